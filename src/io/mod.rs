@@ -1,0 +1,153 @@
+//! Point-cloud formats: streaming, chunked readers and writers for PLY
+//! (ASCII, binary LE/BE, gzip), XYZ/CSV text (gzip) and LAS/LAZ.
+//!
+//! Readers hand out [`PointChunk`]s of bounded size, so no format ever needs the
+//! whole file in memory. Coordinates are validated once here (finite, counts
+//! consistent with headers), so nothing downstream checks again.
+
+pub mod error;
+pub mod memory;
+
+pub use error::IoError;
+
+use glam::{DVec3, Vec3};
+use std::path::{Path, PathBuf};
+
+/// Points handed out per chunk by default: large enough to amortise calls,
+/// small enough (about 1 MiB) to keep ingest memory flat.
+pub const DEFAULT_CHUNK: usize = 1 << 15;
+
+/// File formats scanmesh reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    PlyAscii,
+    PlyBinaryLe,
+    PlyBinaryBe,
+    Xyz,
+    Las,
+    Laz,
+}
+
+/// A bounded batch of consecutive input records.
+///
+/// `first_index` is the 0-based input index of `xyz[0]`; the reader counts
+/// records it skipped (see [`InvalidPolicy::Skip`]) so indices stay those of
+/// the input file.
+#[derive(Clone, Debug, Default)]
+pub struct PointChunk {
+    pub first_index: u64,
+    pub xyz: Vec<DVec3>,
+    /// Present when the source carries normals (PLY nx/ny/nz, XYZ 6 columns).
+    pub normals: Option<Vec<Vec3>>,
+    /// Input index of each point when some records were skipped; `None`
+    /// means `first_index + position`.
+    pub indices: Option<Vec<u64>>,
+}
+
+impl PointChunk {
+    pub fn len(&self) -> usize {
+        self.xyz.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.xyz.is_empty()
+    }
+    pub fn clear(&mut self) {
+        self.xyz.clear();
+        if let Some(n) = &mut self.normals {
+            n.clear();
+        }
+        if let Some(i) = &mut self.indices {
+            i.clear();
+        }
+    }
+    /// Input index of the `i`-th point of this chunk.
+    pub fn index_of(&self, i: usize) -> u64 {
+        match &self.indices {
+            Some(ix) => ix[i],
+            None => self.first_index + i as u64,
+        }
+    }
+}
+
+/// What a reader knows from the header, before reading any point.
+#[derive(Clone, Debug)]
+pub struct SourceInfo {
+    pub path: PathBuf,
+    pub format: Format,
+    pub gzip: bool,
+    /// Point count the header declares (PLY, LAS); `None` for text formats.
+    pub declared_count: Option<u64>,
+    pub has_normals: bool,
+    /// Bounding box from the header, where the format stores one (LAS).
+    pub header_bounds: Option<crate::geom::Aabb>,
+    /// LAS scale and offset, so a LAS output can reuse them.
+    pub las_transform: Option<LasTransform>,
+}
+
+/// LAS integer-coordinate transform: `x = xi * scale.x + offset.x`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LasTransform {
+    pub scale: DVec3,
+    pub offset: DVec3,
+}
+
+/// What to do with records whose coordinates are NaN or infinite.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InvalidPolicy {
+    /// Fail with an error naming the file and record (the default).
+    #[default]
+    Reject,
+    /// Drop the record and count it ([`PointReader::skipped`]).
+    Skip,
+}
+
+/// A streaming source of points.
+pub trait PointReader: Send {
+    fn info(&self) -> &SourceInfo;
+    /// Clears `chunk`, then fills it with up to `max` points. Returns the
+    /// number read; 0 means the input is exhausted (and its declared count,
+    /// if any, was met: a short file is an error, not an early 0).
+    fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError>;
+    /// Records dropped under [`InvalidPolicy::Skip`] so far.
+    fn skipped(&self) -> u64;
+}
+
+/// What a point writer is asked to produce.
+#[derive(Clone, Debug)]
+pub struct WriterSpec {
+    pub format: Format,
+    pub with_normals: bool,
+    /// Write a per-point `flags` byte (u8) property where the format allows.
+    pub with_flags: bool,
+    /// Bounds of all points to be written, needed by LAS to choose its
+    /// quantisation when no `las_transform` is given.
+    pub bounds: Option<crate::geom::Aabb>,
+    pub las_transform: Option<LasTransform>,
+}
+
+/// A streaming sink of points. Output goes to a temporary name and appears
+/// under its final name only in [`PointWriter::finish`].
+pub trait PointWriter: Send {
+    /// `flags`, when the spec asked for them, has one byte per point.
+    fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError>;
+    fn finish(self: Box<Self>) -> Result<u64, IoError>;
+}
+
+/// Format implied by a file name (`.ply`, `.xyz`, `.txt`, `.csv`, `.las`,
+/// `.laz`, each optionally followed by `.gz` for text and PLY).
+pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
+    let name = path.file_name()?.to_str()?.to_ascii_lowercase();
+    let (stem, gz) = match name.strip_suffix(".gz") {
+        Some(s) => (s.to_string(), true),
+        None => (name, false),
+    };
+    let ext = stem.rsplit('.').next()?;
+    let f = match ext {
+        "ply" => Format::PlyBinaryLe,
+        "xyz" | "txt" | "csv" | "pts" => Format::Xyz,
+        "las" => Format::Las,
+        "laz" => Format::Laz,
+        _ => return None,
+    };
+    Some((f, gz))
+}

@@ -1,0 +1,13 @@
+//! scanmesh: out-of-core normals, neighbourhoods and surface reconstruction for
+//! huge laser scans.
+//!
+//! One data flow serves every capability (see `ARCHITECTURE.md`):
+//! ingest ([`io`]) -> point store ([`store`]) -> tiles ([`tiling`]) -> tile
+//! kernel (e.g. [`normals`]) -> seam policy -> streaming writer, scheduled by
+//! [`pipeline`].
+#![deny(unsafe_code)]
+
+pub mod geom;
+pub mod io;
+pub mod normals;
+pub mod spatial;
