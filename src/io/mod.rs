@@ -5,9 +5,11 @@
 //! whole file in memory. Coordinates are validated once here (finite, counts
 //! consistent with headers), so nothing downstream checks again.
 
+pub mod atomic;
 pub mod error;
 pub mod memory;
 
+pub use atomic::AtomicFile;
 pub use error::IoError;
 
 use glam::{DVec3, Vec3};

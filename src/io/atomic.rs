@@ -1,0 +1,77 @@
+//! Output files that appear under their final name only when complete.
+//!
+//! Everything is written to a temporary sibling (`.name.partial-<pid>`); only
+//! [`AtomicFile::commit`] renames it into place. Dropping an uncommitted file
+//! (an error, a panic) removes the temporary, so an interrupted run never
+//! leaves a truncated file that looks whole.
+
+use super::IoError;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug)]
+pub struct AtomicFile {
+    final_path: PathBuf,
+    temp_path: PathBuf,
+    file: File,
+    committed: bool,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file beside `path` (same directory, so the final
+    /// rename never crosses file systems).
+    pub fn create(path: &Path) -> Result<Self, IoError> {
+        let name = path
+            .file_name()
+            .ok_or_else(|| IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: "output path has no file name".into(),
+            })?
+            .to_string_lossy();
+        let temp_path = path.with_file_name(format!(".{}.partial-{}", name, std::process::id()));
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&temp_path)
+            .map_err(|e| IoError::os(path, e))?;
+        Ok(AtomicFile {
+            final_path: path.to_path_buf(),
+            temp_path,
+            file,
+            committed: false,
+        })
+    }
+
+    pub fn file(&mut self) -> &mut File {
+        &mut self.file
+    }
+
+    pub fn final_path(&self) -> &Path {
+        &self.final_path
+    }
+
+    pub fn temp_path(&self) -> &Path {
+        &self.temp_path
+    }
+
+    /// Flushes to disk and renames the temporary into its final name.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        self.file
+            .sync_all()
+            .map_err(|e| IoError::os(&self.final_path, e))?;
+        std::fs::rename(&self.temp_path, &self.final_path)
+            .map_err(|e| IoError::os(&self.final_path, e))?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.temp_path);
+        }
+    }
+}
