@@ -11,3 +11,5 @@ pub mod geom;
 pub mod io;
 pub mod normals;
 pub mod spatial;
+pub mod synth;
+pub mod units;
