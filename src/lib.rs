@@ -10,4 +10,5 @@
 pub mod geom;
 pub mod io;
 pub mod normals;
+pub mod recon;
 pub mod spatial;
