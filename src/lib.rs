@@ -10,6 +10,7 @@
 pub mod geom;
 pub mod io;
 pub mod normals;
+pub mod recon;
 pub mod spatial;
 pub mod synth;
 pub mod units;

@@ -39,6 +39,8 @@ pub enum IoError {
     Unsupported { path: PathBuf, reason: String },
     #[error("{path}: LAS: {reason}")]
     Las { path: PathBuf, reason: String },
+    #[error("{path}: file is empty (no header, no points)")]
+    Empty { path: PathBuf },
 }
 
 impl IoError {

@@ -7,10 +7,23 @@
 
 pub mod atomic;
 pub mod error;
+pub mod las;
 pub mod memory;
+pub mod obj;
+pub mod open;
+pub mod ply;
+mod policy;
+mod source;
+mod text;
+pub mod write;
+pub mod xyz;
 
 pub use atomic::AtomicFile;
 pub use error::IoError;
+pub use obj::read_obj_mesh;
+pub use open::{open_reader, read_mesh_any};
+pub use ply::read_mesh;
+pub use write::create_writer;
 
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};

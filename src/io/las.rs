@@ -1,0 +1,264 @@
+//! LAS/LAZ point reader (ASPRS LAS 1.0-1.4, LAZ via laz-rs), over the `las`
+//! crate: points are decoded block by block into one reused
+//! [`las::PointData`], never all at once; coordinates come out scaled, f64.
+//!
+//! Decoding runs on a thread of its own, because `las::Reader` is not `Send`
+//! (its backend is a `Box<dyn ReadPoints>` without a `Send` bound) while a
+//! [`PointReader`] must be. A channel of [`AHEAD`] blocks keeps memory flat
+//! and lets LAZ decompression overlap with the consumer.
+//!
+//! For uncompressed LAS the file length is checked against the declared
+//! count at open, so a short file fails before any point is read.
+
+use super::policy::Admitter;
+use super::source::BUF_CAPACITY;
+use super::{Format, InvalidPolicy, IoError, LasTransform, PointChunk, PointReader, SourceInfo};
+use crate::geom::Aabb;
+use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
+use glam::{DVec3, Vec3};
+use las::{PointDataBuilder, Reader};
+use std::fs::File;
+use std::io::{BufReader, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+use std::thread::JoinHandle;
+
+/// Points decoded per `las` call (about 1-2 MiB of raw records).
+const BLOCK_POINTS: u64 = 1 << 16;
+/// Blocks decoded ahead of the consumer.
+const AHEAD: usize = 2;
+
+type Block = Result<Vec<DVec3>, IoError>;
+
+pub struct LasReader {
+    info: SourceInfo,
+    blocks: Receiver<Block>,
+    recycle: Sender<Vec<DVec3>>,
+    worker: Option<JoinHandle<()>>,
+    current: Vec<DVec3>,
+    pos: usize,
+    admit: Admitter,
+    declared: u64,
+    next: u64,
+}
+
+pub(crate) fn las_error(path: &Path, e: las::Error) -> IoError {
+    match e {
+        las::Error::Io(e) => IoError::os(path, e),
+        e => IoError::Las {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        },
+    }
+}
+
+/// The header's box, when it is one (finite, `min <= max`).
+fn header_bounds(b: &las::Bounds) -> Option<Aabb> {
+    let a = Aabb::new(
+        DVec3::new(b.min.x, b.min.y, b.min.z),
+        DVec3::new(b.max.x, b.max.y, b.max.z),
+    );
+    (a.min.is_finite() && a.max.is_finite() && !a.is_empty()).then_some(a)
+}
+
+/// Opens the file with `las` and checks its length; runs on the worker.
+fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
+    let os = |e| IoError::os(path, e);
+    let mut file = File::open(path).map_err(os)?;
+    let file_len = file.metadata().map_err(os)?.len();
+    let raw =
+        las::raw::Header::read_from(BufReader::new(&mut file)).map_err(|e| las_error(path, e))?;
+    file.seek(SeekFrom::Start(0)).map_err(os)?;
+    let reader = match Reader::new(BufReader::with_capacity(BUF_CAPACITY, file)) {
+        Ok(r) => r,
+        Err(e) if ends_early(&e) => return Err(truncated(path, raw_count(&raw), 0)),
+        Err(e) => return Err(las_error(path, e)),
+    };
+    let header = reader.header();
+    let declared = header.number_of_points();
+    let compressed = header.point_format().is_compressed;
+    if !compressed {
+        let start = u64::from(raw.offset_to_point_data);
+        let record = u64::from(header.point_format().len()).max(1);
+        let found = file_len.saturating_sub(start) / record;
+        if found < declared {
+            return Err(IoError::Truncated {
+                path: path.to_path_buf(),
+                declared,
+                found,
+            });
+        }
+    }
+    let t = header.transforms();
+    let info = SourceInfo {
+        path: path.to_path_buf(),
+        format: if compressed { Format::Laz } else { Format::Las },
+        gzip: false,
+        declared_count: Some(declared),
+        has_normals: false,
+        header_bounds: header_bounds(&header.bounds()),
+        las_transform: Some(LasTransform {
+            scale: DVec3::new(t.x.scale, t.y.scale, t.z.scale),
+            offset: DVec3::new(t.x.offset, t.y.offset, t.z.offset),
+        }),
+    };
+    Ok((reader, info))
+}
+
+/// Worker: decodes blocks until the declared count, an error, or until the
+/// consumer hangs up.
+fn decode_blocks(
+    path: PathBuf,
+    mut reader: Reader,
+    blocks: Sender<Block>,
+    recycle: Receiver<Vec<DVec3>>,
+) {
+    let declared = reader.header().number_of_points();
+    let mut data = PointDataBuilder::new().for_header(reader.header()).build();
+    let mut done = 0u64;
+    while done < declared {
+        let n = (declared - done).min(BLOCK_POINTS);
+        let block = match reader.fill_points(n, &mut data) {
+            Ok(got) if got == n => {
+                let mut xyz = recycle.try_recv().unwrap_or_default();
+                xyz.clear();
+                let (x, y, z) = (data.x(), data.y(), data.z());
+                xyz.extend(x.zip(y).zip(z).map(|((x, y), z)| DVec3::new(x, y, z)));
+                Ok(xyz)
+            }
+            Ok(got) => Err(truncated(&path, declared, done + got)),
+            Err(e) if ends_early(&e) => Err(truncated(&path, declared, done)),
+            Err(e) => Err(las_error(&path, e)),
+        };
+        let failed = block.is_err();
+        done += n;
+        if blocks.send(block).is_err() || failed {
+            return;
+        }
+    }
+}
+
+/// True when the error comes from the data ending early (LAZ wraps the
+/// `io::Error` in its own error type).
+fn ends_early(e: &las::Error) -> bool {
+    let io = match e {
+        las::Error::Io(io) => io,
+        las::Error::LasZipError(laz::LasZipError::IoError(io)) => io,
+        _ => return false,
+    };
+    io.kind() == std::io::ErrorKind::UnexpectedEof
+}
+
+/// Point count of a raw header (LAS 1.4 keeps large counts elsewhere).
+fn raw_count(raw: &las::raw::Header) -> u64 {
+    match &raw.large_file {
+        Some(l) if l.number_of_point_records > 0 => l.number_of_point_records,
+        _ => u64::from(raw.number_of_point_records),
+    }
+}
+
+fn truncated(path: &Path, declared: u64, found: u64) -> IoError {
+    IoError::Truncated {
+        path: path.to_path_buf(),
+        declared,
+        found,
+    }
+}
+
+impl LasReader {
+    pub(crate) fn open(path: &Path, policy: InvalidPolicy) -> Result<Self, IoError> {
+        let (info_tx, info_rx) = bounded::<Result<SourceInfo, IoError>>(1);
+        let (block_tx, block_rx) = bounded::<Block>(AHEAD);
+        let (recycle_tx, recycle_rx) = unbounded::<Vec<DVec3>>();
+        let owned = path.to_path_buf();
+        let worker = std::thread::Builder::new()
+            .name("las-decode".into())
+            .spawn(move || match open_las(&owned) {
+                Err(e) => {
+                    let _ = info_tx.send(Err(e));
+                }
+                Ok((reader, info)) => {
+                    if info_tx.send(Ok(info)).is_ok() {
+                        decode_blocks(owned, reader, block_tx, recycle_rx);
+                    }
+                }
+            })
+            .map_err(|e| IoError::os(path, e))?;
+        let info = match info_rx.recv() {
+            Ok(info) => info?,
+            Err(_) => return Err(worker_died(path)),
+        };
+        Ok(LasReader {
+            declared: info.declared_count.unwrap_or(0),
+            info,
+            blocks: block_rx,
+            recycle: recycle_tx,
+            worker: Some(worker),
+            current: Vec::new(),
+            pos: 0,
+            admit: Admitter::new(path.to_path_buf(), policy),
+            next: 0,
+        })
+    }
+
+    /// Makes `current[pos..]` non-empty (the next block from the worker).
+    fn refill(&mut self) -> Result<(), IoError> {
+        let block = self
+            .blocks
+            .recv()
+            .map_err(|_| worker_died(&self.info.path))??;
+        let old = std::mem::replace(&mut self.current, block);
+        // The worker may be gone already; then the buffer is simply dropped.
+        let _ = self.recycle.send(old);
+        self.pos = 0;
+        match self.current.is_empty() {
+            true => Err(worker_died(&self.info.path)),
+            false => Ok(()),
+        }
+    }
+}
+
+fn worker_died(path: &Path) -> IoError {
+    IoError::Las {
+        path: path.to_path_buf(),
+        reason: "the decoding thread stopped unexpectedly".into(),
+    }
+}
+
+impl PointReader for LasReader {
+    fn info(&self) -> &SourceInfo {
+        &self.info
+    }
+
+    /// `max` of 0 is taken as 1, since 0 points read means end of input.
+    fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
+        let max = max.max(1);
+        self.admit.begin(chunk, self.next, false);
+        while chunk.len() < max && self.next < self.declared {
+            if self.pos == self.current.len() {
+                self.refill()?;
+            }
+            let take = (max - chunk.len()).min(self.current.len() - self.pos);
+            for &p in &self.current[self.pos..self.pos + take] {
+                self.admit.push(chunk, self.next, p, Vec3::ZERO)?;
+                self.next += 1;
+            }
+            self.pos += take;
+        }
+        Ok(self.admit.end(chunk))
+    }
+
+    fn skipped(&self) -> u64 {
+        self.admit.skipped()
+    }
+}
+
+impl Drop for LasReader {
+    fn drop(&mut self) {
+        // Hang up first so a worker blocked on a full channel wakes and ends.
+        let (_, dead) = bounded(0);
+        drop(std::mem::replace(&mut self.blocks, dead));
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! Choosing a reader for a file: by content first (gzip, `ply`, `LASF`
+//! magic), by name only for text formats, which have no magic.
+
+use super::las::LasReader;
+use super::obj::read_obj;
+use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
+use super::source::open_input;
+use super::xyz::XyzReader;
+use super::{format_from_name, Format, InvalidPolicy, IoError, PointReader};
+use glam::DVec3;
+use std::path::Path;
+
+const LAS_MAGIC: &[u8] = b"LASF";
+
+/// Opens a point file of any supported format for streaming.
+///
+/// gzip (`1f 8b`) is decompressed transparently and the inner content
+/// sniffed; `ply\n` means PLY, `LASF` LAS/LAZ; anything else is read as
+/// XYZ/CSV text if its name says so (`.xyz`, `.txt`, `.csv`, `.pts`, each
+/// optionally `.gz`), else it is [`IoError::UnknownFormat`].
+pub fn open_reader(path: &Path, policy: InvalidPolicy) -> Result<Box<dyn PointReader>, IoError> {
+    let opened = open_input(path)?;
+    if is_ply_magic(&opened.magic) {
+        let r = PlyPointReader::open(path, opened.input, opened.gzip, policy)?;
+        return Ok(Box::new(r));
+    }
+    if opened.magic.starts_with(LAS_MAGIC) {
+        if opened.gzip {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: "gzip-compressed LAS cannot be read as a stream; gunzip it or use LAZ"
+                    .into(),
+            });
+        }
+        // The las crate wants a seekable file: reopen it plainly.
+        drop(opened);
+        return Ok(Box::new(LasReader::open(path, policy)?));
+    }
+    let bad = |magic: &str| IoError::BadHeader {
+        path: path.to_path_buf(),
+        reason: format!("named as this format, but does not start with '{magic}'"),
+    };
+    match format_from_name(path) {
+        Some((Format::Xyz, _)) => Ok(Box::new(XyzReader::open(
+            path,
+            opened.input,
+            opened.gzip,
+            policy,
+        )?)),
+        Some((Format::Las | Format::Laz, _)) => Err(bad("LASF")),
+        Some(_) => Err(bad("ply")),
+        None => Err(IoError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Reads a whole triangle mesh: PLY (by its magic, gzip allowed) or OBJ (by a
+/// `.obj` / `.obj.gz` name). Polygons are fan-triangulated.
+pub fn read_mesh_any(path: &Path) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), IoError> {
+    let opened = open_input(path)?;
+    if is_ply_magic(&opened.magic) {
+        return read_ply_mesh(path, opened.input);
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if name.ends_with(".obj") || name.ends_with(".obj.gz") {
+        return read_obj(path, opened.input);
+    }
+    Err(IoError::Unsupported {
+        path: path.to_path_buf(),
+        reason: "unknown mesh format (expected PLY content, or an .obj / .obj.gz name)".into(),
+    })
+}

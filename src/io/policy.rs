@@ -1,0 +1,99 @@
+//! Admission of decoded records into a [`PointChunk`]: the one place that
+//! enforces finite coordinates and keeps input indices right when
+//! [`InvalidPolicy::Skip`] drops records.
+
+use super::{InvalidPolicy, IoError, PointChunk};
+use glam::{DVec3, Vec3};
+use std::path::PathBuf;
+
+pub(crate) struct Admitter {
+    path: PathBuf,
+    policy: InvalidPolicy,
+    skipped: u64,
+}
+
+impl Admitter {
+    pub fn new(path: PathBuf, policy: InvalidPolicy) -> Self {
+        Admitter {
+            path,
+            policy,
+            skipped: 0,
+        }
+    }
+
+    pub fn skipped(&self) -> u64 {
+        self.skipped
+    }
+
+    /// Clears `chunk` for records starting at input index `first`, keeping
+    /// its allocations.
+    pub fn begin(&self, chunk: &mut PointChunk, first: u64, with_normals: bool) {
+        chunk.xyz.clear();
+        chunk.first_index = first;
+        chunk.indices = None;
+        if with_normals {
+            match &mut chunk.normals {
+                Some(n) => n.clear(),
+                None => chunk.normals = Some(Vec::new()),
+            }
+        } else {
+            chunk.normals = None;
+        }
+    }
+
+    /// Appends input record `record` unless its coordinates are not finite.
+    #[inline]
+    pub fn push(
+        &mut self,
+        chunk: &mut PointChunk,
+        record: u64,
+        p: DVec3,
+        normal: Vec3,
+    ) -> Result<(), IoError> {
+        if !p.is_finite() {
+            return self.reject(chunk, record, p);
+        }
+        chunk.xyz.push(p);
+        if let Some(n) = &mut chunk.normals {
+            n.push(normal);
+        }
+        if let Some(ix) = &mut chunk.indices {
+            ix.push(record);
+        }
+        Ok(())
+    }
+
+    #[cold]
+    fn reject(&mut self, chunk: &mut PointChunk, record: u64, p: DVec3) -> Result<(), IoError> {
+        match self.policy {
+            InvalidPolicy::Reject => {
+                let value = [p.x, p.y, p.z]
+                    .into_iter()
+                    .find(|v| !v.is_finite())
+                    .unwrap_or(f64::NAN);
+                Err(IoError::NonFinite {
+                    path: self.path.clone(),
+                    record,
+                    value,
+                })
+            }
+            InvalidPolicy::Skip => {
+                self.skipped += 1;
+                if chunk.indices.is_none() {
+                    // No skip so far in this chunk: positions were implicit.
+                    let first = chunk.first_index;
+                    chunk.indices = Some((first..first + chunk.xyz.len() as u64).collect());
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Makes `first_index` the index of `xyz[0]` again after skips.
+    pub fn end(&self, chunk: &mut PointChunk) -> usize {
+        if let Some(&first) = chunk.indices.as_ref().and_then(|ix| ix.first()) {
+            chunk.first_index = first;
+        }
+        chunk.xyz.len()
+    }
+}

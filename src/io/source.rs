@@ -1,0 +1,90 @@
+//! Opening an input file: gzip is recognised by its magic bytes (not by name)
+//! and decompressed transparently, and the first bytes of the inner content
+//! are kept so formats can be sniffed by content.
+
+use super::IoError;
+use flate2::read::MultiGzDecoder;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Chain, Cursor, Read};
+use std::path::Path;
+
+/// A buffered byte stream over the (decompressed) content of a file.
+pub(crate) type Input = Box<dyn BufRead + Send>;
+
+/// Bytes kept for sniffing: enough for `ply\r\n`, `LASF` and the gzip magic.
+const MAGIC_LEN: usize = 8;
+/// Read buffer size: large sequential reads keep syscalls and gzip calls rare.
+pub(crate) const BUF_CAPACITY: usize = 1 << 18;
+const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
+pub(crate) struct Opened {
+    pub input: Input,
+    pub gzip: bool,
+    /// First bytes of the decompressed content (fewer only if it is shorter).
+    pub magic: Vec<u8>,
+}
+
+/// Opens `path`, unwrapping gzip (also multi-member gzip) when present.
+/// An empty file, or a gzip stream of nothing, is [`IoError::Empty`].
+pub(crate) fn open_input(path: &Path) -> Result<Opened, IoError> {
+    let os = |e| IoError::os(path, e);
+    let file = File::open(path).map_err(os)?;
+    let (magic, rest) = peek(file).map_err(os)?;
+    if magic.is_empty() {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    if !magic.starts_with(&GZIP_MAGIC) {
+        return Ok(Opened {
+            input: Box::new(BufReader::with_capacity(BUF_CAPACITY, rest)),
+            gzip: false,
+            magic,
+        });
+    }
+    let gz = MultiGzDecoder::new(BufReader::with_capacity(BUF_CAPACITY, rest));
+    let (magic, inner) = peek(gz).map_err(os)?;
+    if magic.is_empty() {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(Opened {
+        input: Box::new(BufReader::with_capacity(BUF_CAPACITY, inner)),
+        gzip: true,
+        magic,
+    })
+}
+
+/// A stream with its first bytes put back in front.
+type Rewound<R> = Chain<Cursor<Vec<u8>>, R>;
+
+/// Reads up to [`MAGIC_LEN`] bytes and hands back a stream that still starts
+/// at the first byte (a single `read` may return less than asked, notably
+/// from a gzip decoder, hence the loop).
+fn peek<R: Read>(mut r: R) -> io::Result<(Vec<u8>, Rewound<R>)> {
+    let mut buf = vec![0u8; MAGIC_LEN];
+    let got = read_full(&mut r, &mut buf)?;
+    buf.truncate(got);
+    Ok((buf.clone(), Cursor::new(buf).chain(r)))
+}
+
+/// Fills `buf` as far as the stream allows; returns the bytes read, which is
+/// less than `buf.len()` only at end of stream.
+pub(crate) fn read_full<R: Read + ?Sized>(r: &mut R, buf: &mut [u8]) -> io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(k) => got += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
+/// Discards exactly `n` bytes; returns how many were there before the end.
+pub(crate) fn skip_bytes<R: Read + ?Sized>(r: &mut R, n: u64) -> io::Result<u64> {
+    io::copy(&mut Read::take(&mut *r, n), &mut io::sink())
+}

@@ -1,0 +1,262 @@
+//! LAS 1.2 / LAZ point writer, point data format 0 (x y z as scaled i32; the
+//! per-point flags, when asked for, go to the "user data" byte; LAS format 0
+//! has no place for normals, so asking for them is an error).
+//!
+//! Quantisation follows the ASPRS LAS 1.2 specification (sec. 2.2, "X, Y and
+//! Z scale factors / offsets"): `X = round((x - offset) / scale)` must fit an
+//! i32. Without a given transform, [`choose_las_transform`] picks one from
+//! the bounds; a point outside the i32 range is an error, never clamped.
+
+use super::{check_chunk, open_output};
+use crate::geom::Aabb;
+use crate::io::las::las_error;
+use crate::io::{AtomicFile, IoError, LasTransform, PointChunk, PointWriter, WriterSpec};
+use byteorder::{ByteOrder, LittleEndian};
+use glam::DVec3;
+use las::{point::Format, Builder, PointData, PointDataBuilder, Transform, Vector, Writer};
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Integer coordinates stay within +-2^30: half the i32 range is headroom
+/// for points slightly outside the stated bounds.
+const REACH: f64 = (1u64 << 30) as f64;
+/// Finest scale chosen automatically (1 nm for metres); finer buys nothing
+/// at the magnitudes where f64 coordinates have ~1e-10 relative precision.
+const MIN_SCALE_EXP: i32 = -9;
+/// Point format 0 record: x y z i32, intensity u16, return bits, class,
+/// scan angle, user data, point source id.
+const RECORD_LEN: usize = 20;
+const USER_DATA_AT: usize = 17;
+/// Return number 1 of 1 (bits 0-2 and 3-5).
+const SINGLE_RETURN: u8 = 1 | (1 << 3);
+
+/// A transform for points within `bounds`: offset = the centre rounded to
+/// whole units, scale = the smallest power of ten that keeps every point of
+/// the box within +-2^30 quanta of the offset.
+pub fn choose_las_transform(bounds: &Aabb) -> Option<LasTransform> {
+    if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+        return None;
+    }
+    let offset = bounds.center().round();
+    let reach = (bounds.max - offset)
+        .abs()
+        .max((bounds.min - offset).abs())
+        .max_element();
+    let mut exp = (reach / REACH).log10().ceil().max(f64::from(MIN_SCALE_EXP)) as i32;
+    while reach / 10f64.powi(exp) > REACH {
+        exp += 1;
+    }
+    Some(LasTransform {
+        scale: DVec3::splat(10f64.powi(exp)),
+        offset,
+    })
+}
+
+/// The output file as the `las` writer sees it. Once `abandoned`, writes and
+/// seeks succeed without touching the file: the `las` writer finalises itself
+/// on drop and panics if that fails, which must not happen for a file that is
+/// being removed anyway. The position is tracked in both modes, because the
+/// LAZ compressor does arithmetic on it.
+struct Guarded {
+    out: BufWriter<File>,
+    abandoned: Arc<AtomicBool>,
+    pos: u64,
+    len: u64,
+}
+
+impl Guarded {
+    fn is_abandoned(&self) -> bool {
+        self.abandoned.load(Ordering::Relaxed)
+    }
+}
+
+impl Write for Guarded {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = match self.is_abandoned() {
+            true => buf.len(),
+            false => self.out.write(buf)?,
+        };
+        self.pos += n as u64;
+        self.len = self.len.max(self.pos);
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        match self.is_abandoned() {
+            true => Ok(()),
+            false => self.out.flush(),
+        }
+    }
+}
+
+impl Seek for Guarded {
+    fn seek(&mut self, to: SeekFrom) -> io::Result<u64> {
+        let target = match to {
+            SeekFrom::Start(p) => Some(p),
+            SeekFrom::Current(d) => self.pos.checked_add_signed(d),
+            SeekFrom::End(d) => self.len.checked_add_signed(d),
+        };
+        let target = target.ok_or_else(|| io::Error::from(io::ErrorKind::InvalidInput))?;
+        if !self.is_abandoned() {
+            self.out.seek(SeekFrom::Start(target))?;
+        }
+        self.pos = target;
+        Ok(target)
+    }
+}
+
+pub(crate) struct LasWriter {
+    path: PathBuf,
+    spec: WriterSpec,
+    writer: Option<Writer<Guarded>>,
+    /// Taken by `finish`; dropped after `writer` otherwise (field order).
+    atomic: Option<AtomicFile>,
+    abandoned: Arc<AtomicBool>,
+    transform: LasTransform,
+    data: PointData,
+    count: u64,
+}
+
+fn to_vector(t: &LasTransform) -> Vector<Transform> {
+    let axis = |s: f64, o: f64| Transform {
+        scale: s,
+        offset: o,
+    };
+    Vector {
+        x: axis(t.scale.x, t.offset.x),
+        y: axis(t.scale.y, t.offset.y),
+        z: axis(t.scale.z, t.offset.z),
+    }
+}
+
+impl LasWriter {
+    pub fn create(path: &Path, spec: &WriterSpec, compressed: bool) -> Result<Self, IoError> {
+        let las_fail = |reason: &str| IoError::Las {
+            path: path.to_path_buf(),
+            reason: reason.into(),
+        };
+        if spec.with_normals {
+            return Err(las_fail(
+                "LAS point format 0 has no normals; write PLY or XYZ",
+            ));
+        }
+        let transform = match (spec.las_transform, &spec.bounds) {
+            (Some(t), _) => t,
+            (None, Some(b)) => {
+                choose_las_transform(b).ok_or_else(|| las_fail("bounds are empty or not finite"))?
+            }
+            (None, None) => {
+                return Err(las_fail(
+                    "LAS output needs the points' bounds or a scale/offset transform",
+                ))
+            }
+        };
+        let valid = transform.scale.is_finite()
+            && transform.scale.cmpgt(DVec3::ZERO).all()
+            && transform.offset.is_finite();
+        if !valid {
+            return Err(las_fail("scale must be finite and positive, offset finite"));
+        }
+        let fmt = Format::new(0).map_err(|e| las_error(path, e))?;
+        let mut builder = Builder::from((1, 2));
+        builder.point_format = fmt;
+        builder.point_format.is_compressed = compressed;
+        builder.transforms = to_vector(&transform);
+        builder.generating_software = "scanmesh".into();
+        let header = builder.into_header().map_err(|e| las_error(path, e))?;
+        let (atomic, out) = open_output(path)?;
+        let abandoned = Arc::new(AtomicBool::new(false));
+        let guarded = Guarded {
+            out,
+            abandoned: Arc::clone(&abandoned),
+            pos: 0,
+            len: 0,
+        };
+        let writer = Writer::new(guarded, header).map_err(|e| las_error(path, e))?;
+        let data = PointDataBuilder::new()
+            .with_format(fmt)
+            .with_transforms(to_vector(&transform))
+            .build();
+        Ok(LasWriter {
+            path: path.to_path_buf(),
+            spec: spec.clone(),
+            writer: Some(writer),
+            atomic: Some(atomic),
+            abandoned,
+            transform,
+            data,
+            count: 0,
+        })
+    }
+}
+
+/// Integer coordinates of output record `record`, or an error naming it.
+fn quantise(t: &LasTransform, path: &Path, p: DVec3, record: u64) -> Result<[i32; 3], IoError> {
+    let q = ((p - t.offset) / t.scale).round();
+    let range = f64::from(i32::MIN)..=f64::from(i32::MAX);
+    if range.contains(&q.x) && range.contains(&q.y) && range.contains(&q.z) {
+        return Ok([q.x as i32, q.y as i32, q.z as i32]);
+    }
+    Err(IoError::Las {
+        path: path.to_path_buf(),
+        reason: format!(
+            "point {record} ({}, {}, {}) is outside the i32 range of scale {} offset {}",
+            p.x, p.y, p.z, t.scale, t.offset
+        ),
+    })
+}
+
+impl PointWriter for LasWriter {
+    fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
+        let c = check_chunk(&self.path, &self.spec, chunk, flags, self.count)?;
+        let bytes = self.data.resize_for(chunk.len());
+        for (i, (rec, p)) in bytes
+            .chunks_exact_mut(RECORD_LEN)
+            .zip(&chunk.xyz)
+            .enumerate()
+        {
+            let q = quantise(&self.transform, &self.path, *p, self.count + i as u64)?;
+            rec.fill(0);
+            LittleEndian::write_i32_into(&q, &mut rec[..12]);
+            rec[14] = SINGLE_RETURN;
+            rec[USER_DATA_AT] = c.flags.map_or(0, |f| f[i]);
+        }
+        let written = match &mut self.writer {
+            Some(w) => w.write_points(&self.data),
+            None => Ok(()),
+        };
+        written.map_err(|e| las_error(&self.path, e))?;
+        self.count += chunk.len() as u64;
+        Ok(())
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<u64, IoError> {
+        let path = self.path.clone();
+        let (Some(mut writer), Some(atomic)) = (self.writer.take(), self.atomic.take()) else {
+            return Err(IoError::Las {
+                path,
+                reason: "writer already finished".into(),
+            });
+        };
+        if let Err(e) = writer.close() {
+            self.abandoned.store(true, Ordering::Relaxed);
+            return Err(las_error(&path, e));
+        }
+        let guarded = writer.into_inner().map_err(|e| las_error(&path, e))?;
+        guarded
+            .out
+            .into_inner()
+            .map_err(|e| IoError::os(&path, e.into_error()))?;
+        atomic.commit()?;
+        Ok(self.count)
+    }
+}
+
+impl Drop for LasWriter {
+    fn drop(&mut self) {
+        // Unfinished: let the las writer's own drop-time close write nowhere.
+        self.abandoned.store(true, Ordering::Relaxed);
+    }
+}

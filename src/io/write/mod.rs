@@ -1,0 +1,95 @@
+//! Streaming point writers: binary PLY (LE/BE), ASCII PLY, XYZ text and
+//! LAS/LAZ. Every writer goes through [`AtomicFile`](super::AtomicFile): the
+//! output appears under its final name only in `finish`; a writer dropped
+//! before that leaves nothing behind.
+
+mod las;
+mod ply;
+mod xyz;
+
+pub use las::choose_las_transform;
+
+use super::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
+use glam::Vec3;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+/// Output buffer: few, large writes.
+const OUT_BUF: usize = 1 << 20;
+
+/// Creates a writer for `spec.format` at `path` (a `.laz` path, or
+/// `Format::Laz`, gives compressed LAS). gzip output is not offered.
+pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWriter>, IoError> {
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".gz") {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: "gzip output is not supported; compress the finished file".into(),
+        });
+    }
+    Ok(match spec.format {
+        Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe => {
+            Box::new(ply::PlyWriter::create(path, spec)?)
+        }
+        Format::Xyz => Box::new(xyz::XyzWriter::create(path, spec)?),
+        Format::Las | Format::Laz => {
+            let compressed = spec.format == Format::Laz || name.ends_with(".laz");
+            Box::new(las::LasWriter::create(path, spec, compressed)?)
+        }
+    })
+}
+
+/// The temporary output and a buffered handle on it (a second descriptor of
+/// the same open file, so `AtomicFile` keeps the commit/cleanup duty).
+fn open_output(path: &Path) -> Result<(AtomicFile, BufWriter<File>), IoError> {
+    let mut atomic = AtomicFile::create(path)?;
+    let file = atomic
+        .file()
+        .try_clone()
+        .map_err(|e| IoError::os(path, e))?;
+    Ok((atomic, BufWriter::with_capacity(OUT_BUF, file)))
+}
+
+/// What a chunk carries for the spec: normals and flags, each present
+/// exactly when the spec asks for it.
+struct Checked<'a> {
+    normals: Option<&'a [Vec3]>,
+    flags: Option<&'a [u8]>,
+}
+
+/// Checks `chunk` against `spec`; `written` is the number of points already
+/// written, so errors name the output record.
+fn check_chunk<'a>(
+    path: &Path,
+    spec: &WriterSpec,
+    chunk: &'a PointChunk,
+    flags: Option<&'a [u8]>,
+    written: u64,
+) -> Result<Checked<'a>, IoError> {
+    let n = chunk.len();
+    let misuse = |reason: String| IoError::Unsupported {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let normals = match (spec.with_normals, chunk.normals.as_deref()) {
+        (false, _) => None,
+        (true, Some(nv)) if nv.len() == n => Some(nv),
+        (true, _) => return Err(misuse(format!("writer needs {n} normals for this chunk"))),
+    };
+    let flags = match (spec.with_flags, flags) {
+        (false, _) => None,
+        (true, Some(f)) if f.len() == n => Some(f),
+        (true, _) => return Err(misuse(format!("writer needs {n} flags for this chunk"))),
+    };
+    for (i, p) in chunk.xyz.iter().enumerate() {
+        if let Some(value) = [p.x, p.y, p.z].into_iter().find(|c| !c.is_finite()) {
+            return Err(IoError::NonFinite {
+                path: path.to_path_buf(),
+                record: written + i as u64,
+                value,
+            });
+        }
+    }
+    Ok(Checked { normals, flags })
+}

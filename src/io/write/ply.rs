@@ -1,0 +1,136 @@
+//! PLY point writer: binary (little- or big-endian) or ASCII; `x y z` as
+//! double, `nx ny nz` as float, `flags` as uchar. The vertex count is written
+//! as a fixed-width placeholder and patched in `finish`, so the points
+//! stream straight to disk.
+
+use super::{check_chunk, open_output, Checked};
+use crate::io::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
+use byteorder::{BigEndian, ByteOrder, LittleEndian};
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Digits of the vertex count: any u64 fits, zero-padded.
+const COUNT_WIDTH: usize = 20;
+
+pub(crate) struct PlyWriter {
+    path: PathBuf,
+    spec: WriterSpec,
+    // Declared before `atomic`: dropped (flushed into the temp) first.
+    out: BufWriter<File>,
+    atomic: AtomicFile,
+    /// Byte offset of the count placeholder.
+    count_at: u64,
+    count: u64,
+    buf: Vec<u8>,
+}
+
+/// The header text and the byte offset of its count digits.
+fn header(spec: &WriterSpec) -> (String, u64) {
+    let format = match spec.format {
+        Format::PlyAscii => "ascii",
+        Format::PlyBinaryBe => "binary_big_endian",
+        _ => "binary_little_endian",
+    };
+    let mut h = format!("ply\nformat {format} 1.0\ncomment written by scanmesh\nelement vertex ");
+    let count_at = h.len() as u64;
+    h += &format!("{:0w$}\n", 0, w = COUNT_WIDTH);
+    h += "property double x\nproperty double y\nproperty double z\n";
+    if spec.with_normals {
+        h += "property float nx\nproperty float ny\nproperty float nz\n";
+    }
+    if spec.with_flags {
+        h += "property uchar flags\n";
+    }
+    h += "end_header\n";
+    (h, count_at)
+}
+
+impl PlyWriter {
+    pub fn create(path: &Path, spec: &WriterSpec) -> Result<Self, IoError> {
+        let (atomic, mut out) = open_output(path)?;
+        let (text, count_at) = header(spec);
+        out.write_all(text.as_bytes())
+            .map_err(|e| IoError::os(path, e))?;
+        Ok(PlyWriter {
+            path: path.to_path_buf(),
+            spec: spec.clone(),
+            out,
+            atomic,
+            count_at,
+            count: 0,
+            buf: Vec::new(),
+        })
+    }
+}
+
+fn encode_binary<B: ByteOrder>(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked) {
+    let mut b8 = [0u8; 8];
+    for (i, p) in chunk.xyz.iter().enumerate() {
+        for v in [p.x, p.y, p.z] {
+            B::write_f64(&mut b8, v);
+            buf.extend_from_slice(&b8);
+        }
+        if let Some(n) = c.normals {
+            for v in [n[i].x, n[i].y, n[i].z] {
+                B::write_f32(&mut b8, v);
+                buf.extend_from_slice(&b8[..4]);
+            }
+        }
+        if let Some(f) = c.flags {
+            buf.push(f[i]);
+        }
+    }
+}
+
+/// One line per point; `{}` prints the shortest text that parses back to
+/// the same f64 (f32 for normals).
+pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked) {
+    for (i, p) in chunk.xyz.iter().enumerate() {
+        // Writing into a Vec cannot fail.
+        let _ = write!(buf, "{} {} {}", p.x, p.y, p.z);
+        if let Some(n) = c.normals {
+            let _ = write!(buf, " {} {} {}", n[i].x, n[i].y, n[i].z);
+        }
+        if let Some(f) = c.flags {
+            let _ = write!(buf, " {}", f[i]);
+        }
+        buf.push(b'\n');
+    }
+}
+
+impl PointWriter for PlyWriter {
+    fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
+        let c = check_chunk(&self.path, &self.spec, chunk, flags, self.count)?;
+        self.buf.clear();
+        match self.spec.format {
+            Format::PlyAscii => encode_text(&mut self.buf, chunk, &c),
+            Format::PlyBinaryBe => encode_binary::<BigEndian>(&mut self.buf, chunk, &c),
+            _ => encode_binary::<LittleEndian>(&mut self.buf, chunk, &c),
+        }
+        self.out
+            .write_all(&self.buf)
+            .map_err(|e| IoError::os(&self.path, e))?;
+        self.count += chunk.len() as u64;
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>) -> Result<u64, IoError> {
+        let PlyWriter {
+            path,
+            out,
+            atomic,
+            count_at,
+            count,
+            ..
+        } = *self;
+        let os = |e| IoError::os(&path, e);
+        let mut file = out.into_inner().map_err(|e| os(e.into_error()))?;
+        file.seek(SeekFrom::Start(count_at)).map_err(os)?;
+        file.write_all(format!("{count:0w$}", w = COUNT_WIDTH).as_bytes())
+            .map_err(os)?;
+        drop(file);
+        atomic.commit()?;
+        Ok(count)
+    }
+}

@@ -1,0 +1,14 @@
+//! Implicit reconstruction (paper 1, steps 5-6): a signed distance evaluated on
+//! one global lattice, polygonised by marching cubes into a mesh whose vertices
+//! are keyed by global lattice edge, so tiles join without cracks.
+//!
+//! This layer is independent of point data: [`lattice`] (corner positions and
+//! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
+//! (one cube, and a reference driver over a set of cubes).
+
+pub mod lattice;
+pub mod mc_table;
+pub mod polygonize;
+
+pub use lattice::{edge_from_key, edge_key, Lattice, LatticeError};
+pub use polygonize::{polygonize_cube, polygonize_field, CubeVertex, IndexedMesh, MeshWelder};
