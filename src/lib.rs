@@ -7,10 +7,14 @@
 //! [`pipeline`].
 #![deny(unsafe_code)]
 
+pub mod demo;
 pub mod geom;
 pub mod io;
 pub mod normals;
+pub mod pipeline;
 pub mod recon;
 pub mod spatial;
+pub mod store;
 pub mod synth;
+pub mod tiling;
 pub mod units;

@@ -6,7 +6,9 @@
 //! consistent with headers), so nothing downstream checks again.
 
 pub mod atomic;
+pub mod convert;
 pub mod error;
+pub mod inspect;
 pub mod las;
 pub mod memory;
 pub mod obj;

@@ -1,0 +1,34 @@
+//! `scanmesh convert`: any point format to any other, streaming.
+
+use anyhow::Result;
+use clap::Args;
+use scanmesh::io::convert::convert;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct ConvertArgs {
+    /// Input point file.
+    input: PathBuf,
+    /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz).
+    output: PathBuf,
+    #[command(flatten)]
+    common: super::CommonArgs,
+}
+
+pub fn run(a: ConvertArgs) -> Result<()> {
+    let s = a.common.settings()?;
+    super::check_distinct(&a.input, &a.output)?;
+    let progress = super::progress::progress(s.quiet);
+    let t0 = Instant::now();
+    let stats = convert(&a.input, &a.output, s.policy, progress.as_ref())?;
+    println!(
+        "convert: {} points ({} skipped) in {:.2} s, peak {} -> {}",
+        stats.points,
+        stats.skipped,
+        t0.elapsed().as_secs_f64(),
+        super::peak(),
+        a.output.display()
+    );
+    Ok(())
+}

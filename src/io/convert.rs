@@ -1,0 +1,73 @@
+//! Streaming format conversion: any readable format to any writable one,
+//! chunk by chunk, in input order. LAS output needs its quantisation before
+//! the first point, so a source without header bounds is read twice.
+
+use super::{
+    create_writer, format_from_name, open_reader, Format, InvalidPolicy, IoError, PointChunk,
+    WriterSpec, DEFAULT_CHUNK,
+};
+use crate::geom::Aabb;
+use crate::pipeline::Progress;
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ConvertStats {
+    pub points: u64,
+    pub skipped: u64,
+}
+
+pub fn convert(
+    input: &Path,
+    output: &Path,
+    policy: InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<ConvertStats, IoError> {
+    let (format, _) = format_from_name(output).ok_or_else(|| IoError::UnknownFormat {
+        path: output.to_path_buf(),
+    })?;
+    let mut reader = open_reader(input, policy)?;
+    let info = reader.info().clone();
+    let is_las = matches!(format, Format::Las | Format::Laz);
+    let bounds = match (is_las, info.header_bounds, info.las_transform) {
+        (true, None, None) => Some(scan_bounds(input, policy, progress)?),
+        (_, b, _) => b,
+    };
+    let spec = WriterSpec {
+        format,
+        with_normals: info.has_normals,
+        with_flags: false,
+        bounds,
+        las_transform: info.las_transform,
+    };
+    let mut writer = create_writer(output, &spec)?;
+    let mut chunk = PointChunk::default();
+    let mut points = 0;
+    progress.begin("convert", info.declared_count.unwrap_or(0));
+    while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        writer.write_chunk(&chunk, None)?;
+        points += chunk.len() as u64;
+        progress.advance(chunk.len() as u64);
+    }
+    progress.end();
+    let skipped = reader.skipped();
+    writer.finish()?;
+    Ok(ConvertStats { points, skipped })
+}
+
+/// Bounding box of all points of `path`, by one streaming pass.
+pub fn scan_bounds(
+    path: &Path,
+    policy: InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<Aabb, IoError> {
+    let mut reader = open_reader(path, policy)?;
+    let mut chunk = PointChunk::default();
+    let mut bounds = Aabb::EMPTY;
+    progress.begin("bounds", reader.info().declared_count.unwrap_or(0));
+    while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        chunk.xyz.iter().for_each(|p| bounds.add(*p));
+        progress.advance(chunk.len() as u64);
+    }
+    progress.end();
+    Ok(bounds)
+}

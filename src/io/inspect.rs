@@ -1,0 +1,71 @@
+//! `scanmesh info` for files: what the header says, plus the facts one
+//! streaming pass gives (count, bounds) and a spacing estimate from the
+//! first points, which for scanner data are spatially coherent.
+
+use super::{open_reader, InvalidPolicy, IoError, PointChunk, SourceInfo, DEFAULT_CHUNK};
+use crate::geom::Aabb;
+use crate::pipeline::Progress;
+use crate::spatial::{build_index, KnnBackend};
+use glam::DVec3;
+use std::path::Path;
+
+/// Points used for the spacing estimate.
+const SPACING_SAMPLE: usize = 1 << 16;
+
+#[derive(Clone, Debug)]
+pub struct Inspection {
+    pub info: SourceInfo,
+    pub count: u64,
+    pub skipped: u64,
+    pub bounds: Aabb,
+    /// Mean nearest-neighbour distance among the first points (duplicates
+    /// left out); `None` with fewer than two distinct points.
+    pub spacing: Option<f64>,
+}
+
+pub fn inspect(
+    path: &Path,
+    policy: InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<Inspection, IoError> {
+    let mut reader = open_reader(path, policy)?;
+    let info = reader.info().clone();
+    let mut chunk = PointChunk::default();
+    let mut bounds = Aabb::EMPTY;
+    let mut count = 0;
+    let mut sample: Vec<DVec3> = Vec::new();
+    progress.begin("inspect", info.declared_count.unwrap_or(0));
+    while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        chunk.xyz.iter().for_each(|p| bounds.add(*p));
+        let room = SPACING_SAMPLE.saturating_sub(sample.len());
+        sample.extend(chunk.xyz.iter().take(room));
+        count += chunk.len() as u64;
+        progress.advance(chunk.len() as u64);
+    }
+    progress.end();
+    Ok(Inspection {
+        info,
+        count,
+        skipped: reader.skipped(),
+        bounds,
+        spacing: prefix_spacing(&sample),
+    })
+}
+
+fn prefix_spacing(sample: &[DVec3]) -> Option<f64> {
+    let origin = sample.first().copied()?;
+    let pts: Vec<DVec3> = sample.iter().map(|p| *p - origin).collect();
+    let ids: Vec<u64> = (0..pts.len() as u64).collect();
+    // Cannot fail: ids match points and the sample is far below u32::MAX.
+    let index = build_index(KnnBackend::KdTree, &pts, &ids).ok()?;
+    let mut nbrs = Vec::new();
+    let (mut sum, mut n) = (0.0, 0u64);
+    for (i, p) in pts.iter().enumerate() {
+        index.knn(*p, 1, Some(i as u32), &mut nbrs);
+        if let Some(nb) = nbrs.first().filter(|nb| nb.dist2 > 0.0) {
+            sum += nb.dist2.sqrt();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}

@@ -1,0 +1,74 @@
+//! Normals against a truth: angle errors and orientation agreement, as the
+//! tests, benches and the demo report them.
+
+use crate::store::{PointStore, StoreError, NORMAL_FILE};
+use glam::DVec3;
+
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct NormalAccuracy {
+    /// Points compared (both normals non-zero).
+    pub compared: usize,
+    /// Angle between the lines (sign ignored), degrees.
+    pub median_angle_deg: f64,
+    pub p95_angle_deg: f64,
+    /// Fraction whose sign agrees with the truth (positive dot product).
+    pub oriented_fraction: f64,
+}
+
+/// Compares `normals[i]` with `truth[i]`; zero normals (degenerate) are skipped.
+pub fn accuracy(normals: &[DVec3], truth: &[DVec3]) -> NormalAccuracy {
+    let mut angles = Vec::with_capacity(normals.len());
+    let mut agree = 0usize;
+    for (n, t) in normals.iter().zip(truth) {
+        if *n == DVec3::ZERO || *t == DVec3::ZERO {
+            continue;
+        }
+        let c = n.normalize().dot(t.normalize());
+        angles.push(c.abs().clamp(0.0, 1.0).acos().to_degrees());
+        agree += usize::from(c > 0.0);
+    }
+    if angles.is_empty() {
+        return NormalAccuracy::default();
+    }
+    angles.sort_by(|a, b| a.total_cmp(b));
+    let q = |f: f64| angles[((angles.len() - 1) as f64 * f).round() as usize];
+    NormalAccuracy {
+        compared: angles.len(),
+        median_angle_deg: q(0.5),
+        p95_angle_deg: q(0.95),
+        oriented_fraction: agree as f64 / angles.len() as f64,
+    }
+}
+
+/// A store's normals in input order, in memory (evaluation of small
+/// clouds only: 24 bytes per point).
+pub fn normals_in_input_order(store: &PointStore) -> Result<Vec<DVec3>, StoreError> {
+    let col = store.attribute(NORMAL_FILE, 12)?;
+    let mut out = vec![DVec3::ZERO; store.len() as usize];
+    let (mut ids, mut nrm) = (Vec::new(), Vec::new());
+    for t in store.tiles() {
+        store.read_indices(t.start, t.count, &mut ids)?;
+        col.read_f32(t.start, t.count, &mut nrm)?;
+        for (k, &id) in ids.iter().enumerate() {
+            let n = &nrm[3 * k..3 * k + 3];
+            out[id as usize] = DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_flips_and_angles() {
+        let truth = vec![DVec3::Z; 4];
+        let n = vec![DVec3::Z, -DVec3::Z, DVec3::new(0.0, 1.0, 1.0), DVec3::ZERO];
+        let a = accuracy(&n, &truth);
+        assert_eq!(a.compared, 3);
+        assert!((a.oriented_fraction - 2.0 / 3.0).abs() < 1e-12);
+        assert!(a.median_angle_deg.abs() < 1e-9);
+        assert!((a.p95_angle_deg - 45.0).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,232 @@
+//! The normals tile kernel (paper 1 sections 2.2-2.4): exact kNN, PCA tangent
+//! planes for the core points, and the tile's minimum spanning forest of the
+//! Riemannian graph for the global orientation pass.
+//!
+//! To weigh an edge from a core point to a margin point the kernel needs the
+//! margin point's normal too, so it also fits the "ring" (margin points that
+//! are neighbours of core points). A ring point's neighbourhood must be loaded
+//! as well, so the margin covers two neighbourhood radii; the kernel checks at
+//! run time that every neighbourhood it used lies inside the loaded region and
+//! asks for a wider margin otherwise.
+
+use super::forest::{spanning_forest, Edge};
+use super::pca::fit_plane;
+use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
+use crate::pipeline::{KernelError, TileKernel};
+use crate::spatial::{build_index, KnnIndex, Neighbour};
+use crate::tiling::TilePoints;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// What one tile contributes.
+#[derive(Debug, Default)]
+pub struct NormalsTile {
+    /// Unit normals of the core points, in store order (zero when degenerate).
+    pub normals: Vec<[f32; 3]>,
+    pub flags: Vec<u8>,
+    /// The tile's minimum spanning forest, sorted by [`Edge::key`] (empty
+    /// unless orientation is by spanning tree).
+    pub forest: Vec<Edge>,
+}
+
+pub struct NormalsKernel {
+    pub params: NormalParams,
+    /// Store origin, for the viewpoint (given in absolute coordinates).
+    pub origin: DVec3,
+    pub initial_margin: f64,
+}
+
+/// A fitted (and, toward a viewpoint, oriented) unit normal.
+#[derive(Clone, Copy, Debug)]
+struct Fitted {
+    n: DVec3,
+}
+
+/// Neighbourhood of one point: its neighbours and the room check.
+struct Hood {
+    nbrs: Vec<Neighbour>,
+    /// How much wider the margin must be for this neighbourhood to be
+    /// certainly complete (0 when it is).
+    short_by: f64,
+}
+
+impl NormalsKernel {
+    fn hood(&self, index: &dyn KnnIndex, tile: &TilePoints, i: usize) -> Hood {
+        let mut nbrs = Vec::with_capacity(self.params.k + 4);
+        let p = tile.points[i];
+        index.knn(p, self.params.k, Some(i as u32), &mut nbrs);
+        let reach = match nbrs.last() {
+            Some(n) if nbrs.len() >= self.params.k => n.dist2.sqrt(),
+            // Fewer than k loaded: complete only if nothing lies beyond.
+            _ => f64::INFINITY,
+        };
+        let room = tile.room(p);
+        let short_by = if reach <= room { 0.0 } else { reach - room };
+        Hood { nbrs, short_by }
+    }
+
+    fn normal_of(&self, tile: &TilePoints, i: usize, hood: &Hood) -> Option<Fitted> {
+        let fit = fit_plane(&tile.points, i, &hood.nbrs).ok()?;
+        let n = fit.normal;
+        let n = match self.params.orientation {
+            Orientation::Viewpoint(v) if n.dot(v - self.origin - tile.points[i]) < 0.0 => -n,
+            _ => n,
+        };
+        Some(Fitted { n })
+    }
+}
+
+impl TileKernel for NormalsKernel {
+    type Output = NormalsTile;
+
+    fn name(&self) -> &str {
+        "normals"
+    }
+
+    fn margin(&self) -> f64 {
+        self.initial_margin
+    }
+
+    fn run(&self, tile: &TilePoints) -> Result<NormalsTile, KernelError> {
+        let index = build_index(self.params.backend, &tile.points, &tile.ids)
+            .map_err(|e| KernelError::Failed(e.to_string()))?;
+        let index = index.as_ref();
+        let core: Vec<Hood> = (0..tile.n_core)
+            .into_par_iter()
+            .map(|i| self.hood(index, tile, i))
+            .collect();
+        check_room(&core, tile.margin)?;
+        let mut normals: Vec<Option<Fitted>> = vec![None; tile.points.len()];
+        let core_normals: Vec<Option<Fitted>> = core
+            .par_iter()
+            .enumerate()
+            .map(|(i, h)| self.normal_of(tile, i, h))
+            .collect();
+        normals[..tile.n_core].copy_from_slice(&core_normals);
+        let mut out = NormalsTile {
+            normals: core_normals
+                .iter()
+                .map(|n| n.map_or([0.0; 3], |f| f.n.as_vec3().to_array()))
+                .collect(),
+            flags: core_normals
+                .iter()
+                .map(|n| if n.is_some() { 0 } else { FLAG_DEGENERATE })
+                .collect(),
+            forest: Vec::new(),
+        };
+        if self.params.orientation == Orientation::SpanningTree {
+            self.fit_ring(index, tile, &core, &mut normals)?;
+            out.forest = tile_forest(tile, &core, &normals, self.params.cost);
+        }
+        Ok(out)
+    }
+}
+
+impl NormalsKernel {
+    /// Normals of the margin points adjacent to core points.
+    fn fit_ring(
+        &self,
+        index: &dyn KnnIndex,
+        tile: &TilePoints,
+        core: &[Hood],
+        normals: &mut [Option<Fitted>],
+    ) -> Result<(), KernelError> {
+        let mut ring: Vec<u32> = core
+            .iter()
+            .flat_map(|h| h.nbrs.iter().map(|n| n.index))
+            .filter(|&j| j as usize >= tile.n_core)
+            .collect();
+        ring.sort_unstable();
+        ring.dedup();
+        let fitted: Vec<(Hood, Option<Fitted>)> = ring
+            .par_iter()
+            .map(|&j| {
+                let h = self.hood(index, tile, j as usize);
+                let n = self.normal_of(tile, j as usize, &h);
+                (h, n)
+            })
+            .collect();
+        let hoods: Vec<Hood> = fitted
+            .iter()
+            .map(|(h, _)| Hood {
+                nbrs: Vec::new(),
+                short_by: h.short_by,
+            })
+            .collect();
+        check_room(&hoods, tile.margin)?;
+        for (&j, (_, n)) in ring.iter().zip(fitted) {
+            normals[j as usize] = n;
+        }
+        Ok(())
+    }
+}
+
+/// Fails with the margin that would make every neighbourhood complete.
+fn check_room(hoods: &[Hood], margin: f64) -> Result<(), KernelError> {
+    let short = hoods.iter().map(|h| h.short_by).fold(0.0, f64::max);
+    if short > 0.0 {
+        // A little extra so rounding at the region's edge cannot loop.
+        let needed = if short.is_finite() {
+            (margin + short) * 1.0001 + 1e-12
+        } else {
+            0.0
+        };
+        return Err(KernelError::MarginTooSmall {
+            needed: needed.max(margin * 2.0),
+        });
+    }
+    Ok(())
+}
+
+/// See [`EdgeCost`]. Symmetric in (i, j), so both tiles that see an edge
+/// weigh it the same.
+fn edge_cost(cost: EdgeCost, d: DVec3, fi: &Fitted, fj: &Fitted, dot: f64) -> f64 {
+    let paper = 1.0 - dot.abs();
+    let (ni, nj) = (fi.n, fj.n);
+    match cost {
+        EdgeCost::Paper => paper,
+        EdgeCost::TangentOffset => {
+            let len = d.length();
+            let offset = if len > 0.0 {
+                (d.dot(ni).abs() + d.dot(nj).abs()) / (2.0 * len)
+            } else {
+                0.0
+            };
+            paper + offset
+        }
+    }
+}
+
+/// The minimum spanning forest of this tile's Riemannian-graph edges: every
+/// edge from a core point to one of its k neighbours, both with normals.
+fn tile_forest(
+    tile: &TilePoints,
+    core: &[Hood],
+    normals: &[Option<Fitted>],
+    cost: EdgeCost,
+) -> Vec<Edge> {
+    let mut edges = Vec::with_capacity(core.len() * 8);
+    for (i, h) in core.iter().enumerate() {
+        let Some(ni) = normals[i] else { continue };
+        for nb in &h.nbrs {
+            let j = nb.index as usize;
+            if let Some(nj) = normals[j] {
+                let dot = ni.n.dot(nj.n);
+                let c = edge_cost(cost, tile.points[j] - tile.points[i], &ni, &nj, dot);
+                edges.push(Edge::with_cost(
+                    tile.ids[i] as u32,
+                    tile.ids[j] as u32,
+                    c,
+                    dot,
+                ));
+            }
+        }
+    }
+    // Local numbering for the union-find: position in the sorted id list.
+    let mut ids: Vec<u32> = edges.iter().flat_map(|e| [e.a, e.b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let local = |id: u32| ids.binary_search(&id).unwrap_or(0) as u32;
+    spanning_forest(&mut edges, ids.len(), local);
+    edges
+}

@@ -1,0 +1,156 @@
+//! Tile forests on disk: each tile's sorted forest edges are appended as one
+//! run to a scratch file, and a k-way merge streams all runs back in global
+//! edge order, so the union of forests (about one edge per point) never has
+//! to fit in memory.
+
+use super::forest::Edge;
+use crate::io::IoError;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+/// Sorted runs of edges in one scratch file, removed on drop.
+pub struct EdgeRuns {
+    path: PathBuf,
+    out: BufWriter<File>,
+    runs: Vec<(u64, u64)>,
+    written: u64,
+}
+
+impl EdgeRuns {
+    pub fn create(path: &Path) -> Result<Self, IoError> {
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(path)
+            .map_err(|e| IoError::os(path, e))?;
+        Ok(EdgeRuns {
+            path: path.to_path_buf(),
+            out: BufWriter::with_capacity(1 << 20, file),
+            runs: Vec::new(),
+            written: 0,
+        })
+    }
+
+    /// Appends one run; `edges` must be sorted by [`Edge::key`].
+    pub fn push_run(&mut self, edges: &[Edge]) -> Result<(), IoError> {
+        for e in edges {
+            self.out
+                .write_all(&e.to_bytes())
+                .map_err(|err| IoError::os(&self.path, err))?;
+        }
+        self.runs.push((self.written, edges.len() as u64));
+        self.written += edges.len() as u64;
+        Ok(())
+    }
+
+    pub fn edges(&self) -> u64 {
+        self.written
+    }
+
+    /// Calls `f` on every edge of every run in global [`Edge::key`] order.
+    /// `buffer_bytes` is shared among the runs' read buffers.
+    pub fn merge(mut self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
+        self.out.flush().map_err(|e| IoError::os(&self.path, e))?;
+        let file = self.out.get_ref();
+        let per_run = (buffer_bytes / Edge::BYTES / self.runs.len().max(1)).max(64);
+        let mut cursors: Vec<RunCursor> = self
+            .runs
+            .iter()
+            .map(|&(start, len)| RunCursor {
+                next: start,
+                end: start + len,
+                buf: Vec::new(),
+                pos: 0,
+            })
+            .collect();
+        let mut heap = BinaryHeap::new();
+        for (r, c) in cursors.iter_mut().enumerate() {
+            if let Some(e) = c.peek(file, per_run, &self.path)? {
+                heap.push(Reverse((e.key(), r)));
+            }
+        }
+        while let Some(Reverse((_, r))) = heap.pop() {
+            let c = &mut cursors[r];
+            let e = c.buf[c.pos];
+            c.pos += 1;
+            f(e);
+            if let Some(e) = c.peek(file, per_run, &self.path)? {
+                heap.push(Reverse((e.key(), r)));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for EdgeRuns {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+struct RunCursor {
+    next: u64,
+    end: u64,
+    buf: Vec<Edge>,
+    pos: usize,
+}
+
+impl RunCursor {
+    /// The run's next edge, refilling the buffer from disk when it is empty.
+    fn peek(&mut self, file: &File, per_run: usize, path: &Path) -> Result<Option<Edge>, IoError> {
+        if self.pos == self.buf.len() {
+            let n = (self.end - self.next).min(per_run as u64) as usize;
+            if n == 0 {
+                return Ok(None);
+            }
+            let mut bytes = vec![0u8; n * Edge::BYTES];
+            file.read_exact_at(&mut bytes, self.next * Edge::BYTES as u64)
+                .map_err(|e| IoError::os(path, e))?;
+            self.buf.clear();
+            self.buf.extend(bytes.chunks_exact(Edge::BYTES).map(|c| {
+                let mut a = [0u8; 16];
+                a.copy_from_slice(c);
+                Edge::from_bytes(&a)
+            }));
+            self.pos = 0;
+            self.next += n as u64;
+        }
+        Ok(Some(self.buf[self.pos]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merge_yields_global_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut runs = EdgeRuns::create(&dir.path().join("e")).unwrap();
+        let mut all = Vec::new();
+        for r in 0..5u32 {
+            let mut edges: Vec<Edge> = (0..100u32)
+                .map(|i| {
+                    Edge::new(
+                        r * 1000 + i,
+                        r * 1000 + i + 1,
+                        ((i * 7919 + r * 31) % 97) as f64 / 97.0,
+                    )
+                })
+                .collect();
+            edges.sort_unstable_by_key(Edge::key);
+            runs.push_run(&edges).unwrap();
+            all.extend(edges);
+        }
+        all.sort_unstable_by_key(Edge::key);
+        let mut merged = Vec::new();
+        runs.merge(1024, |e| merged.push(e)).unwrap();
+        assert_eq!(merged, all);
+    }
+}

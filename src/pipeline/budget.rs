@@ -1,0 +1,52 @@
+//! The memory budget: turns `--mem` (a promise about peak RSS) into tile sizes.
+
+/// Peak-RSS budget split between fixed costs and tiles in flight.
+#[derive(Clone, Copy, Debug)]
+pub struct MemoryBudget {
+    pub bytes: u64,
+    pub threads: usize,
+}
+
+/// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O buffers.
+const BASE_BYTES: u64 = 48 << 20;
+
+impl MemoryBudget {
+    pub fn new(bytes: u64, threads: usize) -> Self {
+        MemoryBudget {
+            bytes,
+            threads: threads.max(1),
+        }
+    }
+
+    /// Largest tile (core points) such that `threads + 1` tiles in flight, each
+    /// with `margin_factor` times its core points loaded at
+    /// `bytes_per_point`, fit beside `reserved` bytes and the base cost.
+    pub fn tile_points(&self, bytes_per_point: u64, margin_factor: f64, reserved: u64) -> u64 {
+        let free = self.bytes.saturating_sub(BASE_BYTES + reserved);
+        let per_tile = free / (self.threads as u64 + 1);
+        let pts = per_tile as f64 / (bytes_per_point.max(1) as f64 * margin_factor.max(1.0));
+        (pts as u64).max(1024)
+    }
+}
+
+/// This process's peak resident set size so far (Linux `VmHWM`), if known.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_shrink_with_budget_and_threads() {
+        let a = MemoryBudget::new(1 << 30, 2).tile_points(400, 1.3, 0);
+        let b = MemoryBudget::new(256 << 20, 2).tile_points(400, 1.3, 0);
+        let c = MemoryBudget::new(256 << 20, 4).tile_points(400, 1.3, 0);
+        assert!(a > b && b > c, "{a} {b} {c}");
+        assert!(b * 3 * 400 * 13 / 10 <= (256 << 20) - BASE_BYTES);
+    }
+}

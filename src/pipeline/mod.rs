@@ -1,0 +1,32 @@
+//! The shared tile pipeline: schedules tile jobs on worker threads, bounds the
+//! tiles in flight (and so the memory), reorders results into tile order and
+//! hands them to the kernel's seam policy. It knows nothing of geometry.
+
+pub mod budget;
+pub mod progress;
+pub mod run;
+
+pub use budget::{peak_rss_bytes, MemoryBudget};
+pub use progress::{NoProgress, Progress};
+pub use run::{run_tiles, KernelError, RunOptions, RunStats, TileKernel};
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PipelineError {
+    #[error(transparent)]
+    Store(#[from] crate::store::StoreError),
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    #[error("tile {tile}: {reason}")]
+    Kernel { tile: usize, reason: String },
+    #[error("tile {tile}: margin {margin} is short but the kernel asked for {needed}")]
+    MarginStuck {
+        tile: usize,
+        margin: f64,
+        needed: f64,
+    },
+    #[error("a worker thread stopped without a result")]
+    WorkerLost,
+    #[error("{0}")]
+    Seam(String),
+}

@@ -1,0 +1,347 @@
+//! Building a store from any point source in streaming passes whose memory
+//! does not grow with the number of points:
+//! 1. read: parse the input once, validate, spill f64 points to a scratch
+//!    file, accumulate the bounding box;
+//! 2. histogram: count points per coarse grid cell;
+//! 3. plan: kd-split the histogram into tiles of at most the target size;
+//! 4. scatter: write each point into its tile's slot range, through small
+//!    per-tile buffers;
+//! 5. sort: order each tile along a Morton curve, count exact duplicates,
+//!    record block bounds.
+
+use super::manifest::{GridSpec, Manifest, STORE_VERSION};
+use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
+use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
+use crate::geom::Aabb;
+use crate::io::{PointChunk, PointReader, DEFAULT_CHUNK};
+use crate::pipeline::{MemoryBudget, Progress};
+use crate::tiling::{plan_tiles, TilePlan};
+use glam::DVec3;
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// Point ids are u32 in the orientation pass's union-find.
+pub const MAX_POINTS: u64 = u32::MAX as u64 - 1;
+
+const SPILL_FILE: &str = ".ingest.spill";
+
+#[derive(Clone, Debug)]
+pub struct BuildOptions {
+    pub tiles: TileTarget,
+    /// Bytes of per-tile write buffers during the scatter pass, in total.
+    pub scatter_buffer: usize,
+}
+
+/// How large tiles may be.
+#[derive(Clone, Copy, Debug)]
+pub enum TileTarget {
+    /// At most this many core points per tile.
+    Points(u64),
+    /// As large as the memory budget allows for a kernel needing
+    /// `bytes_per_point` per loaded point, after `reserved_per_point` bytes
+    /// per stored point kept for global passes (e.g. orientation).
+    Budget {
+        budget: MemoryBudget,
+        bytes_per_point: u64,
+        reserved_per_point: u64,
+    },
+}
+
+impl TileTarget {
+    pub fn points(&self, count: u64) -> u64 {
+        match *self {
+            TileTarget::Points(n) => n.max(1),
+            TileTarget::Budget {
+                budget,
+                bytes_per_point,
+                reserved_per_point,
+            } => budget.tile_points(bytes_per_point, 1.5, reserved_per_point * count),
+        }
+    }
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            tiles: TileTarget::Points(1 << 20),
+            scatter_buffer: 32 << 20,
+        }
+    }
+}
+
+/// Streams `reader` into a new store at `dir` (created; must not hold a store).
+pub fn build_store(
+    reader: &mut dyn PointReader,
+    dir: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<PointStore, StoreError> {
+    std::fs::create_dir_all(dir).map_err(|e| StoreError::os(dir, e))?;
+    let source = reader.info().path.clone();
+    let spill_path = dir.join(SPILL_FILE);
+    let result = build_with_spill(reader, dir, &spill_path, opts, progress);
+    let _ = std::fs::remove_file(&spill_path);
+    let mut manifest = result?;
+    manifest.source = source.display().to_string();
+    save_manifest(dir, &manifest)?;
+    PointStore::open(dir)
+}
+
+fn build_with_spill(
+    reader: &mut dyn PointReader,
+    dir: &Path,
+    spill_path: &Path,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<Manifest, StoreError> {
+    let (count, bounds) = spill(reader, spill_path, progress)?;
+    if count == 0 {
+        return Err(StoreError::Empty {
+            path: reader.info().path.clone(),
+        });
+    }
+    let grid = grid_for(&bounds, count);
+    let cells = histogram(spill_path, &grid, count, progress)?;
+    let plan = plan_tiles(cells, grid.dims, opts.tiles.points(count));
+    let origin = bounds.center();
+    let mut tiles = tile_entries(&plan);
+    scatter(
+        spill_path, dir, &grid, &plan, &tiles, origin, count, opts, progress,
+    )?;
+    let duplicates = sort::sort_tiles(dir, &mut tiles, progress)?;
+    Ok(Manifest {
+        version: STORE_VERSION,
+        count,
+        skipped_invalid: reader.skipped(),
+        duplicates,
+        origin: origin.to_array(),
+        bounds_min: bounds.min.to_array(),
+        bounds_max: bounds.max.to_array(),
+        spacing: None,
+        grid,
+        tiles,
+        columns: Vec::new(),
+        source: String::new(),
+        source_has_normals: reader.info().has_normals,
+    })
+}
+
+fn spill(
+    reader: &mut dyn PointReader,
+    path: &Path,
+    progress: &dyn Progress,
+) -> Result<(u64, Aabb), StoreError> {
+    let file = File::create(path).map_err(|e| StoreError::os(path, e))?;
+    let mut out = BufWriter::with_capacity(1 << 20, file);
+    let mut chunk = PointChunk::default();
+    let mut bounds = Aabb::EMPTY;
+    let mut count = 0u64;
+    progress.begin("read", reader.info().declared_count.unwrap_or(0));
+    loop {
+        let n = reader.read_chunk(&mut chunk, DEFAULT_CHUNK)?;
+        if n == 0 {
+            break;
+        }
+        for p in &chunk.xyz {
+            bounds.add(*p);
+            for v in p.to_array() {
+                out.write_all(&v.to_le_bytes())
+                    .map_err(|e| StoreError::os(path, e))?;
+            }
+        }
+        count += n as u64;
+        if count > MAX_POINTS {
+            return Err(StoreError::TooMany {
+                path: reader.info().path.clone(),
+                count,
+                max: MAX_POINTS,
+            });
+        }
+        progress.advance(n as u64);
+    }
+    out.flush().map_err(|e| StoreError::os(path, e))?;
+    progress.end();
+    Ok((count, bounds))
+}
+
+/// Histogram grid: cubic cells, about `sqrt(n / 16)` cells along the longest
+/// axis (so a surface puts ~16 points in an occupied cell), at most 1024.
+fn grid_for(bounds: &Aabb, count: u64) -> GridSpec {
+    let ext = bounds.extent();
+    let longest = ext.max_element();
+    let per_axis = ((count as f64 / 16.0).sqrt()).clamp(8.0, 1024.0);
+    let cell = if longest > 0.0 {
+        longest / per_axis
+    } else {
+        1.0
+    };
+    let dims = ext
+        .to_array()
+        .map(|e| ((e / cell).floor() as u32 + 1).min(1 << 20));
+    GridSpec {
+        min: bounds.min.to_array(),
+        cell,
+        dims,
+    }
+}
+
+fn cell_of(grid: &GridSpec, p: DVec3) -> [u32; 3] {
+    let mut c = [0u32; 3];
+    for a in 0..3 {
+        let f = ((p[a] - grid.min[a]) / grid.cell).floor();
+        c[a] = (f.max(0.0) as u32).min(grid.dims[a] - 1);
+    }
+    c
+}
+
+/// Reads the spill back in chunks of points.
+fn for_each_spilled(
+    path: &Path,
+    count: u64,
+    mut f: impl FnMut(u64, &[DVec3]) -> Result<(), StoreError>,
+) -> Result<(), StoreError> {
+    let file = File::open(path).map_err(|e| StoreError::os(path, e))?;
+    let mut input = BufReader::with_capacity(1 << 20, file);
+    let mut buf = vec![0u8; DEFAULT_CHUNK * 24];
+    let mut pts = Vec::with_capacity(DEFAULT_CHUNK);
+    let mut done = 0u64;
+    while done < count {
+        let n = (count - done).min(DEFAULT_CHUNK as u64) as usize;
+        input
+            .read_exact(&mut buf[..n * 24])
+            .map_err(|e| StoreError::os(path, e))?;
+        pts.clear();
+        pts.extend(buf[..n * 24].chunks_exact(24).map(|r| {
+            let v = |o: usize| f64::from_le_bytes(r[o..o + 8].try_into().unwrap_or([0; 8]));
+            DVec3::new(v(0), v(8), v(16))
+        }));
+        f(done, &pts)?;
+        done += n as u64;
+    }
+    Ok(())
+}
+
+fn histogram(
+    path: &Path,
+    grid: &GridSpec,
+    count: u64,
+    progress: &dyn Progress,
+) -> Result<Vec<([u32; 3], u64)>, StoreError> {
+    let mut cells: HashMap<[u32; 3], u64> = HashMap::new();
+    progress.begin("histogram", count);
+    for_each_spilled(path, count, |_, pts| {
+        for p in pts {
+            *cells.entry(cell_of(grid, *p)).or_insert(0) += 1;
+        }
+        progress.advance(pts.len() as u64);
+        Ok(())
+    })?;
+    progress.end();
+    // Order does not matter: the planner sorts.
+    Ok(cells.into_iter().collect())
+}
+
+fn tile_entries(plan: &TilePlan) -> Vec<TileEntry> {
+    let mut start = 0;
+    let mut first_block = 0;
+    plan.tiles
+        .iter()
+        .map(|t| {
+            let e = TileEntry {
+                start,
+                count: t.count,
+                lo: t.lo,
+                hi: t.hi,
+                points_min: [0.0; 3],
+                points_max: [0.0; 3],
+                first_block,
+            };
+            start += t.count;
+            first_block += t.count.div_ceil(BLOCK);
+            e
+        })
+        .collect()
+}
+
+/// Per-tile write cursor with small buffers for both columns.
+struct TileBuffer {
+    next: u64,
+    xyz: Vec<u8>,
+    index: Vec<u8>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn scatter(
+    spill_path: &Path,
+    dir: &Path,
+    grid: &GridSpec,
+    plan: &TilePlan,
+    tiles: &[TileEntry],
+    origin: DVec3,
+    count: u64,
+    opts: &BuildOptions,
+    progress: &dyn Progress,
+) -> Result<(), StoreError> {
+    let xyz = Column::create(&dir.join(XYZ_FILE), 12, count)?;
+    let index = Column::create(&dir.join(INDEX_FILE), 8, count)?;
+    let nblocks: u64 = tiles.iter().map(|t| t.count.div_ceil(BLOCK)).sum();
+    Column::create(&dir.join(BLOCKS_FILE), 24, nblocks)?;
+    // Points buffered per tile before a positioned write: the whole budget
+    // split across tiles, at least a page worth.
+    let per_tile = (opts.scatter_buffer / tiles.len().max(1) / 20).clamp(256, 1 << 16);
+    let mut bufs: Vec<TileBuffer> = tiles
+        .iter()
+        .map(|t| TileBuffer {
+            next: t.start,
+            xyz: Vec::new(),
+            index: Vec::new(),
+        })
+        .collect();
+    progress.begin("scatter", count);
+    for_each_spilled(spill_path, count, |first, pts| {
+        for (i, p) in pts.iter().enumerate() {
+            let t = plan.tile_of(cell_of(grid, *p)) as usize;
+            let b = &mut bufs[t];
+            let rel = *p - origin;
+            for v in [rel.x as f32, rel.y as f32, rel.z as f32] {
+                b.xyz.extend_from_slice(&v.to_le_bytes());
+            }
+            b.index.extend_from_slice(&(first + i as u64).to_le_bytes());
+            if b.index.len() >= per_tile * 8 {
+                flush(b, &xyz, &index)?;
+            }
+        }
+        progress.advance(pts.len() as u64);
+        Ok(())
+    })?;
+    for b in &mut bufs {
+        flush(b, &xyz, &index)?;
+    }
+    progress.end();
+    Ok(())
+}
+
+fn flush(b: &mut TileBuffer, xyz: &Column, index: &Column) -> Result<(), StoreError> {
+    let n = (b.index.len() / 8) as u64;
+    if n == 0 {
+        return Ok(());
+    }
+    xyz.write_bytes(b.next, &b.xyz)?;
+    index.write_bytes(b.next, &b.index)?;
+    b.next += n;
+    b.xyz.clear();
+    b.index.clear();
+    Ok(())
+}
+
+/// Where a store for `input` goes when the user did not build one: a scratch
+/// directory beside the output, removed after the run.
+pub fn scratch_store_dir(output: &Path) -> PathBuf {
+    let name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    output.with_file_name(format!(".{}.store-{}", name, std::process::id()))
+}

@@ -1,0 +1,141 @@
+//! Flat little-endian column files: mapped for reading range by range,
+//! written with positioned writes. The one module that needs `unsafe` (the
+//! memory map); every map is dropped as soon as its range is decoded, so
+//! touched pages do not pile up in RSS.
+#![allow(unsafe_code)]
+
+use super::StoreError;
+use memmap2::MmapOptions;
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+/// A column file of fixed-size items.
+#[derive(Debug)]
+pub struct Column {
+    path: PathBuf,
+    file: File,
+    item_bytes: usize,
+}
+
+impl Column {
+    pub fn open(path: &Path, item_bytes: usize, writable: bool) -> Result<Self, StoreError> {
+        let file = File::options()
+            .read(true)
+            .write(writable)
+            .open(path)
+            .map_err(|e| StoreError::os(path, e))?;
+        Ok(Column {
+            path: path.to_path_buf(),
+            file,
+            item_bytes,
+        })
+    }
+
+    /// Creates (or truncates) a column sized for `items` items, zero-filled
+    /// (sparse where the file system allows).
+    pub fn create(path: &Path, item_bytes: usize, items: u64) -> Result<Self, StoreError> {
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(path)
+            .map_err(|e| StoreError::os(path, e))?;
+        file.set_len(items * item_bytes as u64)
+            .map_err(|e| StoreError::os(path, e))?;
+        Ok(Column {
+            path: path.to_path_buf(),
+            file,
+            item_bytes,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Calls `f` with the raw bytes of items `[first, first + count)`.
+    pub fn with_bytes<R>(
+        &self,
+        first: u64,
+        count: u64,
+        f: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, StoreError> {
+        let len = count as usize * self.item_bytes;
+        if len == 0 {
+            return Ok(f(&[]));
+        }
+        let offset = first * self.item_bytes as u64;
+        let file_len = self
+            .file
+            .metadata()
+            .map_err(|e| StoreError::os(&self.path, e))?
+            .len();
+        if offset + len as u64 > file_len {
+            return Err(StoreError::Corrupt {
+                path: self.path.clone(),
+                reason: format!(
+                    "column holds {} bytes, range {}..{} asked",
+                    file_len,
+                    offset,
+                    offset + len as u64
+                ),
+            });
+        }
+        // SAFETY: the store's column files are private to scanmesh and are not
+        // truncated while a store is open; the range was checked against the
+        // file length above. The map lives only inside this call.
+        let map = unsafe { MmapOptions::new().offset(offset).len(len).map(&self.file) }
+            .map_err(|e| StoreError::os(&self.path, e))?;
+        Ok(f(&map))
+    }
+
+    /// Writes raw bytes at item position `first`.
+    pub fn write_bytes(&self, first: u64, bytes: &[u8]) -> Result<(), StoreError> {
+        self.file
+            .write_all_at(bytes, first * self.item_bytes as u64)
+            .map_err(|e| StoreError::os(&self.path, e))
+    }
+
+    pub fn read_f32(&self, first: u64, count: u64, out: &mut Vec<f32>) -> Result<(), StoreError> {
+        out.clear();
+        self.with_bytes(first, count, |b| {
+            out.extend(
+                b.chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            )
+        })
+    }
+
+    pub fn read_u64(&self, first: u64, count: u64, out: &mut Vec<u64>) -> Result<(), StoreError> {
+        out.clear();
+        self.with_bytes(first, count, |b| {
+            out.extend(
+                b.chunks_exact(8)
+                    .map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])),
+            )
+        })
+    }
+
+    pub fn read_u8(&self, first: u64, count: u64, out: &mut Vec<u8>) -> Result<(), StoreError> {
+        out.clear();
+        self.with_bytes(first, count, |b| out.extend_from_slice(b))
+    }
+
+    pub fn write_f32(&self, first: u64, values: &[f32]) -> Result<(), StoreError> {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.write_bytes(first, &bytes)
+    }
+
+    pub fn write_u64(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.write_bytes(first, &bytes)
+    }
+
+    pub fn sync(&self) -> Result<(), StoreError> {
+        self.file
+            .sync_data()
+            .map_err(|e| StoreError::os(&self.path, e))
+    }
+}

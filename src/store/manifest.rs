@@ -1,0 +1,58 @@
+//! The store manifest: the small JSON file that describes a point store
+//! (counts, origin, bounds, spacing, tile table, columns, provenance).
+
+use serde::{Deserialize, Serialize};
+
+/// Bumped whenever the on-disk layout changes incompatibly.
+pub const STORE_VERSION: u32 = 1;
+
+pub const MANIFEST_FILE: &str = "manifest.json";
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub version: u32,
+    /// Points kept (the store index and the point index run over 0..count).
+    pub count: u64,
+    /// Input records dropped under `--skip-invalid`.
+    pub skipped_invalid: u64,
+    /// Points that repeat another point's coordinates exactly (as stored).
+    pub duplicates: u64,
+    /// Coordinates are stored as f32 relative to this f64 origin.
+    pub origin: [f64; 3],
+    /// Tight bounds of the input points (absolute, f64).
+    pub bounds_min: [f64; 3],
+    pub bounds_max: [f64; 3],
+    /// Mean nearest-neighbour distance estimated on a sample, if computed.
+    pub spacing: Option<f64>,
+    pub grid: GridSpec,
+    pub tiles: Vec<TileEntry>,
+    /// Attribute columns present besides coordinates and indices.
+    pub columns: Vec<String>,
+    pub source: String,
+    pub source_has_normals: bool,
+}
+
+/// The coarse histogram grid the planner split; tile cores are integer boxes
+/// of it, so they partition space exactly.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct GridSpec {
+    /// Absolute position of grid corner (0,0,0).
+    pub min: [f64; 3],
+    pub cell: f64,
+    pub dims: [u32; 3],
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct TileEntry {
+    /// First store index of the tile's points; they run to `start + count`.
+    pub start: u64,
+    pub count: u64,
+    /// Core box in grid cells, half-open `[lo, hi)`.
+    pub lo: [u32; 3],
+    pub hi: [u32; 3],
+    /// Tight bounds of the tile's stored points (relative to the origin).
+    pub points_min: [f32; 3],
+    pub points_max: [f32; 3],
+    /// First block (of [`super::BLOCK`] points) of this tile in the block table.
+    pub first_block: u64,
+}

@@ -1,0 +1,249 @@
+//! The point store: a directory holding a JSON manifest beside flat
+//! little-endian columns, tile-sorted (see `ARCHITECTURE.md`).
+//!
+//! Columns: `xyz.f32` (f32 x,y,z relative to the f64 origin), `index.u64`
+//! (each point's position in input order), `blocks.f32` (bounds of every
+//! [`BLOCK`] consecutive points of a tile, to find margin points without
+//! reading whole neighbour tiles), and attribute columns later passes add
+//! (`normal.f32`, `flags.u8`). The store index is the global point id.
+
+pub mod build;
+pub mod column;
+pub mod export;
+pub mod manifest;
+mod sort;
+pub mod source;
+pub mod spacing;
+
+pub use build::{build_store, BuildOptions, TileTarget};
+pub use column::Column;
+pub use export::export_points;
+pub use manifest::{GridSpec, Manifest, TileEntry};
+pub use source::{is_store, open_input, Workspace};
+
+use crate::geom::Aabb;
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+/// Points per bounds block inside a tile.
+pub const BLOCK: u64 = 512;
+
+pub const XYZ_FILE: &str = "xyz.f32";
+pub const INDEX_FILE: &str = "index.u64";
+pub const BLOCKS_FILE: &str = "blocks.f32";
+pub const NORMAL_FILE: &str = "normal.f32";
+pub const FLAGS_FILE: &str = "flags.u8";
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    #[error("{path}: {source}")]
+    Os {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: not a valid point store: {reason}")]
+    Corrupt { path: PathBuf, reason: String },
+    #[error(transparent)]
+    Input(#[from] crate::io::IoError),
+    #[error("{path}: no points to process")]
+    Empty { path: PathBuf },
+    #[error("{path}: {count} points exceed the supported {max}")]
+    TooMany { path: PathBuf, count: u64, max: u64 },
+    #[error(transparent)]
+    Index(#[from] crate::spatial::IndexError),
+    #[error("store has no `{column}` column (run the pass that computes it first)")]
+    MissingColumn { column: String },
+}
+
+impl StoreError {
+    pub fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        StoreError::Os {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+/// An open point store.
+#[derive(Debug)]
+pub struct PointStore {
+    pub dir: PathBuf,
+    pub manifest: Manifest,
+    xyz: Column,
+    index: Column,
+    blocks: Column,
+}
+
+impl PointStore {
+    pub fn open(dir: &Path) -> Result<Self, StoreError> {
+        let mpath = dir.join(manifest::MANIFEST_FILE);
+        let text = std::fs::read_to_string(&mpath).map_err(|e| StoreError::os(&mpath, e))?;
+        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| StoreError::Corrupt {
+            path: mpath.clone(),
+            reason: e.to_string(),
+        })?;
+        if manifest.version != manifest::STORE_VERSION {
+            return Err(StoreError::Corrupt {
+                path: mpath,
+                reason: format!(
+                    "store version {} (this scanmesh reads {})",
+                    manifest.version,
+                    manifest::STORE_VERSION
+                ),
+            });
+        }
+        let store = PointStore {
+            xyz: Column::open(&dir.join(XYZ_FILE), 12, false)?,
+            index: Column::open(&dir.join(INDEX_FILE), 8, false)?,
+            blocks: Column::open(&dir.join(BLOCKS_FILE), 24, false)?,
+            dir: dir.to_path_buf(),
+            manifest,
+        };
+        store.validate()?;
+        Ok(store)
+    }
+
+    /// Checks the tile table against the counts: contiguous, complete.
+    pub fn validate(&self) -> Result<(), StoreError> {
+        let mut next = 0;
+        for (i, t) in self.manifest.tiles.iter().enumerate() {
+            if t.start != next {
+                return Err(self.corrupt(format!("tile {i} starts at {} not {next}", t.start)));
+            }
+            next += t.count;
+        }
+        if next != self.manifest.count {
+            return Err(self.corrupt(format!(
+                "tiles hold {next} points, manifest says {}",
+                self.manifest.count
+            )));
+        }
+        Ok(())
+    }
+
+    fn corrupt(&self, reason: String) -> StoreError {
+        StoreError::Corrupt {
+            path: self.dir.clone(),
+            reason,
+        }
+    }
+
+    pub fn len(&self) -> u64 {
+        self.manifest.count
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.manifest.count == 0
+    }
+
+    pub fn tiles(&self) -> &[TileEntry] {
+        &self.manifest.tiles
+    }
+
+    pub fn origin(&self) -> DVec3 {
+        DVec3::from_array(self.manifest.origin)
+    }
+
+    /// Bounds of all stored points, relative to the origin.
+    pub fn relative_bounds(&self) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for t in &self.manifest.tiles {
+            b.add(DVec3::from_array(t.points_min.map(f64::from)));
+            b.add(DVec3::from_array(t.points_max.map(f64::from)));
+        }
+        b
+    }
+
+    /// Stored coordinates (relative to the origin) of points `[first, first+count)`.
+    pub fn read_points(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<DVec3>,
+    ) -> Result<(), StoreError> {
+        let mut raw = Vec::new();
+        self.xyz.read_f32(first, count, &mut raw)?;
+        out.clear();
+        out.extend(
+            raw.chunks_exact(3)
+                .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
+        );
+        Ok(())
+    }
+
+    /// Input-order index of points `[first, first+count)`.
+    pub fn read_indices(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<u64>,
+    ) -> Result<(), StoreError> {
+        self.index.read_u64(first, count, out)
+    }
+
+    /// Bounds of blocks `[first, first+count)` (relative to the origin).
+    pub fn read_blocks(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<Aabb>,
+    ) -> Result<(), StoreError> {
+        let mut raw = Vec::new();
+        self.blocks.read_f32(first, count, &mut raw)?;
+        out.clear();
+        out.extend(raw.chunks_exact(6).map(|c| {
+            Aabb::new(
+                DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64),
+                DVec3::new(c[3] as f64, c[4] as f64, c[5] as f64),
+            )
+        }));
+        Ok(())
+    }
+
+    pub fn has_column(&self, name: &str) -> bool {
+        self.manifest.columns.iter().any(|c| c == name)
+    }
+
+    /// Opens an attribute column for reading and writing.
+    pub fn attribute(&self, name: &str, item_bytes: usize) -> Result<Column, StoreError> {
+        if !self.has_column(name) {
+            return Err(StoreError::MissingColumn {
+                column: name.to_string(),
+            });
+        }
+        Column::open(&self.dir.join(name), item_bytes, true)
+    }
+
+    /// Creates (or resets) an attribute column and records it in the manifest.
+    pub fn create_attribute(
+        &mut self,
+        name: &str,
+        item_bytes: usize,
+    ) -> Result<Column, StoreError> {
+        let col = Column::create(&self.dir.join(name), item_bytes, self.manifest.count)?;
+        if !self.has_column(name) {
+            self.manifest.columns.push(name.to_string());
+            self.save_manifest()?;
+        }
+        Ok(col)
+    }
+
+    pub fn save_manifest(&self) -> Result<(), StoreError> {
+        save_manifest(&self.dir, &self.manifest)
+    }
+}
+
+/// Writes the manifest atomically (temp + rename): a store whose manifest
+/// exists is complete.
+pub fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
+    let path = dir.join(manifest::MANIFEST_FILE);
+    let text = serde_json::to_string_pretty(manifest).map_err(|e| StoreError::Corrupt {
+        path: path.clone(),
+        reason: e.to_string(),
+    })?;
+    let tmp = dir.join(format!(".{}.tmp", manifest::MANIFEST_FILE));
+    std::fs::write(&tmp, text).map_err(|e| StoreError::os(&tmp, e))?;
+    std::fs::rename(&tmp, &path).map_err(|e| StoreError::os(&path, e))
+}

@@ -1,0 +1,67 @@
+//! Where a command's points come from: a store built earlier (`scanmesh
+//! tile`), or an input file ingested into a scratch store that is removed
+//! when the run ends, successful or not.
+
+use super::{build_store, BuildOptions, PointStore, StoreError};
+use crate::io::{open_reader, InvalidPolicy};
+use crate::pipeline::Progress;
+use std::path::{Path, PathBuf};
+
+/// An open store, owning its directory when it is scratch.
+#[derive(Debug)]
+pub struct Workspace {
+    pub store: PointStore,
+    scratch: Option<PathBuf>,
+}
+
+impl Workspace {
+    pub fn is_scratch(&self) -> bool {
+        self.scratch.is_some()
+    }
+}
+
+impl Drop for Workspace {
+    fn drop(&mut self) {
+        if let Some(dir) = &self.scratch {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+    }
+}
+
+/// True when `path` is a point store directory.
+pub fn is_store(path: &Path) -> bool {
+    path.join(super::manifest::MANIFEST_FILE).is_file()
+}
+
+/// Opens `input` as a store, or ingests it into a scratch store at `scratch`.
+pub fn open_input(
+    input: &Path,
+    scratch: &Path,
+    opts: &BuildOptions,
+    policy: InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<Workspace, StoreError> {
+    if is_store(input) {
+        return Ok(Workspace {
+            store: PointStore::open(input)?,
+            scratch: None,
+        });
+    }
+    let mut reader = open_reader(input, policy)?;
+    // Own the directory before building, so a failed build is cleaned up too.
+    let guard = ScratchGuard(scratch.to_path_buf());
+    let store = build_store(reader.as_mut(), scratch, opts, progress)?;
+    std::mem::forget(guard);
+    Ok(Workspace {
+        store,
+        scratch: Some(scratch.to_path_buf()),
+    })
+}
+
+struct ScratchGuard(PathBuf);
+
+impl Drop for ScratchGuard {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}

@@ -1,0 +1,99 @@
+//! Shared helpers of the integration tests: run the library's whole data
+//! flow (ingest -> store -> tiles -> kernel -> export) on generated points.
+#![allow(dead_code)]
+
+use glam::{DVec3, Vec3};
+use scanmesh::io::memory::MemoryReader;
+use scanmesh::io::{open_reader, Format, InvalidPolicy, PointChunk, WriterSpec};
+use scanmesh::normals::{compute_normals, NormalParams, NormalsReport};
+use scanmesh::pipeline::{NoProgress, RunOptions};
+use scanmesh::store::{build_store, export_points, BuildOptions, PointStore, TileTarget};
+use std::path::Path;
+
+/// Builds a store of `points` in `dir` with tiles of at most `tile_points`.
+pub fn store_of(points: &[DVec3], dir: &Path, tile_points: u64) -> PointStore {
+    let mut reader = MemoryReader::new("generated", points.to_vec(), None);
+    let opts = BuildOptions {
+        tiles: TileTarget::Points(tile_points),
+        ..BuildOptions::default()
+    };
+    build_store(&mut reader, dir, &opts, &NoProgress).expect("build store")
+}
+
+/// Per-point results read back from an exported PLY, in input order.
+pub struct NormalsOut {
+    pub report: NormalsReport,
+    pub normals: Vec<Vec3>,
+    pub flags: Vec<u8>,
+    pub bytes: Vec<u8>,
+}
+
+/// Runs normals through the whole pipeline with `threads` workers (and a
+/// rayon pool of that size), exporting a binary PLY and reading it back.
+pub fn normals_of(
+    points: &[DVec3],
+    tile_points: u64,
+    threads: usize,
+    params: &NormalParams,
+) -> NormalsOut {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let mut store = store_of(points, &dir.path().join("store"), tile_points);
+        let report = compute_normals(&mut store, params, RunOptions::new(threads), &NoProgress)
+            .expect("normals");
+        let out = dir.path().join("out.ply");
+        let spec = WriterSpec {
+            format: Format::PlyBinaryLe,
+            with_normals: true,
+            with_flags: true,
+            bounds: None,
+            las_transform: None,
+        };
+        export_points(&store, &out, &spec, 7777, &NoProgress).expect("export");
+        let (normals, flags) = read_normals(&out);
+        NormalsOut {
+            report,
+            normals,
+            flags,
+            bytes: std::fs::read(&out).expect("read output"),
+        }
+    })
+}
+
+/// Normals of a PLY file in file order; flags are parsed from the raw
+/// records (the point reader does not carry them).
+pub fn read_normals(path: &Path) -> (Vec<Vec3>, Vec<u8>) {
+    let mut r = open_reader(path, InvalidPolicy::Reject).expect("open");
+    let mut chunk = PointChunk::default();
+    let mut normals = Vec::new();
+    while r.read_chunk(&mut chunk, 4096).expect("read") > 0 {
+        normals.extend(chunk.normals.as_ref().expect("normals present"));
+    }
+    let bytes = std::fs::read(path).expect("read");
+    let body = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .map(|p| p + 11)
+        .expect("header end");
+    // Records: 3 doubles, 3 floats, 1 flag byte.
+    let flags = bytes[body..].chunks_exact(37).map(|r| r[36]).collect();
+    (normals, flags)
+}
+
+/// Angle in degrees between two directions, ignoring sign when `unsigned`.
+pub fn angle_deg(a: DVec3, b: DVec3, unsigned: bool) -> f64 {
+    let mut c = a.normalize().dot(b.normalize());
+    if unsigned {
+        c = c.abs();
+    }
+    c.clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}

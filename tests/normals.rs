@@ -1,0 +1,157 @@
+//! Normals end to end: accuracy on analytic surfaces, consistent orientation,
+//! tiled == untiled bit for bit, 1 thread == 2 threads, degenerate input.
+
+mod common;
+
+use common::{angle_deg, median, normals_of};
+use glam::DVec3;
+use scanmesh::normals::{NormalParams, Orientation, FLAG_DEGENERATE, FLAG_UNORIENTED};
+use scanmesh::spatial::KnnBackend;
+use scanmesh::synth::{generate, Shape};
+
+fn check_outward(shape: &Shape, n: usize, noise: f64, max_median_deg: f64) {
+    let scan = generate(shape, n, noise, 7).expect("generate");
+    let out = normals_of(&scan.points, u64::MAX, 2, &NormalParams::default());
+    assert_eq!(out.report.degenerate, 0);
+    let mut errs = Vec::new();
+    let mut agree = 0;
+    for (i, n) in out.normals.iter().enumerate() {
+        let truth = scan.normals[i];
+        errs.push(angle_deg(n.as_dvec3(), truth, true));
+        agree += usize::from(n.as_dvec3().dot(truth) > 0.0);
+    }
+    let med = median(errs);
+    assert!(
+        med < max_median_deg,
+        "{}: median angle error {med:.3} deg",
+        shape.name()
+    );
+    assert_eq!(
+        agree,
+        n,
+        "{}: {} of {n} normals point outward",
+        shape.name(),
+        agree
+    );
+}
+
+#[test]
+fn sphere_normals_are_radial_and_outward() {
+    check_outward(&Shape::unit_sphere(), 20_000, 0.0, 1.0);
+}
+
+#[test]
+fn torus_normals_are_accurate_and_outward() {
+    check_outward(&Shape::torus(1.0, 0.3), 30_000, 0.0, 1.5);
+}
+
+#[test]
+fn noisy_sphere_stays_oriented() {
+    check_outward(&Shape::unit_sphere(), 20_000, 0.002, 5.0);
+}
+
+#[test]
+fn tiled_equals_untiled_bit_for_bit() {
+    let scan = generate(&Shape::torus(1.0, 0.3), 40_000, 0.001, 11).expect("generate");
+    let params = NormalParams::default();
+    let whole = normals_of(&scan.points, u64::MAX, 2, &params);
+    let tiled = normals_of(&scan.points, 600, 2, &params);
+    assert_eq!(whole.report.tiles, 1);
+    assert!(
+        tiled.report.tiles >= 64,
+        "only {} tiles",
+        tiled.report.tiles
+    );
+    assert!(
+        whole.bytes == tiled.bytes,
+        "tiled output differs from untiled"
+    );
+}
+
+#[test]
+fn one_thread_equals_two_threads() {
+    let scan = generate(&Shape::unit_sphere(), 20_000, 0.001, 3).expect("generate");
+    let params = NormalParams::default();
+    let one = normals_of(&scan.points, 1500, 1, &params);
+    let two = normals_of(&scan.points, 1500, 2, &params);
+    assert!(
+        one.bytes == two.bytes,
+        "1-thread and 2-thread outputs differ"
+    );
+}
+
+#[test]
+fn grid_and_kdtree_give_the_same_normals() {
+    let scan = generate(&Shape::torus(1.0, 0.3), 20_000, 0.001, 5).expect("generate");
+    let kd = normals_of(&scan.points, 2000, 2, &NormalParams::default());
+    let grid = normals_of(
+        &scan.points,
+        2000,
+        2,
+        &NormalParams {
+            backend: KnnBackend::Grid,
+            ..NormalParams::default()
+        },
+    );
+    assert!(kd.bytes == grid.bytes);
+}
+
+#[test]
+fn viewpoint_orientation_faces_the_scanner() {
+    let scan = generate(&Shape::terrain(), 20_000, 0.0, 9).expect("generate");
+    let view = DVec3::new(0.0, 0.0, 1000.0);
+    let params = NormalParams {
+        orientation: Orientation::Viewpoint(view),
+        ..NormalParams::default()
+    };
+    let out = normals_of(&scan.points, 3000, 2, &params);
+    for (i, n) in out.normals.iter().enumerate() {
+        if out.flags[i] & FLAG_DEGENERATE == 0 {
+            assert!(n.as_dvec3().dot(view - scan.points[i]) > 0.0, "point {i}");
+        }
+    }
+}
+
+#[test]
+fn colinear_points_are_flagged_not_invented() {
+    let points: Vec<DVec3> = (0..500)
+        .map(|i| DVec3::new(i as f64 * 0.01, 2.0, 3.0))
+        .collect();
+    let out = normals_of(&points, u64::MAX, 1, &NormalParams::default());
+    assert_eq!(out.report.degenerate, 500);
+    assert!(out.flags.iter().all(|f| f & FLAG_DEGENERATE != 0));
+    assert!(out.normals.iter().all(|n| *n == glam::Vec3::ZERO));
+}
+
+#[test]
+fn duplicated_points_get_the_same_normal() {
+    let scan = generate(&Shape::unit_sphere(), 5_000, 0.0, 1).expect("generate");
+    let mut pts = scan.points.clone();
+    pts.extend_from_slice(&scan.points);
+    let out = normals_of(&pts, 1000, 2, &NormalParams::default());
+    assert_eq!(out.report.degenerate, 0);
+    for i in 0..scan.points.len() {
+        let (a, b) = (out.normals[i], out.normals[i + scan.points.len()]);
+        assert!(
+            angle_deg(a.as_dvec3(), b.as_dvec3(), false) < 1.0,
+            "point {i}"
+        );
+        assert!(a.as_dvec3().dot(scan.normals[i]) > 0.0);
+    }
+}
+
+#[test]
+fn a_small_island_is_flagged_unoriented() {
+    // A big sphere and a far tiny cluster: the cluster is < 1/1000 of points.
+    let scan = generate(&Shape::unit_sphere(), 30_000, 0.0, 2).expect("generate");
+    let mut pts = scan.points.clone();
+    let island =
+        generate(&Shape::sphere(DVec3::new(50.0, 0.0, 0.0), 0.01), 20, 0.0, 3).expect("generate");
+    pts.extend_from_slice(&island.points);
+    let out = normals_of(&pts, u64::MAX, 2, &NormalParams::default());
+    let unoriented: Vec<usize> = (0..pts.len())
+        .filter(|&i| out.flags[i] & FLAG_UNORIENTED != 0)
+        .collect();
+    assert_eq!(unoriented, (30_000..30_020).collect::<Vec<_>>());
+    assert_eq!(out.report.unoriented, 20);
+}

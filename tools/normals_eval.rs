@@ -1,0 +1,99 @@
+//! `normals-eval`: compares a point file's normals with the vertex normals of
+//! a reference triangle mesh whose vertices are those points, in the same
+//! order (e.g. `scanmesh normals dragon_vrip.ply.gz` against the dragon's own
+//! triangles). Vertex normals are area-weighted face normals, right-hand
+//! winding (outward for a consistently wound closed mesh).
+
+use anyhow::{bail, Result};
+use clap::Parser;
+use glam::DVec3;
+use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
+use scanmesh::normals::evaluate::accuracy;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "normals-eval",
+    about = "Normals of a point file against a reference mesh's vertex normals"
+)]
+struct Args {
+    /// Point file with normals (as written by `scanmesh normals`).
+    normals: PathBuf,
+    /// Triangle mesh whose vertices are the same points in the same order.
+    #[arg(long)]
+    reference: PathBuf,
+    #[arg(long)]
+    json: bool,
+    /// Also print orientation disagreements binned by angle error.
+    #[arg(long)]
+    by_angle: bool,
+}
+
+/// Disagreements per 15-degree bin of unsigned angle error: flips of
+/// accurate normals are orientation failures, flips of normals near 90
+/// degrees off are undecidable.
+fn print_by_angle(normals: &[DVec3], truth: &[DVec3]) {
+    let mut bins = [(0usize, 0usize); 7];
+    for (n, t) in normals.iter().zip(truth) {
+        if *n == DVec3::ZERO || *t == DVec3::ZERO {
+            continue;
+        }
+        let c = n.normalize().dot(t.normalize());
+        let b = (c.abs().clamp(0.0, 1.0).acos().to_degrees() / 15.0) as usize;
+        bins[b.min(6)].0 += 1;
+        bins[b.min(6)].1 += usize::from(c < 0.0);
+    }
+    for (i, (all, wrong)) in bins.iter().enumerate().take(6) {
+        println!(
+            "  angle {:>2}-{:>2} deg: {all:>8} points, {wrong:>6} flipped",
+            i * 15,
+            i * 15 + 15
+        );
+    }
+}
+
+fn main() -> Result<()> {
+    let a = Args::parse();
+    let (vertices, faces) = read_mesh_any(&a.reference)?;
+    let mut truth = vec![DVec3::ZERO; vertices.len()];
+    for f in &faces {
+        let [p, q, r] = f.map(|i| vertices[i as usize]);
+        // Cross product length is twice the area: area weighting for free.
+        let n = (q - p).cross(r - p);
+        for i in f {
+            truth[*i as usize] += n;
+        }
+    }
+    let mut reader = open_reader(&a.normals, InvalidPolicy::Reject)?;
+    let mut chunk = PointChunk::default();
+    let mut normals = Vec::with_capacity(vertices.len());
+    while reader.read_chunk(&mut chunk, 1 << 16)? > 0 {
+        let Some(ns) = &chunk.normals else {
+            bail!("{}: no normals", a.normals.display());
+        };
+        normals.extend(ns.iter().map(|n| n.as_dvec3()));
+    }
+    if normals.len() != truth.len() {
+        bail!(
+            "{} points but the reference has {} vertices",
+            normals.len(),
+            truth.len()
+        );
+    }
+    let acc = accuracy(&normals, &truth);
+    if a.by_angle {
+        print_by_angle(&normals, &truth);
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&acc)?);
+    } else {
+        println!(
+            "normals-eval: {} points compared, median angle {:.3} deg, 95th percentile {:.3} deg, oriented with the mesh {:.4} %",
+            acc.compared,
+            acc.median_angle_deg,
+            acc.p95_angle_deg,
+            100.0 * acc.oriented_fraction
+        );
+    }
+    Ok(())
+}
