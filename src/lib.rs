@@ -9,5 +9,6 @@
 
 pub mod geom;
 pub mod io;
+pub mod mesh;
 pub mod normals;
 pub mod spatial;
