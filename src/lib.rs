@@ -10,6 +10,7 @@
 pub mod demo;
 pub mod geom;
 pub mod io;
+pub mod mesh;
 pub mod normals;
 pub mod pipeline;
 pub mod recon;

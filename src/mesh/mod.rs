@@ -1,0 +1,102 @@
+//! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
+//! topology metrics ([`quality`]), distances to a reference ([`distance`]),
+//! streaming PLY/OBJ output ([`write`]) and procedural shapes for tests and
+//! benches ([`shapes`]).
+//!
+//! Mesh evaluation is not part of the five papers; the metrics follow the
+//! standard definitions named in each module (Euler characteristic, fans,
+//! Ericson's closest point). The "spacing" used to scale distances is the one
+//! of `/work/shared/papers/README.md` (conventions): the mean
+//! nearest-neighbour distance.
+
+pub mod distance;
+pub mod error;
+pub mod quality;
+pub mod shapes;
+pub mod write;
+
+mod bvh;
+mod closest;
+mod nearest;
+mod sampling;
+mod topology;
+mod union_find;
+
+pub use distance::{
+    compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
+};
+pub use error::MeshError;
+pub use quality::{quality, ComponentQuality, QualityReport};
+pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions};
+
+use error::non_finite_coordinate;
+use glam::DVec3;
+
+/// An indexed triangle mesh: plain data, no invariants enforced on
+/// construction. Call [`Mesh::validate`] at a trust boundary; the metrics
+/// below tolerate invalid data (they skip and count it) rather than panic.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub vertices: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
+        Mesh {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Checks that every coordinate is finite and every index is in range;
+    /// reports the first offender.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        for (i, p) in self.vertices.iter().enumerate() {
+            if let Some(value) = non_finite_coordinate(*p) {
+                return Err(MeshError::NonFiniteVertex {
+                    vertex: i as u64,
+                    value,
+                });
+            }
+        }
+        let n = self.vertices.len();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    triangle: t as u64,
+                    index,
+                    vertex_count: n as u64,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The corner positions of `tri`, or `None` when an index is out of
+    /// range or a corner is not finite.
+    pub fn corners(&self, tri: [u32; 3]) -> Option<[DVec3; 3]> {
+        let get = |i: u32| {
+            self.vertices
+                .get(i as usize)
+                .copied()
+                .filter(|p| p.is_finite())
+        };
+        Some([get(tri[0])?, get(tri[1])?, get(tri[2])?])
+    }
+
+    /// Sum of triangle areas, skipping invalid triangles. Summed in fixed
+    /// order, so the result is reproducible.
+    pub fn area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .filter_map(|&t| self.corners(t))
+            .map(|[a, b, c]| triangle_area(a, b, c))
+            .sum()
+    }
+}
+
+/// Area of the triangle `abc`.
+pub fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    0.5 * (b - a).cross(c - a).length()
+}

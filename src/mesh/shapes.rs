@@ -1,0 +1,134 @@
+//! Procedural meshes with known geometry and topology, for tests, benches
+//! and demos: a subdivided icosahedron (sphere, genus 0), a torus (genus 1)
+//! and a planar grid (a disc with one boundary loop). All consistently
+//! oriented, outward normals for the closed ones.
+
+use super::Mesh;
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// Unit icosphere: the icosahedron with each triangle split in four
+/// `subdivisions` times, vertices pushed onto the unit sphere.
+/// Triangles: 20 * 4^subdivisions.
+pub fn icosphere(subdivisions: u32) -> Mesh {
+    let mut mesh = icosahedron();
+    for _ in 0..subdivisions {
+        mesh = subdivide(&mesh);
+    }
+    mesh
+}
+
+fn icosahedron() -> Mesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let raw = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ];
+    let vertices = raw
+        .iter()
+        .map(|&v| DVec3::from_array(v).normalize())
+        .collect();
+    let triangles = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    Mesh::new(vertices, triangles)
+}
+
+/// One 1-to-4 split; edge midpoints are shared through a map that is only
+/// looked up, never iterated, so the result is deterministic.
+fn subdivide(mesh: &Mesh) -> Mesh {
+    let mut vertices = mesh.vertices.clone();
+    let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut midpoint = |a: u32, b: u32, vertices: &mut Vec<DVec3>| -> u32 {
+        let key = (a.min(b), a.max(b));
+        *midpoints.entry(key).or_insert_with(|| {
+            let m = (vertices[a as usize] + vertices[b as usize]).normalize();
+            vertices.push(m);
+            (vertices.len() - 1) as u32
+        })
+    };
+    let mut triangles = Vec::with_capacity(mesh.triangles.len() * 4);
+    for &[a, b, c] in &mesh.triangles {
+        let ab = midpoint(a, b, &mut vertices);
+        let bc = midpoint(b, c, &mut vertices);
+        let ca = midpoint(c, a, &mut vertices);
+        triangles.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// Torus around the z axis: tube radius `minor` around a circle of radius
+/// `major`, `n_major x n_minor` quads split into two triangles each.
+/// Closed, genus 1 (Euler characteristic 0) for n_major, n_minor >= 3.
+pub fn torus(major: f64, minor: f64, n_major: u32, n_minor: u32) -> Mesh {
+    let mut vertices = Vec::with_capacity((n_major * n_minor) as usize);
+    for i in 0..n_major {
+        let u = std::f64::consts::TAU * i as f64 / n_major as f64;
+        for j in 0..n_minor {
+            let v = std::f64::consts::TAU * j as f64 / n_minor as f64;
+            let r = major + minor * v.cos();
+            vertices.push(DVec3::new(r * u.cos(), r * u.sin(), minor * v.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (i % n_major) * n_minor + (j % n_minor);
+    let mut triangles = Vec::with_capacity(2 * vertices.len());
+    for i in 0..n_major {
+        for j in 0..n_minor {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.extend([[a, b, c], [a, c, d]]);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// Planar grid in z = 0 over `[0, size.x] x [0, size.y]` with `nx x ny`
+/// cells, two triangles per cell, normals +z. Vertex `(i, j)` has index
+/// `j * (nx + 1) + i`.
+pub fn grid(nx: u32, ny: u32, size: glam::DVec2) -> Mesh {
+    let mut vertices = Vec::with_capacity(((nx + 1) * (ny + 1)) as usize);
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let x = size.x * i as f64 / nx.max(1) as f64;
+            let y = size.y * j as f64 / ny.max(1) as f64;
+            vertices.push(DVec3::new(x, y, 0.0));
+        }
+    }
+    let id = |i: u32, j: u32| j * (nx + 1) + i;
+    let mut triangles = Vec::with_capacity(2 * (nx * ny) as usize);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.extend([[a, b, c], [a, c, d]]);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}

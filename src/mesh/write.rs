@@ -1,0 +1,298 @@
+//! Streaming mesh output: PLY (binary little-endian or ASCII) and OBJ, in
+//! memory that does not grow with the mesh (ARCHITECTURE.md, "Writers").
+//!
+//! Vertices stream into the final file (an [`AtomicFile`], under a
+//! temporary name) right after a header whose counts are fixed-width
+//! placeholders; faces stream into an unnamed scratch file in the same
+//! directory (the OS removes it on drop or on a crash). `finish` appends the
+//! faces, patches the counts in place (same width, so nothing shifts) and
+//! renames the file into place. Dropping an unfinished writer leaves nothing.
+//!
+//! Binary PLY layout: vertex `x, y, z` as `double` (or `float` with
+//! [`WriteOptions::single_precision`]), face `list uchar int vertex_indices`
+//! (so at most 2^31 vertices). Counts are written as 20 zero-padded digits,
+//! which every PLY reader parses as the plain decimal number.
+
+use super::error::non_finite_coordinate;
+use super::{Mesh, MeshError};
+use crate::io::{AtomicFile, IoError};
+use glam::DVec3;
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    PlyBinary,
+    PlyAscii,
+    Obj,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// Write vertex coordinates as 32-bit floats instead of doubles.
+    pub single_precision: bool,
+}
+
+/// Width of the patched count fields in a PLY header.
+const COUNT_WIDTH: usize = 20;
+/// Buffer per stream: large writes, flat memory.
+const BUFFER: usize = 1 << 20;
+
+/// Where the two counts sit in the PLY header.
+#[derive(Clone, Copy, Debug)]
+struct CountOffsets {
+    vertices: u64,
+    faces: u64,
+}
+
+pub struct MeshWriter {
+    // Sinks first: they drop (and flush into the doomed temporary) before
+    // `out` removes it.
+    vertex_sink: BufWriter<File>,
+    face_sink: BufWriter<File>,
+    out: AtomicFile,
+    format: MeshFormat,
+    options: WriteOptions,
+    counts_at: Option<CountOffsets>,
+    vertices: u64,
+    triangles: u64,
+    /// Largest index seen so far and the first triangle that used it.
+    max_index: Option<(u32, u64)>,
+}
+
+impl MeshWriter {
+    pub fn create(path: &Path, format: MeshFormat) -> Result<Self, MeshError> {
+        Self::create_with(path, format, WriteOptions::default())
+    }
+
+    pub fn create_with(
+        path: &Path,
+        format: MeshFormat,
+        options: WriteOptions,
+    ) -> Result<Self, MeshError> {
+        let mut out = AtomicFile::create(path)?;
+        let os = |e| MeshError::Io(IoError::os(path, e));
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let scratch = tempfile::tempfile_in(&dir).map_err(os)?;
+        let mut vertex_sink = BufWriter::with_capacity(BUFFER, out.file().try_clone().map_err(os)?);
+        let counts_at = write_header(&mut vertex_sink, format, options).map_err(os)?;
+        Ok(MeshWriter {
+            vertex_sink,
+            face_sink: BufWriter::with_capacity(BUFFER, scratch),
+            out,
+            format,
+            options,
+            counts_at,
+            vertices: 0,
+            triangles: 0,
+            max_index: None,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        self.out.final_path()
+    }
+
+    /// Largest vertex count the format can index.
+    fn vertex_limit(&self) -> u64 {
+        match self.format {
+            MeshFormat::PlyBinary | MeshFormat::PlyAscii => i32::MAX as u64 + 1,
+            MeshFormat::Obj => u32::MAX as u64 + 1,
+        }
+    }
+
+    /// Appends vertices; returns the global index of the first one. The
+    /// batch is checked before anything is written, so a refused batch
+    /// leaves the writer as it was.
+    pub fn add_vertices(&mut self, vertices: &[DVec3]) -> Result<u32, MeshError> {
+        let first = self.vertices;
+        let count = first + vertices.len() as u64;
+        let limit = self.vertex_limit();
+        let too_many = || MeshError::TooManyVertices {
+            path: self.path().to_path_buf(),
+            count,
+            limit,
+        };
+        if count > limit {
+            return Err(too_many());
+        }
+        // An empty batch on a full writer has no index to return.
+        let first_index = u32::try_from(first).map_err(|_| too_many())?;
+        if let Some((i, value)) = vertices
+            .iter()
+            .enumerate()
+            .find_map(|(i, &p)| non_finite_coordinate(p).map(|v| (i, v)))
+        {
+            return Err(MeshError::NonFiniteOutput {
+                path: self.path().to_path_buf(),
+                vertex: first + i as u64,
+                value,
+            });
+        }
+        for &p in vertices {
+            self.write_vertex(p).map_err(|e| self.os(e))?;
+        }
+        self.vertices = count;
+        Ok(first_index)
+    }
+
+    /// Appends triangles by global vertex index. Indices may refer to
+    /// vertices not yet added; `finish` checks them all. After an I/O error
+    /// the writer is unusable: drop it (which removes the partial output).
+    pub fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> Result<(), MeshError> {
+        for &t in triangles {
+            let m = t[0].max(t[1]).max(t[2]);
+            if self.max_index.is_none_or(|(best, _)| m > best) {
+                self.max_index = Some((m, self.triangles));
+            }
+            self.write_face(t).map_err(|e| self.os(e))?;
+            self.triangles += 1;
+        }
+        Ok(())
+    }
+
+    /// Completes the file and renames it into place; returns the vertex and
+    /// triangle counts written.
+    pub fn finish(mut self) -> Result<(u64, u64), MeshError> {
+        if let Some((index, triangle)) = self.max_index.filter(|&(m, _)| m as u64 >= self.vertices)
+        {
+            return Err(MeshError::DanglingIndex {
+                path: self.path().to_path_buf(),
+                triangle,
+                index,
+                vertex_count: self.vertices,
+            });
+        }
+        self.assemble().map_err(|e| self.os(e))?;
+        let counts = (self.vertices, self.triangles);
+        let MeshWriter { out, .. } = self;
+        out.commit()?;
+        Ok(counts)
+    }
+
+    /// Appends the faces to the vertices and patches the header counts.
+    fn assemble(&mut self) -> std::io::Result<()> {
+        self.vertex_sink.flush()?;
+        self.face_sink.flush()?;
+        let file = self.vertex_sink.get_mut();
+        let scratch = self.face_sink.get_mut();
+        scratch.seek(SeekFrom::Start(0))?;
+        file.seek(SeekFrom::End(0))?;
+        std::io::copy(scratch, file)?;
+        if let Some(at) = self.counts_at {
+            for (offset, count) in [(at.vertices, self.vertices), (at.faces, self.triangles)] {
+                file.seek(SeekFrom::Start(offset))?;
+                write!(file, "{count:0COUNT_WIDTH$}")?;
+            }
+        }
+        Ok(())
+    }
+
+    fn os(&self, e: std::io::Error) -> MeshError {
+        MeshError::Io(IoError::os(self.path(), e))
+    }
+
+    fn write_vertex(&mut self, p: DVec3) -> std::io::Result<()> {
+        let w = &mut self.vertex_sink;
+        let single = self.options.single_precision;
+        match self.format {
+            MeshFormat::PlyBinary if single => {
+                for c in p.as_vec3().to_array() {
+                    w.write_all(&c.to_le_bytes())?;
+                }
+                Ok(())
+            }
+            MeshFormat::PlyBinary => {
+                for c in p.to_array() {
+                    w.write_all(&c.to_le_bytes())?;
+                }
+                Ok(())
+            }
+            // Rust's float Display is the shortest text that reads back to
+            // the same value, so ASCII output round-trips exactly.
+            MeshFormat::PlyAscii if single => {
+                let q = p.as_vec3();
+                writeln!(w, "{} {} {}", q.x, q.y, q.z)
+            }
+            MeshFormat::PlyAscii => writeln!(w, "{} {} {}", p.x, p.y, p.z),
+            MeshFormat::Obj if single => {
+                let q = p.as_vec3();
+                writeln!(w, "v {} {} {}", q.x, q.y, q.z)
+            }
+            MeshFormat::Obj => writeln!(w, "v {} {} {}", p.x, p.y, p.z),
+        }
+    }
+
+    fn write_face(&mut self, t: [u32; 3]) -> std::io::Result<()> {
+        let w = &mut self.face_sink;
+        match self.format {
+            MeshFormat::PlyBinary => {
+                w.write_all(&[3u8])?;
+                // Indices above i32::MAX are caught by `finish` (the vertex
+                // limit), so the cast never writes a wrong index to a file
+                // that gets committed.
+                for i in t {
+                    w.write_all(&(i as i32).to_le_bytes())?;
+                }
+                Ok(())
+            }
+            MeshFormat::PlyAscii => writeln!(w, "3 {} {} {}", t[0], t[1], t[2]),
+            MeshFormat::Obj => {
+                let [a, b, c] = t.map(|i| i as u64 + 1);
+                writeln!(w, "f {a} {b} {c}")
+            }
+        }
+    }
+}
+
+/// Writes the header; for PLY returns where the two counts sit.
+fn write_header(
+    w: &mut BufWriter<File>,
+    format: MeshFormat,
+    options: WriteOptions,
+) -> std::io::Result<Option<CountOffsets>> {
+    let kind = match format {
+        MeshFormat::PlyBinary => "binary_little_endian",
+        MeshFormat::PlyAscii => "ascii",
+        MeshFormat::Obj => {
+            writeln!(w, "# written by scanmesh")?;
+            return Ok(None);
+        }
+    };
+    let scalar = if options.single_precision {
+        "float"
+    } else {
+        "double"
+    };
+    let placeholder = format!("{:0COUNT_WIDTH$}", 0);
+    let mut header =
+        format!("ply\nformat {kind} 1.0\ncomment written by scanmesh\nelement vertex ");
+    let vertices = header.len() as u64;
+    header.push_str(&placeholder);
+    header.push_str(&format!(
+        "\nproperty {scalar} x\nproperty {scalar} y\nproperty {scalar} z\nelement face "
+    ));
+    let faces = header.len() as u64;
+    header.push_str(&placeholder);
+    header.push_str("\nproperty list uchar int vertex_indices\nend_header\n");
+    w.write_all(header.as_bytes())?;
+    Ok(Some(CountOffsets { vertices, faces }))
+}
+
+/// Writes `mesh` to `path` in one go (streamed in batches through
+/// [`MeshWriter`]); returns the vertex and triangle counts.
+pub fn write_mesh(path: &Path, mesh: &Mesh, format: MeshFormat) -> Result<(u64, u64), MeshError> {
+    const BATCH: usize = 1 << 16;
+    let mut writer = MeshWriter::create(path, format)?;
+    for chunk in mesh.vertices.chunks(BATCH) {
+        writer.add_vertices(chunk)?;
+    }
+    for chunk in mesh.triangles.chunks(BATCH) {
+        writer.add_triangles(chunk)?;
+    }
+    writer.finish()
+}
