@@ -51,8 +51,36 @@ impl Progress for Bars {
     }
 }
 
+/// Stage timings on stderr (`SCANMESH_TIMINGS=1`), for profiling runs.
+struct Timings {
+    start: Mutex<Option<(String, std::time::Instant)>>,
+}
+
+impl Progress for Timings {
+    fn begin(&self, stage: &str, _: u64) {
+        if let Ok(mut s) = self.start.lock() {
+            *s = Some((stage.to_string(), std::time::Instant::now()));
+        }
+    }
+
+    fn advance(&self, _: u64) {}
+
+    fn end(&self) {
+        if let Ok(mut s) = self.start.lock() {
+            if let Some((stage, t0)) = s.take() {
+                eprintln!("{:>24}: {:.3} s", stage, t0.elapsed().as_secs_f64());
+            }
+        }
+    }
+}
+
 /// Bars on a terminal, nothing otherwise or when `quiet`.
 pub fn progress(quiet: bool) -> Box<dyn Progress> {
+    if std::env::var_os("SCANMESH_TIMINGS").is_some() {
+        return Box::new(Timings {
+            start: Mutex::new(None),
+        });
+    }
     if quiet || !std::io::stderr().is_terminal() {
         Box::new(NoProgress)
     } else {

@@ -65,14 +65,24 @@ impl Edge {
     }
 }
 
-/// Minimum spanning forest of `edges` over vertices named by `local(id)`
-/// (dense local numbering `0..n`). Sorts `edges` by [`Edge::key`] and keeps
-/// the forest edges, in that order.
-pub fn spanning_forest(edges: &mut Vec<Edge>, n: usize, local: impl Fn(u32) -> u32) {
-    edges.sort_unstable_by_key(Edge::key);
-    edges.dedup_by_key(|e| (e.a, e.b));
+/// An edge with its endpoints' dense local numbers (`0..n` in a tile).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalEdge {
+    pub edge: Edge,
+    pub local: [u32; 2],
+}
+
+/// Minimum spanning forest of `edges` over `n` local vertices: sorts by
+/// [`Edge::key`], drops repeats, and returns the forest edges in that order.
+pub fn spanning_forest(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
+    edges.sort_unstable_by_key(|e| e.edge.key());
+    edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
     let mut uf = ParityUnionFind::new(n);
-    edges.retain(|e| uf.union(local(e.a), local(e.b), false));
+    edges
+        .into_iter()
+        .filter(|e| uf.union(e.local[0], e.local[1], false))
+        .map(|e| e.edge)
+        .collect()
 }
 
 #[cfg(test)]
@@ -93,14 +103,19 @@ mod tests {
     #[test]
     fn forest_keeps_cheapest_edges() {
         // Square 0-1-2-3 with one diagonal; the heaviest cycle edges go.
-        let mut edges = vec![
-            Edge::new(0, 1, 0.9),
-            Edge::new(1, 2, 0.99),
-            Edge::new(2, 3, 0.8),
-            Edge::new(3, 0, 0.95),
-            Edge::new(0, 2, 0.5),
-        ];
-        spanning_forest(&mut edges, 4, |i| i);
+        let edges = [
+            (0, 1, 0.9),
+            (1, 2, 0.99),
+            (2, 3, 0.8),
+            (3, 0, 0.95),
+            (0, 2, 0.5),
+        ]
+        .map(|(a, b, d)| LocalEdge {
+            edge: Edge::new(a, b, d),
+            local: [a, b],
+        })
+        .to_vec();
+        let edges = spanning_forest(edges, 4);
         assert_eq!(edges.len(), 3);
         let kept: Vec<_> = edges.iter().map(|e| (e.a, e.b)).collect();
         assert_eq!(kept, vec![(1, 2), (0, 3), (0, 1)]);

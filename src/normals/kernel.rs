@@ -9,8 +9,9 @@
 //! run time that every neighbourhood it used lies inside the loaded region and
 //! asks for a wider margin otherwise.
 
-use super::forest::{spanning_forest, Edge};
+use super::forest::{spanning_forest, Edge, LocalEdge};
 use super::pca::fit_plane;
+use super::stats::SamplingHistograms;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::{build_index, KnnIndex, Neighbour};
@@ -19,7 +20,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// What one tile contributes.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct NormalsTile {
     /// Unit normals of the core points, in store order (zero when degenerate).
     pub normals: Vec<[f32; 3]>,
@@ -27,6 +28,8 @@ pub struct NormalsTile {
     /// The tile's minimum spanning forest, sorted by [`Edge::key`] (empty
     /// unless orientation is by spanning tree).
     pub forest: Vec<Edge>,
+    /// Nearest-neighbour distances and fit residuals of the core points.
+    pub sampling: SamplingHistograms,
 }
 
 pub struct NormalsKernel {
@@ -34,12 +37,16 @@ pub struct NormalsKernel {
     /// Store origin, for the viewpoint (given in absolute coordinates).
     pub origin: DVec3,
     pub initial_margin: f64,
+    /// Store spacing: the scale of the sampling histograms.
+    pub spacing: f64,
 }
 
 /// A fitted (and, toward a viewpoint, oriented) unit normal.
 #[derive(Clone, Copy, Debug)]
 struct Fitted {
     n: DVec3,
+    /// RMS distance of the neighbourhood to its plane.
+    residual: f64,
 }
 
 /// Neighbourhood of one point: its neighbours and the room check.
@@ -72,7 +79,8 @@ impl NormalsKernel {
             Orientation::Viewpoint(v) if n.dot(v - self.origin - tile.points[i]) < 0.0 => -n,
             _ => n,
         };
-        Some(Fitted { n })
+        let residual = (fit.eigenvalues[0].max(0.0) / (hood.nbrs.len() + 1) as f64).sqrt();
+        Some(Fitted { n, residual })
     }
 }
 
@@ -113,6 +121,7 @@ impl TileKernel for NormalsKernel {
                 .map(|n| if n.is_some() { 0 } else { FLAG_DEGENERATE })
                 .collect(),
             forest: Vec::new(),
+            sampling: sampling(&core, &core_normals, self.spacing),
         };
         if self.params.orientation == Orientation::SpanningTree {
             self.fit_ring(index, tile, &core, &mut normals)?;
@@ -159,6 +168,19 @@ impl NormalsKernel {
         }
         Ok(())
     }
+}
+
+fn sampling(core: &[Hood], fitted: &[Option<Fitted>], spacing: f64) -> SamplingHistograms {
+    let mut h = SamplingHistograms::new(spacing);
+    for (hood, f) in core.iter().zip(fitted) {
+        if let Some(nb) = hood.nbrs.first() {
+            h.nn.add(nb.dist2.sqrt());
+        }
+        if let Some(f) = f {
+            h.residual.add(f.residual);
+        }
+    }
+    h
 }
 
 /// Fails with the margin that would make every neighbourhood complete.
@@ -210,23 +232,24 @@ fn tile_forest(
         let Some(ni) = normals[i] else { continue };
         for nb in &h.nbrs {
             let j = nb.index as usize;
+            // A mutual pair of core points is added once, from its lower end.
+            let mutual = j < core.len() && core[j].nbrs.iter().any(|m| m.index as usize == i);
+            if mutual && j < i {
+                continue;
+            }
             if let Some(nj) = normals[j] {
                 let dot = ni.n.dot(nj.n);
                 let c = edge_cost(cost, tile.points[j] - tile.points[i], &ni, &nj, dot);
-                edges.push(Edge::with_cost(
-                    tile.ids[i] as u32,
-                    tile.ids[j] as u32,
-                    c,
-                    dot,
-                ));
+                let edge = Edge::with_cost(tile.ids[i] as u32, tile.ids[j] as u32, c, dot);
+                // Local numbers in the same (id) order as the edge's ends.
+                let local = if tile.ids[i] < tile.ids[j] {
+                    [i as u32, j as u32]
+                } else {
+                    [j as u32, i as u32]
+                };
+                edges.push(LocalEdge { edge, local });
             }
         }
     }
-    // Local numbering for the union-find: position in the sorted id list.
-    let mut ids: Vec<u32> = edges.iter().flat_map(|e| [e.a, e.b]).collect();
-    ids.sort_unstable();
-    ids.dedup();
-    let local = |id: u32| ids.binary_search(&id).unwrap_or(0) as u32;
-    spanning_forest(&mut edges, ids.len(), local);
-    edges
+    spanning_forest(edges, tile.points.len())
 }

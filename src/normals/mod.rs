@@ -13,14 +13,16 @@ pub mod kernel;
 pub mod orient;
 pub mod pca;
 pub mod runs;
+pub mod stats;
 pub mod unionfind;
 
 use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::KnnBackend;
-use crate::store::{PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
+use crate::store::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
 use glam::DVec3;
 use kernel::{NormalsKernel, NormalsTile};
 use runs::EdgeRuns;
+use stats::{SamplingHistograms, SamplingStats};
 
 /// The neighbourhood was too small or degenerate (colinear, coincident) for
 /// a tangent plane: the normal is zero, never made up.
@@ -103,6 +105,7 @@ pub struct NormalsReport {
     pub unoriented: u64,
     pub components: usize,
     pub forest_edges: u64,
+    pub sampling: SamplingStats,
     pub run: RunStats,
 }
 
@@ -124,12 +127,31 @@ pub fn compute_normals(
     let spacing = crate::store::spacing::ensure_spacing(store)?;
     let normals = store.create_attribute(NORMAL_FILE, 12)?;
     let flags = store.create_attribute(FLAGS_FILE, 1)?;
+    let report = normals_into(store, params, spacing, opts, progress, &normals, &flags)?;
+    normals.sync()?;
+    flags.sync()?;
+    store.manifest.sampling = Some(report.sampling);
+    store.save_manifest()?;
+    Ok(report)
+}
+
+/// The kernel pass and, for the spanning tree, the global orientation.
+fn normals_into(
+    store: &PointStore,
+    params: &NormalParams,
+    spacing: f64,
+    opts: RunOptions,
+    progress: &dyn Progress,
+    normals: &Column,
+    flags: &Column,
+) -> Result<NormalsReport, NormalsError> {
     let kernel = NormalsKernel {
         params: *params,
         origin: store.origin(),
         initial_margin: initial_margin(spacing, params.k),
+        spacing,
     };
-    let store = &*store;
+    let mut sampling = SamplingHistograms::new(spacing);
     let mut runs = EdgeRuns::create(&store.dir.join(".forest.edges"))?;
     let mut report = NormalsReport {
         points: store.len(),
@@ -147,15 +169,15 @@ pub fn compute_normals(
             .filter(|f| **f & FLAG_DEGENERATE != 0)
             .count() as u64;
         runs.push_run(&out.forest)?;
+        sampling.merge(&out.sampling);
         Ok(())
     })?;
+    report.sampling = sampling.stats();
     report.forest_edges = runs.edges();
     if params.orientation == Orientation::SpanningTree {
-        let stats = orient::orient_by_forest(store, runs, &normals, &flags, progress)?;
+        let stats = orient::orient_by_forest(store, runs, normals, flags, progress)?;
         report.unoriented = stats.unoriented;
         report.components = stats.components;
     }
-    normals.sync()?;
-    flags.sync()?;
     Ok(report)
 }

@@ -125,6 +125,7 @@ fn build_with_spill(
         columns: Vec::new(),
         source: String::new(),
         source_has_normals: reader.info().has_normals,
+        sampling: None,
     })
 }
 

@@ -30,6 +30,9 @@ pub struct Manifest {
     pub columns: Vec<String>,
     pub source: String,
     pub source_has_normals: bool,
+    /// Sampling density and noise, once a normals pass measured them.
+    #[serde(default)]
+    pub sampling: Option<crate::normals::stats::SamplingStats>,
 }
 
 /// The coarse histogram grid the planner split; tile cores are integer boxes

@@ -1,0 +1,194 @@
+//! Sampling statistics gathered by the normals kernel for later stages: the
+//! nearest-neighbour distance (paper 1's rho, sampling density) and the
+//! tangent-plane fit residual (its delta, noise), as mergeable log-scale
+//! histograms so tiles can be summed in any grouping to the same result.
+
+use serde::{Deserialize, Serialize};
+
+/// Bins per octave, and octaves below and above the scale.
+const PER_OCTAVE: f64 = 64.0;
+const OCTAVES: i32 = 24;
+const BINS: usize = (2 * OCTAVES) as usize * PER_OCTAVE as usize;
+
+/// Histogram of positive values on a log2 scale around `scale`, with 1.1 %
+/// wide bins; zeros and values outside the range are counted apart.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogHistogram {
+    scale: f64,
+    bins: Vec<u64>,
+    zeros: u64,
+    above: u64,
+    max: f64,
+}
+
+impl LogHistogram {
+    pub fn new(scale: f64) -> Self {
+        LogHistogram {
+            scale: if scale > 0.0 && scale.is_finite() {
+                scale
+            } else {
+                1.0
+            },
+            bins: vec![0; BINS],
+            zeros: 0,
+            above: 0,
+            max: 0.0,
+        }
+    }
+
+    pub fn add(&mut self, v: f64) {
+        if v.is_nan() || v <= 0.0 {
+            self.zeros += 1;
+            return;
+        }
+        self.max = self.max.max(v);
+        let b = ((v / self.scale).log2() + OCTAVES as f64) * PER_OCTAVE;
+        if b < 0.0 {
+            self.bins[0] += 1;
+        } else if b >= BINS as f64 {
+            self.above += 1;
+        } else {
+            self.bins[b as usize] += 1;
+        }
+    }
+
+    pub fn merge(&mut self, o: &LogHistogram) {
+        self.bins.iter_mut().zip(&o.bins).for_each(|(a, b)| *a += b);
+        self.zeros += o.zeros;
+        self.above += o.above;
+        self.max = self.max.max(o.max);
+    }
+
+    pub fn count(&self) -> u64 {
+        self.bins.iter().sum::<u64>() + self.zeros + self.above
+    }
+
+    fn upper_edge(&self, bin: usize) -> f64 {
+        self.scale * ((bin + 1) as f64 / PER_OCTAVE - OCTAVES as f64).exp2()
+    }
+
+    /// The value below which a fraction `q` of the values lie (bin upper
+    /// edge: at most 1.1 % high).
+    pub fn quantile(&self, q: f64) -> f64 {
+        let target = (q.clamp(0.0, 1.0) * self.count() as f64).ceil() as u64;
+        let mut seen = self.zeros;
+        if seen >= target {
+            return 0.0;
+        }
+        for (i, c) in self.bins.iter().enumerate() {
+            seen += c;
+            if seen >= target {
+                return self.upper_edge(i).min(self.max);
+            }
+        }
+        self.max
+    }
+
+    /// Largest value not above `limit`, and how many values exceed it.
+    pub fn max_below(&self, limit: f64) -> (f64, u64) {
+        let mut best = 0.0;
+        let mut over = self.above;
+        for (i, c) in self.bins.iter().enumerate() {
+            if *c == 0 {
+                continue;
+            }
+            let edge = self.upper_edge(i).min(self.max);
+            if edge <= limit * (1.0 + 1.0 / PER_OCTAVE) {
+                best = edge;
+            } else {
+                over += c;
+            }
+        }
+        (best, over)
+    }
+}
+
+/// The surface-sampling facts later stages need, saved in the store manifest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SamplingStats {
+    /// Robust largest nearest-neighbour distance (paper 1's rho): the
+    /// largest one not beyond 3x the 99th percentile.
+    pub rho: f64,
+    /// Points whose nearest neighbour lies beyond that (isolated outliers).
+    pub rho_outliers: u64,
+    /// Median nearest-neighbour distance.
+    pub median_nn: f64,
+    /// Noise bound (paper 1's delta) estimated as twice the median RMS
+    /// residual of the tangent-plane fits.
+    pub noise: f64,
+}
+
+/// Per-tile accumulators of [`SamplingStats`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplingHistograms {
+    pub nn: LogHistogram,
+    pub residual: LogHistogram,
+}
+
+impl SamplingHistograms {
+    pub fn new(spacing: f64) -> Self {
+        SamplingHistograms {
+            nn: LogHistogram::new(spacing),
+            residual: LogHistogram::new(spacing),
+        }
+    }
+
+    pub fn merge(&mut self, o: &SamplingHistograms) {
+        self.nn.merge(&o.nn);
+        self.residual.merge(&o.residual);
+    }
+
+    pub fn stats(&self) -> SamplingStats {
+        let (rho, rho_outliers) = self.nn.max_below(3.0 * self.nn.quantile(0.99));
+        SamplingStats {
+            rho,
+            rho_outliers,
+            median_nn: self.nn.quantile(0.5),
+            noise: 2.0 * self.residual.quantile(0.5),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_within_a_bin() {
+        let mut h = LogHistogram::new(1.0);
+        for i in 1..=1000 {
+            h.add(i as f64 / 100.0);
+        }
+        let q = h.quantile(0.5);
+        assert!((q - 5.0).abs() / 5.0 < 0.012, "{q}");
+        assert_eq!(h.quantile(1.0), 10.0);
+    }
+
+    #[test]
+    fn outliers_do_not_set_rho() {
+        let mut s = SamplingHistograms::new(1.0);
+        for i in 0..10_000 {
+            s.nn.add(1.0 + (i % 100) as f64 / 100.0);
+            s.residual.add(0.1);
+        }
+        s.nn.add(50.0);
+        s.nn.add(80.0);
+        let st = s.stats();
+        assert!(st.rho < 2.05 && st.rho > 1.95, "{st:?}");
+        assert_eq!(st.rho_outliers, 2);
+        assert!((st.noise - 0.2).abs() < 0.01);
+    }
+
+    #[test]
+    fn merge_is_order_free() {
+        let mut a = LogHistogram::new(0.5);
+        let mut b = LogHistogram::new(0.5);
+        (1..100).for_each(|i| a.add(i as f64));
+        (100..200).for_each(|i| b.add(i as f64));
+        let mut ab = a.clone();
+        ab.merge(&b);
+        let mut ba = b.clone();
+        ba.merge(&a);
+        assert_eq!(ab, ba);
+    }
+}
