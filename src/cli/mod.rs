@@ -3,8 +3,10 @@
 
 mod cmd_convert;
 mod cmd_demo;
+mod cmd_eval;
 mod cmd_info;
 mod cmd_normals;
+mod cmd_reconstruct;
 mod cmd_tile;
 mod progress;
 
@@ -37,6 +39,10 @@ enum Command {
     Tile(cmd_tile::TileArgs),
     /// Oriented normals for every point, written in input order.
     Normals(cmd_normals::NormalsArgs),
+    /// A triangle mesh from a point cloud (implicit: paper 1).
+    Reconstruct(cmd_reconstruct::ReconstructArgs),
+    /// Mesh quality, and distances to a reference mesh or point set.
+    Eval(cmd_eval::EvalArgs),
     /// Run the main job on a sample embedded in the binary.
     Demo(cmd_demo::DemoArgs),
 }
@@ -128,6 +134,8 @@ pub fn run() -> Result<()> {
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
         Command::Normals(a) => cmd_normals::run(a),
+        Command::Reconstruct(a) => cmd_reconstruct::run(a),
+        Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
     }
 }

@@ -37,8 +37,8 @@ pub struct NormalsKernel {
     /// Store origin, for the viewpoint (given in absolute coordinates).
     pub origin: DVec3,
     pub initial_margin: f64,
-    /// Store spacing: the scale of the sampling histograms.
-    pub spacing: f64,
+    /// Scale of the sampling histograms (the same for every tile).
+    pub histogram_scale: f64,
 }
 
 /// A fitted (and, toward a viewpoint, oriented) unit normal.
@@ -121,7 +121,7 @@ impl TileKernel for NormalsKernel {
                 .map(|n| if n.is_some() { 0 } else { FLAG_DEGENERATE })
                 .collect(),
             forest: Vec::new(),
-            sampling: sampling(&core, &core_normals, self.spacing),
+            sampling: sampling(&core, &core_normals, self.histogram_scale),
         };
         if self.params.orientation == Orientation::SpanningTree {
             self.fit_ring(index, tile, &core, &mut normals)?;
@@ -170,8 +170,8 @@ impl NormalsKernel {
     }
 }
 
-fn sampling(core: &[Hood], fitted: &[Option<Fitted>], spacing: f64) -> SamplingHistograms {
-    let mut h = SamplingHistograms::new(spacing);
+fn sampling(core: &[Hood], fitted: &[Option<Fitted>], scale: f64) -> SamplingHistograms {
+    let mut h = SamplingHistograms::new(scale);
     for (hood, f) in core.iter().zip(fitted) {
         if let Some(nb) = hood.nbrs.first() {
             h.nn.add(nb.dist2.sqrt());

@@ -145,13 +145,17 @@ fn normals_into(
     normals: &Column,
     flags: &Column,
 ) -> Result<NormalsReport, NormalsError> {
+    // The histograms' scale must not depend on the tiling (the spacing
+    // estimate does, through its sample), so it comes from the input bounds.
+    let extent = store.relative_bounds().extent().max_element();
+    let scale = if extent > 0.0 { extent / 4096.0 } else { 1.0 };
     let kernel = NormalsKernel {
         params: *params,
         origin: store.origin(),
         initial_margin: initial_margin(spacing, params.k),
-        spacing,
+        histogram_scale: scale,
     };
-    let mut sampling = SamplingHistograms::new(spacing);
+    let mut sampling = SamplingHistograms::new(scale);
     let mut runs = EdgeRuns::create(&store.dir.join(".forest.edges"))?;
     let mut report = NormalsReport {
         points: store.len(),

@@ -6,9 +6,13 @@
 //! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
 //! (one cube, and a reference driver over a set of cubes).
 
+pub mod kernel;
 pub mod lattice;
 pub mod mc_table;
 pub mod polygonize;
+pub mod reconstruct;
+pub mod sdf;
+pub mod stitch;
 
 pub use lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 pub use polygonize::{polygonize_cube, polygonize_field, CubeVertex, IndexedMesh, MeshWelder};

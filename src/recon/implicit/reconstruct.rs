@@ -1,0 +1,112 @@
+//! `reconstruct --method implicit` end to end over a store: oriented normals
+//! (computed unless the store has them), paper 1's rho and delta, one global
+//! lattice anchored at the store origin, the marching-cubes tile kernel, and
+//! the seam stitcher streaming into a mesh file.
+
+use super::kernel::ImplicitKernel;
+use super::lattice::{Lattice, LatticeError};
+use super::stitch::Stitcher;
+use crate::mesh::{MeshError, MeshFormat, MeshWriter};
+use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
+use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::store::{PointStore, StoreError, NORMAL_FILE};
+use crate::tiling::load::core_box;
+use glam::DVec3;
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ImplicitParams {
+    pub normals: NormalParams,
+    /// Cube edge; default rho + delta (paper 1 section 2.6).
+    pub cell: Option<f64>,
+    /// Noise bound delta; default estimated from the plane-fit residuals.
+    pub noise: Option<f64>,
+    /// The surface is closed: every corner is defined (paper 1 section 4.1).
+    pub closed: bool,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ImplicitReport {
+    /// Present when this run computed the normals.
+    pub normals: Option<NormalsReport>,
+    pub rho: f64,
+    pub rho_outliers: u64,
+    pub delta: f64,
+    pub cell: f64,
+    pub vertices: u64,
+    pub triangles: u64,
+    pub cubes: u64,
+    pub run: RunStats,
+}
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReconError {
+    #[error(transparent)]
+    Normals(#[from] NormalsError),
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error(transparent)]
+    Lattice(#[from] LatticeError),
+    #[error("--{what} {value} must be a positive finite number")]
+    BadParameter { what: &'static str, value: f64 },
+}
+
+pub fn reconstruct_implicit(
+    store: &mut PointStore,
+    params: &ImplicitParams,
+    output: &Path,
+    format: MeshFormat,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<ImplicitReport, ReconError> {
+    let mut report = ImplicitReport::default();
+    if !store.has_column(NORMAL_FILE) || store.manifest.sampling.is_none() {
+        report.normals = Some(compute_normals(store, &params.normals, opts, progress)?);
+    }
+    let stats = store.manifest.sampling.unwrap_or_default();
+    report.rho = if stats.rho > 0.0 {
+        stats.rho
+    } else {
+        store.manifest.spacing.unwrap_or(1.0)
+    };
+    report.rho_outliers = stats.rho_outliers;
+    report.delta = positive("noise", params.noise.unwrap_or(stats.noise), true)?;
+    report.cell = positive(
+        "cell",
+        params.cell.unwrap_or(report.rho + report.delta),
+        false,
+    )?;
+    let lattice = Lattice::new(DVec3::ZERO, report.cell)?;
+    let reach = report.rho + report.delta;
+    let kernel = ImplicitKernel {
+        lattice,
+        limit: if params.closed { f64::INFINITY } else { reach },
+        backend: params.normals.backend,
+        initial_margin: 3.0 * report.cell + 2.0 * reach,
+    };
+    let writer = MeshWriter::create(output, format)?;
+    let mut stitcher = Stitcher::new(writer, store.origin());
+    let store = &*store;
+    report.run = run_tiles(store, &kernel, opts, progress, |t, out| {
+        report.cubes += out.cubes as u64;
+        let core = core_box(store, &store.tiles()[t]);
+        stitcher
+            .add_tile(&lattice, &core, &out.triangles)
+            .map_err(|e| PipelineError::Seam(e.to_string()))
+    })?;
+    (report.vertices, report.triangles) = stitcher.finish()?;
+    Ok(report)
+}
+
+fn positive(what: &'static str, value: f64, zero_ok: bool) -> Result<f64, ReconError> {
+    if value.is_finite() && (value > 0.0 || (zero_ok && value == 0.0)) {
+        Ok(value)
+    } else {
+        Err(ReconError::BadParameter { what, value })
+    }
+}
