@@ -10,6 +10,9 @@
 
 use glam::DVec3;
 
+pub mod rtree;
+pub mod topological;
+
 /// One neighbour: its position in the slice the index was built over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Neighbour {
