@@ -13,6 +13,8 @@ use glam::DVec3;
 pub mod brute;
 pub mod grid;
 pub mod kdtree;
+pub mod rtree;
+pub mod topological;
 
 pub use brute::{brute_knn, neighbour_order};
 pub use grid::GridIndex;
