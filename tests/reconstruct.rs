@@ -1,0 +1,150 @@
+//! Implicit reconstruction end to end: topology on analytic surfaces, open
+//! boundaries, distance to the truth, tiled == untiled as exact triangle
+//! sets, 1 thread == 2 threads.
+
+mod common;
+
+use common::store_of;
+use glam::DVec3;
+use scanmesh::io::read_mesh_any;
+use scanmesh::mesh::{quality, Mesh, MeshFormat, QualityReport};
+use scanmesh::pipeline::{NoProgress, RunOptions};
+use scanmesh::recon::implicit::reconstruct::{
+    reconstruct_implicit, ImplicitParams, ImplicitReport,
+};
+use scanmesh::synth::{generate, Shape};
+
+struct Recon {
+    mesh: Mesh,
+    report: ImplicitReport,
+    quality: QualityReport,
+}
+
+fn reconstruct(points: &[DVec3], tile_points: u64, threads: usize, closed: bool) -> Recon {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let mut store = store_of(points, &dir.path().join("store"), tile_points);
+        let out = dir.path().join("mesh.ply");
+        let params = ImplicitParams {
+            closed,
+            ..ImplicitParams::default()
+        };
+        let report = reconstruct_implicit(
+            &mut store,
+            &params,
+            &out,
+            MeshFormat::PlyBinary,
+            RunOptions::new(threads),
+            &NoProgress,
+        )
+        .expect("reconstruct");
+        let (v, t) = read_mesh_any(&out).expect("read mesh");
+        let mesh = Mesh::new(v, t);
+        let quality = quality(&mesh);
+        Recon {
+            mesh,
+            report,
+            quality,
+        }
+    })
+}
+
+/// Triangles as position triples, rotated to start at their smallest
+/// vertex (keeping orientation) and sorted: equal iff the meshes are the
+/// same up to vertex order.
+fn canonical(m: &Mesh) -> Vec<[[u64; 3]; 3]> {
+    let mut tris: Vec<[[u64; 3]; 3]> = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| m.vertices[i as usize].to_array().map(f64::to_bits));
+            let r = (0..3).min_by_key(|&i| p[i]).unwrap_or(0);
+            [p[r], p[(r + 1) % 3], p[(r + 2) % 3]]
+        })
+        .collect();
+    tris.sort_unstable();
+    tris
+}
+
+fn torus_distance(p: DVec3, major: f64, minor: f64) -> f64 {
+    let q = (p.x * p.x + p.y * p.y).sqrt() - major;
+    ((q * q + p.z * p.z).sqrt() - minor).abs()
+}
+
+#[test]
+fn closed_torus_is_watertight_with_euler_zero() {
+    let scan = generate(&Shape::torus(1.0, 0.3), 60_000, 0.0, 4).expect("generate");
+    let r = reconstruct(&scan.points, u64::MAX, 2, true);
+    let q = &r.quality;
+    assert!(q.watertight, "{q}");
+    assert_eq!(q.euler_characteristic, 0, "{q}");
+    assert_eq!(q.components, 1, "{q}");
+    assert_eq!(q.non_manifold_edges, 0);
+    assert!(q.consistently_oriented);
+    let worst = r
+        .mesh
+        .vertices
+        .iter()
+        .map(|v| torus_distance(*v, 1.0, 0.3))
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 0.25 * r.report.cell,
+        "vertex {worst} off the torus, cell {}",
+        r.report.cell
+    );
+}
+
+#[test]
+fn plane_with_a_hole_has_two_boundary_loops() {
+    let scan = generate(&Shape::hole_plane(2.0, 0.4), 40_000, 0.0, 8).expect("generate");
+    let r = reconstruct(&scan.points, u64::MAX, 2, false);
+    assert_eq!(r.quality.boundary_loops, 2, "{}", r.quality);
+    assert_eq!(r.quality.non_manifold_edges, 0);
+    assert_eq!(r.quality.components, 1);
+    // Nothing beyond the data: every vertex lies near the sampled square.
+    let limit = r.report.rho + r.report.delta;
+    for v in &r.mesh.vertices {
+        assert!(
+            v.z.abs() < 1e-9 && v.x.abs() <= 1.0 + limit && v.y.abs() <= 1.0 + limit,
+            "{v}"
+        );
+        assert!(v.truncate().length() >= 0.4 - limit, "{v} inside the hole");
+    }
+}
+
+#[test]
+fn tiled_mesh_equals_untiled_mesh() {
+    let scan = generate(&Shape::torus(1.0, 0.3), 40_000, 0.001, 12).expect("generate");
+    let whole = reconstruct(&scan.points, u64::MAX, 2, false);
+    let tiled = reconstruct(&scan.points, 500, 2, false);
+    assert!(
+        tiled.report.run.tiles >= 64,
+        "{} tiles",
+        tiled.report.run.tiles
+    );
+    assert_eq!(whole.report.cell, tiled.report.cell);
+    assert!(!whole.mesh.triangles.is_empty());
+    assert!(
+        canonical(&whole.mesh) == canonical(&tiled.mesh),
+        "tiled mesh differs"
+    );
+    assert_eq!(whole.quality.boundary_edges, tiled.quality.boundary_edges);
+    assert_eq!(
+        whole.quality.vertices, tiled.quality.vertices,
+        "duplicate seam vertices"
+    );
+}
+
+#[test]
+fn one_thread_equals_two_threads() {
+    let scan = generate(&Shape::unit_sphere(), 20_000, 0.002, 2).expect("generate");
+    let one = reconstruct(&scan.points, 2000, 1, true);
+    let two = reconstruct(&scan.points, 2000, 2, true);
+    assert!(one.mesh.vertices == two.mesh.vertices && one.mesh.triangles == two.mesh.triangles);
+    assert!(one.quality.watertight);
+    assert_eq!(one.quality.euler_characteristic, 2);
+}
