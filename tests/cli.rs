@@ -1,0 +1,179 @@
+//! The command line on bad input and bad output: a clear error naming the
+//! file, a non-zero exit, no panic, and no output file that looks complete.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn scanmesh(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args(args)
+        .output()
+        .expect("run scanmesh")
+}
+
+fn assert_fails_naming(out: &Output, name: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "succeeded: {err}");
+    assert!(err.contains(name), "error does not name {name}: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+}
+
+fn write(dir: &Path, name: &str, body: &[u8]) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, body).expect("write fixture");
+    p.display().to_string()
+}
+
+fn no_output_left(dir: &Path, name: &str) {
+    let left: Vec<_> = std::fs::read_dir(dir)
+        .expect("list")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(name))
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+const GOOD_XYZ: &[u8] = b"0 0 0\n1 0 0\n0 1 0\n1 1 0\n0.5 0.5 0.1\n0.2 0.7 0\n0.9 0.1 0\n0.3 0.3 0\n0.6 0.8 0\n0.1 0.9 0\n0.8 0.6 0\n0.4 0.1 0\n0.7 0.4 0\n0.2 0.2 0\n0.9 0.9 0\n";
+
+#[test]
+fn missing_input_is_an_error() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("n.ply");
+    let o = scanmesh(&[
+        "normals",
+        "/nonexistent/scan.ply",
+        "-o",
+        out.to_str().unwrap_or(""),
+    ]);
+    assert_fails_naming(&o, "/nonexistent/scan.ply");
+    no_output_left(dir.path(), "n.ply");
+}
+
+#[test]
+fn truncated_ply_is_an_error_and_leaves_no_output() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut body = b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\nproperty float y\nproperty float z\nend_header\n".to_vec();
+    body.extend(std::iter::repeat_n(0u8, 12 * 10));
+    let input = write(dir.path(), "cut.ply", &body);
+    let out = dir.path().join("cut_normals.ply");
+    let o = scanmesh(&[
+        "normals",
+        &input,
+        "-o",
+        out.to_str().unwrap_or(""),
+        "--quiet",
+    ]);
+    assert_fails_naming(&o, "cut.ply");
+    no_output_left(dir.path(), "cut_normals");
+}
+
+#[test]
+fn nan_coordinates_are_rejected_or_skipped_with_a_count() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut body = GOOD_XYZ.to_vec();
+    body.extend_from_slice(b"nan 0 0\n");
+    let input = write(dir.path(), "nan.xyz", &body);
+    let out = dir.path().join("nan_n.ply");
+    let o = scanmesh(&[
+        "normals",
+        &input,
+        "-o",
+        out.to_str().unwrap_or(""),
+        "--quiet",
+        "--k",
+        "6",
+    ]);
+    assert_fails_naming(&o, "nan.xyz");
+    let o = scanmesh(&[
+        "convert",
+        &input,
+        out.to_str().unwrap_or(""),
+        "--skip-invalid",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("15 points (1 skipped)"));
+}
+
+#[test]
+fn garbage_and_empty_inputs_are_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let garbage = write(
+        dir.path(),
+        "garbage.ply",
+        b"ply\nformat nonsense\n\x00\x01\x02",
+    );
+    let empty = write(dir.path(), "empty.xyz", b"");
+    for input in [&garbage, &empty] {
+        let o = scanmesh(&["info", input, "--quiet"]);
+        assert_fails_naming(
+            &o,
+            Path::new(input)
+                .file_name()
+                .and_then(|n| n.to_str())
+                .unwrap_or(""),
+        );
+    }
+}
+
+#[test]
+fn absurd_header_count_fails_fast() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(
+        dir.path(),
+        "huge.ply",
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 999999999999999\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0",
+    );
+    let o = scanmesh(&[
+        "convert",
+        &input,
+        dir.path().join("o.xyz").to_str().unwrap_or(""),
+        "--quiet",
+    ]);
+    assert_fails_naming(&o, "huge.ply");
+}
+
+#[test]
+fn unwritable_output_is_an_error() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let o = scanmesh(&["convert", &input, "/nonexistent/dir/out.ply", "--quiet"]);
+    assert_fails_naming(&o, "/nonexistent/dir/out.ply");
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let out = dir.path().join("o.ply");
+    let out = out.to_str().unwrap_or("");
+    for bad in [
+        ["--mem", "12 parsecs"],
+        ["--threads", "0"],
+        ["--k", "1"],
+        ["--viewpoint", "1,2"],
+    ] {
+        let o = scanmesh(&["normals", &input, "-o", out, bad[0], bad[1]]);
+        assert!(!o.status.success(), "{bad:?} accepted");
+    }
+}
+
+#[test]
+fn degenerate_flat_cloud_gets_normals() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "flat.xyz", GOOD_XYZ);
+    let out = dir.path().join("flat_n.xyz");
+    let o = scanmesh(&[
+        "normals",
+        &input,
+        "-o",
+        out.to_str().unwrap_or(""),
+        "--quiet",
+        "--k",
+        "5",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).expect("output");
+    assert_eq!(text.lines().count(), 15);
+}
