@@ -34,15 +34,33 @@ fn bench(c: &mut Criterion) {
             orientation: Orientation::None,
             ..NormalParams::default()
         };
-        let mst = NormalParams { backend, ..NormalParams::default() };
+        let mst = NormalParams {
+            backend,
+            ..NormalParams::default()
+        };
         g.bench_function(format!("pca_only/{backend:?}"), |b| {
-            b.iter(|| black_box(compute_normals(&mut whole, &pca, RunOptions::new(2), &NoProgress).expect("normals")))
+            b.iter(|| {
+                black_box(
+                    compute_normals(&mut whole, &pca, RunOptions::new(2), &NoProgress)
+                        .expect("normals"),
+                )
+            })
         });
         g.bench_function(format!("pca_mst/{backend:?}"), |b| {
-            b.iter(|| black_box(compute_normals(&mut whole, &mst, RunOptions::new(2), &NoProgress).expect("normals")))
+            b.iter(|| {
+                black_box(
+                    compute_normals(&mut whole, &mst, RunOptions::new(2), &NoProgress)
+                        .expect("normals"),
+                )
+            })
         });
         g.bench_function(format!("pca_mst_tiled/{backend:?}"), |b| {
-            b.iter(|| black_box(compute_normals(&mut tiled, &mst, RunOptions::new(2), &NoProgress).expect("normals")))
+            b.iter(|| {
+                black_box(
+                    compute_normals(&mut tiled, &mst, RunOptions::new(2), &NoProgress)
+                        .expect("normals"),
+                )
+            })
         });
     }
     g.finish();

@@ -35,6 +35,8 @@ pub struct ImplicitKernel {
     pub limit: f64,
     pub backend: KnnBackend,
     pub initial_margin: f64,
+    /// Cubes within this many cubes of a sample's cube form the band.
+    pub band: i64,
 }
 
 /// A lattice corner and its signed distance (`None`: undefined).
@@ -69,7 +71,7 @@ impl TileKernel for ImplicitKernel {
     fn run(&self, tile: &TilePoints) -> Result<ImplicitTile, KernelError> {
         // The band looks one cube beyond owned cubes, whose far corners lie
         // one cube beyond the core: every sample within two cubes is needed.
-        let band_reach = 2.0 * self.lattice.cell * 1.001;
+        let band_reach = (self.band + 1) as f64 * self.lattice.cell * 1.001;
         if tile.margin < band_reach {
             return Err(KernelError::MarginTooSmall { needed: band_reach });
         }
@@ -81,7 +83,7 @@ impl TileKernel for ImplicitKernel {
             normals: &normals,
             index: index.as_ref(),
         };
-        let cubes = band(&self.lattice, &points, &tile.core);
+        let cubes = band(&self.lattice, &points, &tile.core, self.band);
         let corners = self.corner_values(&samples, tile, &cubes)?;
         let mut out = ImplicitTile {
             cubes: cubes.len(),
@@ -165,17 +167,17 @@ pub fn owns(lattice: &Lattice, core: &Aabb, cube: [i64; 3]) -> bool {
     (0..3).all(|a| core.min[a] <= p[a] && p[a] < core.max[a])
 }
 
-/// Owned cubes within one cube of a sample's cube, sorted.
-fn band(lattice: &Lattice, points: &[DVec3], core: &Aabb) -> Vec<[i64; 3]> {
+/// Owned cubes within `reach` cubes of a sample's cube, sorted.
+fn band(lattice: &Lattice, points: &[DVec3], core: &Aabb, reach: i64) -> Vec<[i64; 3]> {
     let owned = |c: [i64; 3]| owns(lattice, core, c);
     let mut occupied: Vec<[i64; 3]> = points.iter().map(|p| lattice.cell_of(*p)).collect();
     occupied.sort_unstable();
     occupied.dedup();
     let mut cubes: Vec<[i64; 3]> = Vec::new();
     for c in occupied {
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
+        for dz in -reach..=reach {
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
                     let n = [c[0] + dx, c[1] + dy, c[2] + dz];
                     if owned(n) {
                         cubes.push(n);

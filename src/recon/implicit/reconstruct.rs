@@ -87,7 +87,8 @@ pub fn reconstruct_implicit(
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
         backend: params.normals.backend,
-        initial_margin: 3.0 * report.cell + 2.0 * reach,
+        initial_margin: 4.0 * report.cell + 2.0 * reach,
+        band: 1,
     };
     let writer = MeshWriter::create(output, format)?;
     let mut stitcher = Stitcher::new(writer, store.origin());
