@@ -9,25 +9,9 @@ use scanmesh::io::{
     open_reader, read_mesh, read_mesh_any, read_obj_mesh, Format, InvalidPolicy, PointChunk,
     DEFAULT_CHUNK,
 };
+use scanmesh::synth::Rng;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// SplitMix64: a seeded generator, so every failure can be replayed.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
 
 struct ReadBack {
     xyz: Vec<DVec3>,
@@ -310,7 +294,7 @@ fn odd_ply_layouts_in_all_encodings() {
     for (li, (layout, has_normals)) in layouts().into_iter().enumerate() {
         for enc in [Enc::Ascii, Enc::Le, Enc::Be] {
             let seed = 1000 + li as u64;
-            let mut r = Rng(seed);
+            let mut r = Rng::new(seed);
             let cam = camera(&mut r);
             let rows = vertex_rows(&mut r, &layout, 257);
             let (xs, ys, zs) = (
@@ -415,7 +399,7 @@ fn cube_ply(enc: Enc, faces_first: bool) -> Vec<u8> {
             .collect(),
         declared: None,
     };
-    let mut r = Rng(5);
+    let mut r = Rng::new(5);
     let mut els = vec![camera(&mut r), vertex, face];
     if faces_first {
         els.swap(1, 2);

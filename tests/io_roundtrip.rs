@@ -10,25 +10,9 @@ use scanmesh::io::{
     create_writer, open_reader, Format, InvalidPolicy, LasTransform, PointChunk, WriterSpec,
     DEFAULT_CHUNK,
 };
+use scanmesh::synth::Rng;
 use std::io::Write;
 use std::path::Path;
-
-/// SplitMix64: a seeded generator, so every failure can be replayed.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
 
 struct Cloud {
     xyz: Vec<DVec3>,
@@ -38,7 +22,7 @@ struct Cloud {
 
 /// Points spread over a UTM-like box (large offsets, full f64 mantissas).
 fn cloud(n: usize, seed: u64) -> Cloud {
-    let mut r = Rng(seed);
+    let mut r = Rng::new(seed);
     let xyz = (0..n)
         .map(|_| {
             DVec3::new(
@@ -285,7 +269,7 @@ fn las_uses_given_transform() {
 
 #[test]
 fn chosen_las_transform_fits_with_headroom() {
-    let mut r = Rng(99);
+    let mut r = Rng::new(99);
     for case in 0..200 {
         let c = DVec3::new(r.range(-1e7, 1e7), r.range(-1e7, 1e7), r.range(-1e3, 1e3));
         let e = DVec3::new(r.range(0.0, 1e5), r.range(0.0, 1.0), r.range(0.0, 1e-3));

@@ -9,23 +9,7 @@ use scanmesh::spatial::topological::{
     all_topological, topological_neighbours, TopoError, TopoParams, TopoResult, TopoScratch,
 };
 use scanmesh::spatial::{KnnIndex, Neighbour};
-
-/// SplitMix64: a tiny seeded generator, so every cloud is reproducible.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use scanmesh::synth::Rng;
 
 /// Tie keys that are a scrambled permutation, so tie order != index order.
 fn scrambled_ties(n: usize) -> Vec<u64> {
@@ -53,7 +37,7 @@ fn brute_knn(points: &[DVec3], tie: &[u64], q: DVec3, k: usize, ex: Option<u32>)
 
 /// Clouds with plenty of exact ties: random, integer lattice, duplicates.
 fn tie_clouds(seed: u64) -> Vec<(&'static str, Vec<DVec3>)> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let random = (0..700)
         .map(|_| DVec3::new(rng.range(-5., 5.), rng.range(-5., 5.), rng.range(-1., 1.)))
         .collect();
@@ -86,7 +70,7 @@ fn rtree_knn_equals_brute_force_with_ties_and_duplicates() {
         for (name, points) in tie_clouds(seed) {
             let tie = scrambled_ties(points.len());
             let index = RTreeIndex::new(&points, &tie).unwrap();
-            let mut rng = Rng(seed ^ 0xABCD);
+            let mut rng = Rng::new(seed ^ 0xABCD);
             let mut got = Vec::new();
             for trial in 0..120 {
                 let i = (rng.next_u64() % points.len() as u64) as u32;
@@ -234,7 +218,7 @@ const SPARSE: f64 = 4.5;
 /// A sheet `z = height(x, y)`: jittered grid of spacing 1 for x < 0, of
 /// spacing [`SPARSE`] for x >= 0.
 fn step_sheet(seed: u64, height: impl Fn(f64, f64) -> f64) -> Vec<DVec3> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut points = Vec::new();
     for (x0, x1, s) in [(-40.0, 0.0, 1.0), (0.0, 90.0, SPARSE)] {
         let (nx, ny) = (((x1 - x0) / s) as usize, (120.0 / s) as usize);
@@ -464,7 +448,7 @@ fn check_iteration_statistics(name: &str, points: &[DVec3]) {
 #[test]
 fn iteration_statistics_on_noisy_uniform_and_step_clouds() {
     let seed = 4;
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let noisy: Vec<DVec3> = (0..4000)
         .map(|_| {
             DVec3::new(

@@ -1,31 +1,13 @@
 //! Area-uniform random points on a mesh, reproducible for a seed and
 //! independent of the thread count: sample `i` draws from its own stream
-//! (SplitMix64 seeded by `seed` and `i`), picks a triangle in the cumulative
+//! (the project's [`crate::synth::Rng`] seeded by `seed` and `i`), picks a triangle in the cumulative
 //! areas (stratified, see [`area_samples`]) and a point in it by the
 //! square-root warp (Osada et al., "Shape distributions", 2002, section 4.2).
 
 use super::Mesh;
+use crate::synth::Rng;
 use glam::DVec3;
 use rayon::prelude::*;
-
-/// SplitMix64 (Steele, Lea, Flood 2014): small, fast, good enough to place
-/// evaluation samples.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
 
 /// Samples per parallel task: each task binary-searches once, then walks.
 const TASK: usize = 4096;
@@ -55,8 +37,8 @@ pub(crate) fn area_samples(mesh: &Mesh, count: usize, seed: u64) -> Vec<DVec3> {
             // `t`: the first triangle whose running area exceeds `x`.
             let mut t: Option<usize> = None;
             range.filter_map(move |i| {
-                let mut rng = SplitMix64(seed ^ (i as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93));
-                let x = ((i as f64 + rng.next_f64()) * step).min(total);
+                let mut rng = Rng::new(seed ^ (i as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93));
+                let x = ((i as f64 + rng.uniform()) * step).min(total);
                 let mut cur = match t {
                     Some(cur) => cur,
                     None => cumulative.partition_point(|&c| c <= x).min(last),
@@ -67,8 +49,8 @@ pub(crate) fn area_samples(mesh: &Mesh, count: usize, seed: u64) -> Vec<DVec3> {
                 t = Some(cur);
                 // A triangle that added area is valid, so this never skips.
                 let [a, b, c] = mesh.corners(mesh.triangles[cur])?;
-                let s = rng.next_f64().sqrt();
-                let r = rng.next_f64();
+                let s = rng.uniform().sqrt();
+                let r = rng.uniform();
                 Some(a * (1.0 - s) + b * (s * (1.0 - r)) + c * (s * r))
             })
         })

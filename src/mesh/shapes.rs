@@ -18,49 +18,10 @@ pub fn icosphere(subdivisions: u32) -> Mesh {
     mesh
 }
 
+/// The unit icosahedron of the synthetic-scan generator, as a [`Mesh`].
 fn icosahedron() -> Mesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let raw = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ];
-    let vertices = raw
-        .iter()
-        .map(|&v| DVec3::from_array(v).normalize())
-        .collect();
-    let triangles = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    Mesh::new(vertices, triangles)
+    let ico = crate::synth::TriMesh::icosahedron(1.0);
+    Mesh::new(ico.vertices, ico.faces)
 }
 
 /// One 1-to-4 split; edge midpoints are shared through a map that is only
