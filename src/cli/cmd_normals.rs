@@ -14,7 +14,7 @@ use std::time::Instant;
 pub struct NormalsArgs {
     /// Input point file or store directory.
     input: PathBuf,
-    /// Output point file (.ply binary by default; .xyz, .csv, .las, .laz).
+    /// Output point file (.ply binary by default, or .xyz/.csv).
     #[arg(short, long)]
     output: PathBuf,
     /// Neighbours per point (paper: 8..15).
@@ -139,6 +139,10 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
             "{}: gzip output is not supported; drop the .gz",
             path.display()
         );
+    }
+    if matches!(format, Format::Las | Format::Laz) {
+        // Point format 0 has no normal fields; extra bytes are not written yet.
+        bail!("{}: LAS/LAZ output cannot carry normals yet; write .ply or .xyz", path.display());
     }
     if ascii && format == Format::PlyBinaryLe {
         format = Format::PlyAscii;
