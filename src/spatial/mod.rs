@@ -10,6 +10,14 @@
 
 use glam::DVec3;
 
+pub mod brute;
+pub mod grid;
+pub mod kdtree;
+
+pub use brute::{brute_knn, neighbour_order};
+pub use grid::GridIndex;
+pub use kdtree::KdIndex;
+
 /// One neighbour: its position in the slice the index was built over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Neighbour {
@@ -38,4 +46,52 @@ pub enum KnnBackend {
     /// kiddo's immutable kd-tree, asked for extra neighbours to settle ties.
     #[default]
     KdTree,
+}
+
+/// Why an index could not be built over the given points.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IndexError {
+    #[error("{points} points but {ties} tie keys: every point needs exactly one")]
+    TieLengthMismatch { points: usize, ties: usize },
+    #[error(
+        "{points} points: a kNN index holds at most u32::MAX points (Neighbour::index is u32)"
+    )]
+    TooManyPoints { points: usize },
+    #[error("grid cell size {cell} is not a positive finite number")]
+    BadCellSize { cell: f64 },
+    #[error("kd-tree construction failed: {0}")]
+    KdTree(#[from] kiddo::kd_tree::ConstructionError),
+}
+
+/// Checks what every backend requires of its input.
+pub(crate) fn check_input(points: &[DVec3], tie: &[u64]) -> Result<(), IndexError> {
+    if points.len() != tie.len() {
+        return Err(IndexError::TieLengthMismatch {
+            points: points.len(),
+            ties: tie.len(),
+        });
+    }
+    if points.len() > u32::MAX as usize {
+        return Err(IndexError::TooManyPoints {
+            points: points.len(),
+        });
+    }
+    Ok(())
+}
+
+/// Builds the chosen kNN structure over `points`, with `tie[i]` the global id
+/// of `points[i]`. Both backends give identical answers; they differ in speed.
+///
+/// Returns an error instead of the bare box because the input can be
+/// unusable (tie keys missing, more points than a `u32` index can name).
+pub fn build_index<'a>(
+    backend: KnnBackend,
+    points: &'a [DVec3],
+    tie: &'a [u64],
+) -> Result<Box<dyn KnnIndex + 'a>, IndexError> {
+    Ok(match backend {
+        KnnBackend::Grid => Box::new(GridIndex::new(points, tie)?),
+        KnnBackend::KdTree => Box::new(KdIndex::new(points, tie)?),
+    })
 }
