@@ -21,7 +21,7 @@ pub struct NormalsArgs {
     #[arg(long, default_value_t = 12)]
     k: usize,
     /// kNN structure.
-    #[arg(long, value_enum, default_value_t = Knn::Kdtree)]
+    #[arg(long, value_enum, default_value_t = Knn::Grid)]
     knn: Knn,
     /// How normals get their sign.
     #[arg(long, value_enum, default_value_t = Orient::Mst)]
@@ -142,7 +142,10 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
     }
     if matches!(format, Format::Las | Format::Laz) {
         // Point format 0 has no normal fields; extra bytes are not written yet.
-        bail!("{}: LAS/LAZ output cannot carry normals yet; write .ply or .xyz", path.display());
+        bail!(
+            "{}: LAS/LAZ output cannot carry normals yet; write .ply or .xyz",
+            path.display()
+        );
     }
     if ascii && format == Format::PlyBinaryLe {
         format = Format::PlyAscii;

@@ -68,7 +68,9 @@ pub enum Degenerate {
     Colinear,
 }
 
-/// Fits the plane of the neighbourhood `{points[sample]} ∪ nbrs`.
+/// Fits the plane of the neighbourhood `{points[sample]} ∪ nbrs`. `nbrs`
+/// should not contain `sample` itself (query with `exclude = Some(sample)`),
+/// or it is counted twice.
 pub fn fit_plane(
     points: &[DVec3],
     sample: usize,
@@ -103,7 +105,7 @@ where
     for p in others {
         add(&mut cv, covariance_term((p - anchor) - offset));
     }
-    let (eigenvalues, vectors) = sym3_eigen(cv);
+    let (eigenvalues, vectors) = sym3_eigen(symmetric(cv));
     let [l0, l1, l2] = eigenvalues;
     if l2 <= 0.0 {
         return Err(Degenerate::Coincident);
@@ -118,18 +120,24 @@ where
     })
 }
 
-fn covariance_term(d: DVec3) -> [[f64; 3]; 3] {
+/// The six distinct entries of `d d^T`: xx, yy, zz, xy, xz, yz.
+fn covariance_term(d: DVec3) -> [f64; 6] {
     [
-        [d.x * d.x, d.x * d.y, d.x * d.z],
-        [d.y * d.x, d.y * d.y, d.y * d.z],
-        [d.z * d.x, d.z * d.y, d.z * d.z],
+        d.x * d.x,
+        d.y * d.y,
+        d.z * d.z,
+        d.x * d.y,
+        d.x * d.z,
+        d.y * d.z,
     ]
 }
 
-fn add(acc: &mut [[f64; 3]; 3], t: [[f64; 3]; 3]) {
-    for (row, trow) in acc.iter_mut().zip(t) {
-        for (a, b) in row.iter_mut().zip(trow) {
-            *a += b;
-        }
+fn add(acc: &mut [f64; 6], t: [f64; 6]) {
+    for (a, b) in acc.iter_mut().zip(t) {
+        *a += b;
     }
+}
+
+fn symmetric([xx, yy, zz, xy, xz, yz]: [f64; 6]) -> [[f64; 3]; 3] {
+    [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
 }

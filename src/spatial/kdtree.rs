@@ -11,7 +11,7 @@
 use std::num::NonZeroUsize;
 
 use glam::DVec3;
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use kiddo::{kd_tree::KdTree, Eytzinger, SquaredEuclidean, VecOfArenas};
 
 use super::brute::{dist2, neighbour_order};
 use super::{check_input, IndexError, KnnIndex, Neighbour};
@@ -22,9 +22,19 @@ use super::{check_input, IndexError, KnnIndex, Neighbour};
 /// distance, whatever the summation order or vector width.
 const ROUNDING_GAP: f64 = 1e-12;
 
+/// Points per leaf. kiddo's `ImmutableKdTree` alias uses 32; 8 ran ~12 %
+/// fewer instructions per k = 12 query (callgrind, 1M-point sphere). The
+/// immutable layout accepts any number of identical points whatever the
+/// bucket size (tests/knn_oracle.rs puts ~150 on one spot).
+const BUCKET: usize = 8;
+
+/// kiddo's immutable kd-tree layout (as `kiddo::ImmutableKdTree`) with our
+/// bucket size: items are `u32` indices into the borrowed points.
+type Tree = KdTree<f64, u32, Eytzinger, VecOfArenas<f64, u32, 3, BUCKET>, 3, BUCKET>;
+
 /// kd-tree exact kNN index over borrowed points.
 pub struct KdIndex<'a> {
-    tree: ImmutableKdTree<f64, 3>,
+    tree: Tree,
     points: &'a [DVec3],
     tie: &'a [u64],
 }
@@ -34,7 +44,7 @@ impl<'a> KdIndex<'a> {
     /// the points' indices in `points`.
     pub fn new(points: &'a [DVec3], tie: &'a [u64]) -> Result<Self, IndexError> {
         check_input(points, tie)?;
-        let tree = ImmutableKdTree::new_from_source(
+        let tree = Tree::new_from_source(
             points,
             |p: &DVec3, axis| p.to_array()[axis.min(2)],
             |i, _| i as u32,

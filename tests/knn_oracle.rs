@@ -1,0 +1,306 @@
+//! Both kNN backends against the brute-force oracle, exactly: same indices,
+//! same squared distances, same order, on seeded clouds chosen to break
+//! inexact searches (ties, duplicates, far queries, k beyond n).
+
+use glam::DVec3;
+use scanmesh::spatial::{
+    brute_knn, build_index, GridIndex, IndexError, KdIndex, KnnBackend, KnnIndex, Neighbour,
+};
+
+/// Small deterministic generator (SplitMix64) so failures replay from a seed.
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+    fn vec3(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+    }
+}
+
+fn uniform_cube(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+    (0..n).map(|_| rng.vec3(-1.0, 1.0)).collect()
+}
+
+fn clustered(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+    let centres: Vec<DVec3> = (0..5).map(|_| rng.vec3(-50.0, 50.0)).collect();
+    (0..n)
+        .map(|_| {
+            let c = centres[rng.below(centres.len())];
+            let spread = if rng.unit() < 0.5 { 0.01 } else { 1.0 };
+            c + rng.vec3(-spread, spread)
+        })
+        .collect()
+}
+
+/// Noisy unit sphere at UTM-like offsets.
+fn sphere_surface(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+    let offset = DVec3::new(5.0e5, 4.2e6, 120.0);
+    (0..n)
+        .map(|_| {
+            let z = rng.range(-1.0, 1.0);
+            let phi = rng.range(0.0, std::f64::consts::TAU);
+            let r = (1.0 - z * z).sqrt();
+            let radius = 1.0 + rng.range(-1e-3, 1e-3);
+            offset + radius * DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// An integer lattice: every point has many exactly equidistant neighbours.
+fn lattice(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+    let side = (n as f64).cbrt().ceil() as i64;
+    let step = [0.5, 1.0, 0.25][rng.below(3)];
+    let mut pts = Vec::new();
+    for z in 0..side {
+        for y in 0..side {
+            for x in 0..side {
+                pts.push(DVec3::new(x as f64, y as f64, z as f64) * step);
+            }
+        }
+    }
+    pts.truncate(n);
+    pts
+}
+
+/// A few locations repeated many times, plus some scatter.
+fn duplicates(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+    let spots: Vec<DVec3> = (0..4).map(|_| rng.vec3(-2.0, 2.0)).collect();
+    (0..n)
+        .map(|i| {
+            if i % 7 == 0 {
+                rng.vec3(-2.0, 2.0)
+            } else {
+                spots[rng.below(spots.len())]
+            }
+        })
+        .collect()
+}
+
+/// Unique tie keys in shuffled order, so tie order differs from index order.
+fn shuffled_ties(rng: &mut SplitMix64, n: usize) -> Vec<u64> {
+    let mut tie: Vec<u64> = (0..n as u64).map(|i| i * 3 + 1000).collect();
+    for i in (1..n).rev() {
+        tie.swap(i, rng.below(i + 1));
+    }
+    tie
+}
+
+/// Queries: every data point (with and without excluding itself), random
+/// points around the data, and points far outside it.
+fn check_all(name: &str, seed: u64, points: &[DVec3], index: &dyn KnnIndex, k: usize, tie: &[u64]) {
+    let mut rng = SplitMix64(seed ^ 0xABCD);
+    let mut out = vec![
+        Neighbour {
+            dist2: -1.0,
+            index: 7
+        };
+        3
+    ];
+    let check = |q: DVec3, exclude: Option<u32>, out: &mut Vec<Neighbour>| {
+        index.knn(q, k, exclude, out);
+        let want = brute_knn(points, tie, q, k, exclude);
+        assert_eq!(
+            *out, want,
+            "{name}: seed {seed}, k {k}, query {q:?}, exclude {exclude:?}"
+        );
+    };
+    for (i, p) in points.iter().enumerate() {
+        check(*p, Some(i as u32), &mut out);
+        if i % 3 == 0 {
+            check(*p, None, &mut out);
+        }
+    }
+    let (lo, hi) = bounds(points);
+    let size = (hi - lo).max_element().max(1.0);
+    for _ in 0..100 {
+        let t = DVec3::new(
+            rng.range(-0.3, 1.3),
+            rng.range(-0.3, 1.3),
+            rng.range(-0.3, 1.3),
+        );
+        check(lo + t * (hi - lo), None, &mut out);
+    }
+    for scale in [3.0, 1e3, 1e9] {
+        let dir = rng.vec3(-1.0, 1.0).normalize_or(DVec3::X);
+        check(lo + dir * size * scale, None, &mut out);
+    }
+}
+
+fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
+    points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
+/// Every backend, including grids with extreme cell sizes, on one cloud.
+fn check_backends(name: &str, seed: u64, points: &[DVec3], ks: &[usize]) {
+    let mut rng = SplitMix64(seed);
+    let tie = shuffled_ties(&mut rng, points.len());
+    let (lo, hi) = bounds(points);
+    let size = (hi - lo).max_element().max(1e-9);
+    let grid_auto = GridIndex::new(points, &tie).expect("grid");
+    let grid_fine = GridIndex::with_cell(points, &tie, size * 0.02).expect("fine grid");
+    let grid_tiny = GridIndex::with_cell(points, &tie, size * 1e-4).expect("tiny grid");
+    let grid_coarse = GridIndex::with_cell(points, &tie, size * 10.0).expect("coarse grid");
+    let kd = KdIndex::new(points, &tie).expect("kd-tree");
+    let indexes: [(&str, &dyn KnnIndex); 5] = [
+        ("grid auto", &grid_auto),
+        ("grid fine", &grid_fine),
+        ("grid tiny", &grid_tiny),
+        ("grid coarse", &grid_coarse),
+        ("kd", &kd),
+    ];
+    for (backend, index) in indexes {
+        assert_eq!(index.len(), points.len());
+        for &k in ks {
+            check_all(&format!("{name}/{backend}"), seed, points, index, k, &tie);
+        }
+    }
+}
+
+#[test]
+fn uniform_cube_matches_oracle() {
+    for seed in 1..4 {
+        let pts = uniform_cube(&mut SplitMix64(seed), 1500);
+        check_backends("uniform cube", seed, &pts, &[1, 12]);
+    }
+}
+
+#[test]
+fn clustered_matches_oracle() {
+    for seed in 10..13 {
+        let pts = clustered(&mut SplitMix64(seed), 1500);
+        check_backends("clustered", seed, &pts, &[8, 30]);
+    }
+}
+
+#[test]
+fn surface_at_utm_offset_matches_oracle() {
+    for seed in 20..23 {
+        let pts = sphere_surface(&mut SplitMix64(seed), 2000);
+        check_backends("sphere", seed, &pts, &[12]);
+    }
+}
+
+#[test]
+fn lattice_ties_match_oracle() {
+    for seed in 30..32 {
+        let pts = lattice(&mut SplitMix64(seed), 1000);
+        check_backends("lattice", seed, &pts, &[1, 7, 19]);
+    }
+}
+
+#[test]
+fn many_duplicates_match_oracle() {
+    for seed in 40..43 {
+        let pts = duplicates(&mut SplitMix64(seed), 700);
+        check_backends("duplicates", seed, &pts, &[3, 12, 200]);
+    }
+}
+
+#[test]
+fn k_beyond_n_returns_everything_in_order() {
+    for seed in 50..53 {
+        let pts = uniform_cube(&mut SplitMix64(seed), 9);
+        check_backends("tiny", seed, &pts, &[8, 9, 10, 100]);
+    }
+}
+
+#[test]
+fn single_point_and_single_location() {
+    check_backends("one point", 60, &[DVec3::new(3.0, -2.0, 1.0)], &[1, 2]);
+    check_backends("one location", 61, &[DVec3::splat(0.5); 40], &[1, 12, 40]);
+}
+
+#[test]
+fn empty_index_and_zero_k_give_nothing() {
+    for backend in [KnnBackend::Grid, KnnBackend::KdTree] {
+        let index = build_index(backend, &[], &[]).expect("empty index");
+        let mut out = vec![Neighbour {
+            dist2: 0.0,
+            index: 0,
+        }];
+        index.knn(DVec3::ZERO, 5, None, &mut out);
+        assert!(out.is_empty() && index.is_empty());
+        let pts = [DVec3::ZERO, DVec3::X];
+        let index = build_index(backend, &pts, &[0, 1]).expect("index");
+        index.knn(DVec3::ZERO, 0, None, &mut out);
+        assert!(out.is_empty());
+    }
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let pts = [DVec3::ZERO, DVec3::X];
+    for backend in [KnnBackend::Grid, KnnBackend::KdTree] {
+        let err = build_index(backend, &pts, &[0]).err();
+        assert_eq!(
+            err,
+            Some(IndexError::TieLengthMismatch { points: 2, ties: 1 })
+        );
+    }
+    for cell in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(
+            GridIndex::with_cell(&pts, &[0, 1], cell),
+            Err(IndexError::BadCellSize { .. })
+        ));
+    }
+}
+
+#[test]
+fn auto_cell_holds_a_few_points_on_a_surface() {
+    let pts = sphere_surface(&mut SplitMix64(70), 20_000);
+    let tie: Vec<u64> = (0..pts.len() as u64).collect();
+    let grid = GridIndex::new(&pts, &tie).expect("grid");
+    let mean = pts.len() as f64 / grid.occupied_cells() as f64;
+    assert!((1.0..=16.0).contains(&mean), "mean occupancy {mean}");
+}
+
+/// Many small quantised clouds (exact ties everywhere, points on cell
+/// boundaries) with random cell sizes, k and queries.
+#[test]
+fn small_quantised_clouds_with_random_cells_match_oracle() {
+    for seed in 100..400u64 {
+        let mut rng = SplitMix64(seed);
+        let n = 1 + rng.below(80);
+        let quantum = [0.25, 0.5, 1.0][rng.below(3)];
+        let pts: Vec<DVec3> = (0..n)
+            .map(|_| (rng.vec3(0.0, 6.0) / quantum).round() * quantum)
+            .collect();
+        let tie = shuffled_ties(&mut rng, n);
+        let cell = [1e-3, 0.25, 0.5, 0.7, 1.0, 3.0, 50.0][rng.below(7)];
+        let grid = GridIndex::with_cell(&pts, &tie, cell).expect("grid");
+        let kd = KdIndex::new(&pts, &tie).expect("kd-tree");
+        let mut out = Vec::new();
+        for _ in 0..40 {
+            let k = 1 + rng.below(n + 3);
+            let q = (rng.vec3(-2.0, 8.0) / quantum).round() * quantum;
+            let exclude = (rng.unit() < 0.5).then(|| rng.below(n) as u32);
+            let want = brute_knn(&pts, &tie, q, k, exclude);
+            for (name, index) in [("grid", &grid as &dyn KnnIndex), ("kd", &kd)] {
+                index.knn(q, k, exclude, &mut out);
+                assert_eq!(
+                    out, want,
+                    "{name}: seed {seed}, cell {cell}, k {k}, q {q:?}, exclude {exclude:?}"
+                );
+            }
+        }
+    }
+}
