@@ -11,6 +11,7 @@ pub mod demo;
 pub mod geom;
 pub mod io;
 pub mod mesh;
+pub mod neighbours;
 pub mod normals;
 pub mod pipeline;
 pub mod recon;

@@ -5,6 +5,7 @@ mod cmd_convert;
 mod cmd_demo;
 mod cmd_eval;
 mod cmd_info;
+mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
 mod cmd_tile;
@@ -39,6 +40,9 @@ enum Command {
     Tile(cmd_tile::TileArgs),
     /// Oriented normals for every point, written in input order.
     Normals(cmd_normals::NormalsArgs),
+    /// Topological (paper 3) or k nearest neighbours of every point, in input order.
+    #[command(visible_alias = "neighbours")]
+    Neighbors(cmd_neighbors::NeighborsArgs),
     /// A triangle mesh from a point cloud (implicit: paper 1).
     Reconstruct(cmd_reconstruct::ReconstructArgs),
     /// Mesh quality, and distances to a reference mesh or point set.
@@ -134,6 +138,7 @@ pub fn run() -> Result<()> {
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
         Command::Normals(a) => cmd_normals::run(a),
+        Command::Neighbors(a) => cmd_neighbors::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),

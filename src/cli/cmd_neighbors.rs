@@ -1,0 +1,176 @@
+//! `scanmesh neighbors`: every point's topological (paper 3) or k nearest
+//! neighbours, in input order, as a binary CSR file or text.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use scanmesh::io::AtomicFile;
+use scanmesh::neighbours::{
+    compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions, MAX_K,
+};
+use scanmesh::store::{build::scratch_store_dir, open_input, BuildOptions, TileTarget};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct NeighborsArgs {
+    /// Input point file or store directory.
+    input: PathBuf,
+    /// Output file (binary CSR, see `scanmesh::neighbours::csr`; or text).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Which neighbourhood: topological (paper 3, mean reverse shift) or
+    /// the plain k nearest.
+    #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = Mode::Topological)]
+    neighbours: Mode,
+    /// Points per kNN query (paper 3: 8..30, usually 15).
+    #[arg(long, default_value_t = 15)]
+    k: usize,
+    /// Output layout.
+    #[arg(long, value_enum, default_value_t = Layout::Bin)]
+    format: Layout,
+    /// Write statistics (sizes, iterations, time) to this JSON file.
+    #[arg(long)]
+    summary: Option<PathBuf>,
+    /// Cap on reverse-shift iterations (topological).
+    #[arg(long, default_value_t = 10)]
+    max_iterations: usize,
+    #[command(flatten)]
+    common: super::CommonArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Mode {
+    Topological,
+    Knn,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Layout {
+    /// Binary CSR: header, u64 offsets, u32/u64 neighbour ids.
+    Bin,
+    /// One line per point: its id, then its neighbours' ids.
+    Txt,
+}
+
+impl NeighborsArgs {
+    fn params(&self) -> Result<NeighbourParams> {
+        if !(1..=MAX_K).contains(&self.k) {
+            bail!("--k must be in 1..={MAX_K}");
+        }
+        Ok(match self.neighbours {
+            Mode::Topological => NeighbourParams::topological(self.k, self.max_iterations),
+            Mode::Knn => NeighbourParams::knn(self.k),
+        })
+    }
+
+    fn format(&self) -> OutputFormat {
+        match self.format {
+            Layout::Bin => OutputFormat::Csr,
+            Layout::Txt => OutputFormat::Text,
+        }
+    }
+}
+
+pub fn run(a: NeighborsArgs) -> Result<()> {
+    let s = a.common.settings()?;
+    let params = a.params()?;
+    s.init_threads();
+    super::check_distinct(&a.input, &a.output)?;
+    if let Some(summary) = &a.summary {
+        super::check_distinct(&a.input, summary)?;
+        if summary == &a.output {
+            bail!("--summary and -o name the same file");
+        }
+    }
+    let progress = super::progress::progress(s.quiet);
+    let t0 = Instant::now();
+    let mut ws = open_input(
+        &a.input,
+        &scratch_store_dir(&a.output),
+        &build_options(&s, &params),
+        s.policy,
+        progress.as_ref(),
+    )
+    .with_context(|| format!("reading {}", a.input.display()))?;
+    let out = OutputOptions {
+        format: a.format(),
+        window_points: (s.mem / 8 / params.window_bytes_per_point()).max(1 << 12),
+    };
+    let report = compute_neighbours(
+        &mut ws.store,
+        &params,
+        &a.output,
+        &out,
+        s.run_options(),
+        progress.as_ref(),
+    )
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    let secs = t0.elapsed().as_secs_f64();
+    if let Some(path) = &a.summary {
+        write_summary(path, &report, &params, secs)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    print_summary(&report, &params, secs, &a.output);
+    Ok(())
+}
+
+/// Tiles sized from the budget for this kernel, or forced by --tile-points.
+fn build_options(s: &super::Settings, params: &NeighbourParams) -> BuildOptions {
+    let tiles = match s.tile_points {
+        Some(n) => TileTarget::Points(n),
+        None => TileTarget::Budget {
+            budget: s.budget(),
+            bytes_per_point: params.bytes_per_point(),
+            reserved_per_point: 0,
+        },
+    };
+    BuildOptions {
+        tiles,
+        scatter_buffer: (s.mem / 8).min(64 << 20) as usize,
+    }
+}
+
+fn write_summary(
+    path: &Path,
+    report: &NeighboursReport,
+    params: &NeighbourParams,
+    secs: f64,
+) -> Result<()> {
+    let mut file = AtomicFile::create(path)?;
+    let text = serde_json::to_string_pretty(&report.summary(params, secs))?;
+    file.file().write_all(text.as_bytes())?;
+    file.file().write_all(b"\n")?;
+    file.commit()?;
+    Ok(())
+}
+
+fn print_summary(r: &NeighboursReport, params: &NeighbourParams, secs: f64, out: &Path) {
+    let st = &r.stats;
+    let sizes = match (
+        st.min_size(),
+        st.median_size(),
+        st.mean_size(),
+        st.max_size(),
+    ) {
+        (Some(lo), Some(med), Some(mean), Some(hi)) => format!("{lo}/{med}/{mean:.1}/{hi}"),
+        _ => "-".into(),
+    };
+    let iterations = match st.median_iterations() {
+        Some(m) => format!(", iterations median {m} ({} hit the cap)", st.hit_cap()),
+        None => String::new(),
+    };
+    println!(
+        "neighbors: {} points, {} tiles ({} reloaded with a wider margin), {} k {}, size min/median/mean/max {}{}, {:.2} s, peak {} -> {}",
+        r.points,
+        r.tiles,
+        r.run.retries,
+        params.mode_name(),
+        params.k(),
+        sizes,
+        iterations,
+        secs,
+        super::peak(),
+        out.display()
+    );
+}

@@ -1,0 +1,246 @@
+//! Neighbourhoods of every point, written in input order (issue 4): the
+//! topological neighbours of paper 3 (mean reverse shift, see
+//! [`crate::spatial::topological`]) or the plain k nearest neighbours.
+//!
+//! Data flow: [`kernel::NeighboursKernel`] runs on every tile and checks at
+//! run time that each core point's neighbourhood lies inside the loaded
+//! region (asking for a wider margin otherwise), so a tiled run gives the
+//! untiled lists exactly. Results arrive in tile (spatial) order but the
+//! output is in input order:
+//!
+//! 1. each tile's records, sorted by id, are appended to a scratch file with
+//!    a per-tile index of output-window boundaries ([`spill`]);
+//! 2. a final pass fills one window of consecutive input ids at a time (one
+//!    contiguous byte range per tile, like `store::export`) and appends it to
+//!    the output ([`csr`]: binary CSR or text), written under a temporary
+//!    name and renamed into place only when complete.
+//!
+//! Memory is the tiles in flight plus one window of lists (sized by the
+//! caller), never a structure per point of the whole cloud. Ids are 0-based
+//! positions in the input among the points kept (the store's `index.u64`).
+//!
+//! Measured (release, 2 shared cores under load ~7, 1M points sampled from
+//! the dragon, k = 15): topological 24 s, peak 284 MiB at `--mem 1GiB` and
+//! 46 MiB at `--mem 128MiB` (64 tiles, byte-identical output); kNN 3.9 s.
+//! Iterations: median 1, max 5, none capped; |T| 15..45, mean 17.2.
+
+pub mod csr;
+pub mod kernel;
+pub mod spill;
+pub mod stats;
+
+pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
+pub use kernel::{NeighboursKernel, NeighboursTile};
+pub use stats::{HoodStats, Summary};
+
+use crate::io::IoError;
+use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::spatial::topological::TopoParams;
+use crate::spatial::KnnBackend;
+use crate::store::{PointStore, StoreError};
+use spill::{Spill, WindowLists, Windows};
+use std::path::Path;
+
+/// Largest k accepted: neighbourhoods are for local geometry, and a larger k
+/// would mostly make tiles (and their margins) absurdly large.
+pub const MAX_K: usize = 4096;
+
+/// Which neighbourhood every point gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Neighbourhood {
+    /// Paper 3's topological neighbours (k per query, capped iterations).
+    Topological(TopoParams),
+    /// The exact k nearest neighbours.
+    Knn { k: usize },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NeighbourParams {
+    pub neighbourhood: Neighbourhood,
+    /// kNN structure for [`Neighbourhood::Knn`] (the topological mode uses
+    /// the paper's R*-tree).
+    pub backend: KnnBackend,
+}
+
+impl Default for NeighbourParams {
+    fn default() -> Self {
+        NeighbourParams {
+            neighbourhood: Neighbourhood::Topological(TopoParams::default()),
+            backend: KnnBackend::default(),
+        }
+    }
+}
+
+impl NeighbourParams {
+    pub fn knn(k: usize) -> Self {
+        NeighbourParams {
+            neighbourhood: Neighbourhood::Knn { k },
+            ..Self::default()
+        }
+    }
+
+    pub fn topological(k: usize, max_iterations: usize) -> Self {
+        NeighbourParams {
+            neighbourhood: Neighbourhood::Topological(TopoParams { k, max_iterations }),
+            ..Self::default()
+        }
+    }
+
+    pub fn k(&self) -> usize {
+        match self.neighbourhood {
+            Neighbourhood::Topological(p) => p.k,
+            Neighbourhood::Knn { k } => k,
+        }
+    }
+
+    /// `topological` or `knn`.
+    pub fn mode_name(&self) -> &'static str {
+        match self.neighbourhood {
+            Neighbourhood::Topological(_) => "topological",
+            Neighbourhood::Knn { .. } => "knn",
+        }
+    }
+
+    /// Typical neighbours per point: k, or 2k for topological (paper 3:
+    /// |T| in [k, 3k]).
+    pub fn expected_size(&self) -> u64 {
+        match self.neighbourhood {
+            Neighbourhood::Topological(p) => 2 * p.k as u64,
+            Neighbourhood::Knn { k } => k as u64,
+        }
+    }
+
+    /// Peak bytes per loaded point of the kernel (points, ids, index, the
+    /// core lists in local and global ids), for the memory planner.
+    pub fn bytes_per_point(&self) -> u64 {
+        120 + 12 * 3 * self.k() as u64
+    }
+
+    /// Bytes per point of an output window (decoded lists, scratch records).
+    pub fn window_bytes_per_point(&self) -> u64 {
+        40 + 16 * self.expected_size()
+    }
+
+    /// First margin to try, for a surface sampled at `spacing`: the k-th
+    /// neighbour lies near `1.13 sqrt(k)` spacings on uniform samples (more
+    /// on scans); the reverse shift's reach adds the shift, about one more
+    /// radius. The kernel asks for more when it is short.
+    pub fn initial_margin(&self, spacing: f64) -> f64 {
+        let factor = match self.neighbourhood {
+            Neighbourhood::Topological(_) => 6.0,
+            Neighbourhood::Knn { .. } => 3.0,
+        };
+        factor * spacing * (self.k() as f64).sqrt()
+    }
+
+    fn validate(&self) -> Result<(), NeighboursError> {
+        let k = self.k();
+        if !(1..=MAX_K).contains(&k) {
+            return Err(NeighboursError::BadParams {
+                reason: format!("k = {k}: must be in 1..={MAX_K}"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// How the lists are written.
+#[derive(Clone, Copy, Debug)]
+pub struct OutputOptions {
+    pub format: OutputFormat,
+    /// Points per output window (memory: see
+    /// [`NeighbourParams::window_bytes_per_point`]).
+    pub window_points: u64,
+}
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum NeighboursError {
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    #[error(transparent)]
+    Io(#[from] IoError),
+    #[error("bad neighbourhood parameters: {reason}")]
+    BadParams { reason: String },
+    #[error("neighbour scratch records are inconsistent: {reason}")]
+    Scratch { reason: String },
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct NeighboursReport {
+    pub points: u64,
+    pub tiles: usize,
+    /// Total neighbour entries written.
+    pub neighbours: u64,
+    pub stats: HoodStats,
+    pub run: RunStats,
+}
+
+impl NeighboursReport {
+    /// The `--summary` document.
+    pub fn summary(&self, params: &NeighbourParams, seconds: f64) -> Summary {
+        let k = params.k();
+        Summary {
+            mode: params.mode_name(),
+            k,
+            points: self.points,
+            tiles: self.tiles,
+            tiles_reloaded: self.run.retries,
+            largest_margin: self.run.largest_margin,
+            neighbours: self.neighbours,
+            size: stats::SizeSummary::of(&self.stats, k),
+            iterations: match params.neighbourhood {
+                Neighbourhood::Topological(p) => {
+                    stats::IterationSummary::of(&self.stats, p.max_iterations)
+                }
+                Neighbourhood::Knn { .. } => None,
+            },
+            seconds,
+        }
+    }
+}
+
+/// Computes every point's neighbourhood and writes the lists to `output` in
+/// input order. Nothing appears at `output` unless the run succeeds.
+pub fn compute_neighbours(
+    store: &mut PointStore,
+    params: &NeighbourParams,
+    output: &Path,
+    out: &OutputOptions,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<NeighboursReport, NeighboursError> {
+    params.validate()?;
+    // Opened first, so an unwritable output fails before the long work.
+    let mut writer = csr::ListWriter::create(output, out.format, store.len())?;
+    let spacing = crate::store::spacing::ensure_spacing(store)?;
+    let kernel = NeighboursKernel {
+        params: *params,
+        initial_margin: params.initial_margin(spacing).max(f64::MIN_POSITIVE),
+    };
+    let windows = Windows::new(store.len(), out.window_points);
+    let mut spill = Spill::create(&store.dir, windows, IdWidth::for_points(store.len()))?;
+    let mut report = NeighboursReport {
+        points: store.len(),
+        tiles: store.tiles().len(),
+        ..NeighboursReport::default()
+    };
+    report.run = run_tiles(store, &kernel, opts, progress, |_, tile: NeighboursTile| {
+        report.stats.merge(&tile.stats);
+        Ok(spill.push_tile(&tile)?)
+    })?;
+    report.neighbours = report.stats.total();
+    let mut reader = spill.finish()?;
+    let mut lists = WindowLists::default();
+    progress.begin("write", store.len());
+    for w in 0..windows.count() {
+        reader.read_window(w, &mut lists)?;
+        writer.write_window(&lists)?;
+        progress.advance(lists.len() as u64);
+    }
+    progress.end();
+    writer.commit()?;
+    Ok(report)
+}
