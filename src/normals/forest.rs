@@ -9,6 +9,7 @@
 //! root is the parity of its tree path, as Prim's walk would set it.
 
 use super::unionfind::ParityUnionFind;
+use rayon::slice::ParallelSliceMut;
 
 /// A Riemannian-graph edge between two points (input-order ids, `a < b`).
 /// `w` is the cost `1 - |n_a . n_b|` carrying the sign of `n_a . n_b`, so a
@@ -75,7 +76,7 @@ pub struct LocalEdge {
 /// Minimum spanning forest of `edges` over `n` local vertices: sorts by
 /// [`Edge::key`], drops repeats, and returns the forest edges in that order.
 pub fn spanning_forest(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
-    edges.sort_unstable_by_key(|e| e.edge.key());
+    edges.par_sort_unstable_by_key(|e| e.edge.key());
     edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
     let mut uf = ParityUnionFind::new(n);
     edges
