@@ -27,12 +27,19 @@ pub struct NormalsArgs {
     #[arg(long, value_enum, default_value_t = Orient::Mst)]
     orient: Orient,
     /// Spanning-tree edge cost: `offset` (default) adds the tangent-plane
-    /// offset to the paper's `1 - |ni.nj|` so the tree does not cross thin parts.
+    /// offset to the paper's `1 - |ni.nj|` so the tree does not cross thin parts
+    /// (for --orient sources|single-source: subtracts it from `w`).
     #[arg(long, value_enum, default_value_t = Cost::Offset)]
     cost: Cost,
     /// Scanner position x,y,z (implies --orient viewpoint).
     #[arg(long, value_parser = parse_point)]
     viewpoint: Option<DVec3>,
+    /// Source propagation threshold on |ni.nj| (--orient sources|single-source).
+    #[arg(long, default_value_t = scanmesh::normals::sources::DEFAULT_TAU)]
+    tau: f64,
+    /// Direction x,y,z of the single source (--orient single-source).
+    #[arg(long, value_parser = parse_point, default_value = "0,0,1")]
+    source_direction: DVec3,
     /// Write PLY as ASCII instead of binary.
     #[arg(long)]
     ascii: bool,
@@ -60,6 +67,10 @@ enum Orient {
     Mst,
     /// Toward --viewpoint.
     Viewpoint,
+    /// Six sources at the extreme points along +-X, +-Y, +-Z (paper 5).
+    Sources,
+    /// One source, the point farthest along --source-direction (terrain).
+    SingleSource,
     /// Unoriented (canonical PCA sign).
     None,
 }
@@ -86,7 +97,21 @@ impl NormalsArgs {
             (Orient::Mst | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
             (Orient::Mst, None) => Orientation::SpanningTree,
             (Orient::None, _) => Orientation::None,
+            (Orient::Sources | Orient::SingleSource, Some(_)) => {
+                bail!("--viewpoint goes with --orient viewpoint only")
+            }
+            (Orient::Sources, None) => Orientation::SixSources { tau: self.tau },
+            (Orient::SingleSource, None) => Orientation::SingleSource {
+                direction: self.source_direction,
+                tau: self.tau,
+            },
         };
+        if !(0.0..=1.0).contains(&self.tau) {
+            bail!("--tau must lie in [0, 1]");
+        }
+        if self.source_direction.try_normalize().is_none() {
+            bail!("--source-direction must be non-zero");
+        }
         Ok(NormalParams {
             k: self.k,
             backend: match self.knn {

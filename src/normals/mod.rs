@@ -13,6 +13,7 @@ pub mod kernel;
 pub mod orient;
 pub mod pca;
 pub mod runs;
+pub mod sources;
 pub mod stats;
 pub mod unionfind;
 
@@ -38,6 +39,12 @@ pub enum Orientation {
     SpanningTree,
     /// Toward a scanner position (absolute coordinates): single-station scans.
     Viewpoint(DVec3),
+    /// Paper 5's six sources (extreme points along +-X, +-Y, +-Z), spread
+    /// where `|n_i . n_j| >= tau` ([`sources`]).
+    SixSources { tau: f64 },
+    /// One source, the point farthest along `direction` (single-sheet
+    /// models, e.g. terrain with +Z).
+    SingleSource { direction: DVec3, tau: f64 },
     /// Leave the canonical PCA sign (largest component positive).
     None,
 }
@@ -95,6 +102,8 @@ pub enum NormalsError {
     Pipeline(#[from] PipelineError),
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    #[error(transparent)]
+    Sources(#[from] sources::SourcesError),
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -182,6 +191,12 @@ fn normals_into(
         let stats = orient::orient_by_forest(store, runs, normals, flags, progress)?;
         report.unoriented = stats.unoriented;
         report.components = stats.components;
+    }
+    if let Some(sp) = sources::SourceParams::for_normals(params, spacing) {
+        let stats = sources::orient_store(store, &sp, spacing, opts, progress, normals, flags)?;
+        report.unoriented = stats.unoriented;
+        report.components = stats.components;
+        report.forest_edges = stats.forest_edges;
     }
     Ok(report)
 }

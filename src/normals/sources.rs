@@ -1,0 +1,192 @@
+//! Normal orientation by six sources (paper 5, "valley-ridge feature lines",
+//! step 2): the points of largest and smallest x, y, z get normals along
+//! +-X, +-Y, +-Z; from them the sign spreads to neighbours within `r` whose
+//! normals are nearly parallel (`w = |n_i . n_j| >= tau`, tau = 0.6),
+//! largest `w` first, flipping a neighbour whose normal opposes; the points
+//! left are oriented by the nearest-distance rule. A single source
+//! direction (e.g. +Z) serves single-sheet models such as terrain.
+//!
+//! - [`orient_by_sources`]: the algorithm over one cloud in memory, a pure
+//!   function ([`propagate`] has the steps, the two spreading orders and
+//!   every deviation from the paper).
+//! - [`orient_store`]: the same over a store of any size, tile by tile,
+//!   *exactly*: the default best-first spreading is Prim's algorithm from a
+//!   root joined to the sources, so each tile keeps the minimum spanning
+//!   forest of its pairs, one Kruskal pass over the union of the tiles'
+//!   forests finds the same tree (ARCHITECTURE.md, normal orientation), and
+//!   the tiled result equals the in-memory one bit for bit, for any tiling
+//!   and thread count, given the same radius ([`tiled`]; the store's
+//!   spacing estimate, and so the default radius, samples tiles). The issue proposed orienting each tile on
+//!   its own and voting one sign per tile component through the overlaps;
+//!   built and measured first, that vote carried a tile's local mistake
+//!   (a front across a thin ridge, with the better path outside the tile)
+//!   on to every later tile: 71.5 % of the dragon oriented like the mesh
+//!   with 82 tiles against 99.37 % untiled. The spanning forest has no
+//!   such failure.
+//!
+//! Neighbourhood radius: the paper takes r = 2..4 times the mean distance of
+//! a point to its 5-7 nearest neighbours; the store knows the mean
+//! *nearest*-neighbour distance, and r = 3 of those ([`RADIUS_SPACINGS`])
+//! holds about 10-30 points on a surface, the paper's 10-20 "fit well".
+
+mod best_first;
+mod graph;
+mod hood;
+pub mod kernel;
+pub mod pairs;
+pub mod propagate;
+pub mod seeds;
+mod stacks;
+pub mod tiled;
+
+pub use hood::Neighbourhood;
+pub use propagate::Order;
+pub use seeds::{Extreme, Extremes, Sources};
+pub use tiled::{orient_store, SourceStats};
+
+use super::{EdgeCost, NormalParams, Orientation};
+use crate::spatial::IndexError;
+use glam::DVec3;
+use graph::Graph;
+use pairs::PairRule;
+use propagate::{propagate, Cloud, Seed};
+
+/// The paper's propagation threshold.
+pub const DEFAULT_TAU: f64 = 0.6;
+/// Default radius in store spacings (mean nearest-neighbour distances).
+pub const RADIUS_SPACINGS: f64 = 3.0;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SourceParams {
+    pub sources: Sources,
+    /// Propagate only where `w >= tau`.
+    pub tau: f64,
+    pub hood: Neighbourhood,
+    /// With a radius neighbourhood, the nearest-distance rule also reaches
+    /// this many nearest points beyond `r` (0: none).
+    pub bridge_k: usize,
+    /// How `w` is measured ([`pairs::PairRule`]).
+    pub weight: EdgeCost,
+    pub order: Order,
+}
+
+impl SourceParams {
+    /// The parameters the normals parameters ask for, with the default
+    /// radius for a store of mean spacing `spacing`, bridges to the same k
+    /// nearest as the tangent planes and the spanning tree's edge cost;
+    /// `None` for other orientations.
+    pub fn for_normals(params: &NormalParams, spacing: f64) -> Option<Self> {
+        let (sources, tau) = match params.orientation {
+            Orientation::SixSources { tau } => (Sources::Six, tau),
+            Orientation::SingleSource { direction, tau } => (Sources::Single(direction), tau),
+            _ => return None,
+        };
+        Some(SourceParams {
+            sources,
+            tau,
+            hood: Neighbourhood::Radius(RADIUS_SPACINGS * spacing),
+            bridge_k: params.k,
+            weight: params.cost,
+            order: Order::BestFirst,
+        })
+    }
+
+    /// The direction that roots parts no pair reaches (+X for six sources).
+    pub fn first_direction(&self) -> DVec3 {
+        let d = self.sources.directions();
+        d.first().copied().unwrap_or(DVec3::X)
+    }
+
+    pub fn validate(&self) -> Result<(), SourcesError> {
+        if !(0.0..=1.0).contains(&self.tau) {
+            return Err(SourcesError::BadTau { tau: self.tau });
+        }
+        if self.sources.directions().is_empty() {
+            return Err(SourcesError::BadDirection);
+        }
+        match self.hood {
+            Neighbourhood::Radius(r) if r.is_finite() && r > 0.0 => Ok(()),
+            Neighbourhood::Nearest(k) if k > 0 => Ok(()),
+            hood => Err(SourcesError::BadNeighbourhood { hood }),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SourcesError {
+    #[error("tau {tau} lies outside [0, 1]")]
+    BadTau { tau: f64 },
+    #[error("the source direction must be a finite non-zero vector")]
+    BadDirection,
+    #[error("unusable neighbourhood {hood:?}")]
+    BadNeighbourhood { hood: Neighbourhood },
+    #[error("{points} points but {other} normals or ids")]
+    Lengths { points: usize, other: usize },
+    #[error("id {id}: orientation names points by u32 ids (and one more for the sources' root)")]
+    IdTooLarge { id: u64 },
+    #[error("the paper's stack order runs in memory only; tiles need the best-first order")]
+    StacksNotTiled,
+    #[error(transparent)]
+    Index(#[from] IndexError),
+}
+
+/// The orientation of one point: flip its (unoriented) normal or not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PointSign {
+    pub flip: bool,
+    /// False only for points without a normal (nothing to orient).
+    pub oriented: bool,
+}
+
+/// Orients one cloud in memory. `normals[i]` is the unit unoriented normal
+/// of `points[i]` (`None` when degenerate); `ids` are the input-order ids
+/// that break every tie (below `u32::MAX`).
+pub fn orient_by_sources(
+    points: &[DVec3],
+    normals: &[Option<DVec3>],
+    ids: &[u64],
+    params: &SourceParams,
+) -> Result<Vec<PointSign>, SourcesError> {
+    params.validate()?;
+    for other in [normals.len(), ids.len()] {
+        if other != points.len() {
+            return Err(SourcesError::Lengths {
+                points: points.len(),
+                other,
+            });
+        }
+    }
+    let small_ids = ids
+        .iter()
+        .map(|&id| u32::try_from(id).ok().filter(|&v| v < u32::MAX))
+        .collect::<Option<Vec<u32>>>();
+    let Some(small_ids) = small_ids else {
+        let id = ids.iter().copied().max().unwrap_or(0);
+        return Err(SourcesError::IdTooLarge { id });
+    };
+    let graph = Graph::build(points, normals, ids, params)?;
+    let mut ex = Extremes::new(&params.sources);
+    for (i, p) in points.iter().enumerate() {
+        if normals[i].is_some() {
+            ex.offer(*p, ids[i], i as u64);
+        }
+    }
+    let seeds: Vec<Seed> = ex
+        .finish()
+        .iter()
+        .map(|e| Seed {
+            point: e.index as u32,
+            direction: e.direction,
+        })
+        .collect();
+    let cloud = Cloud {
+        points,
+        normals,
+        ids: &small_ids,
+        graph: &graph,
+        rule: PairRule::new(params),
+        first_direction: params.first_direction(),
+    };
+    Ok(propagate(&cloud, &seeds, params.order))
+}
