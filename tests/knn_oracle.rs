@@ -6,50 +6,40 @@ use glam::DVec3;
 use scanmesh::spatial::{
     brute_knn, build_index, GridIndex, IndexError, KdIndex, KnnBackend, KnnIndex, Neighbour,
 };
+use scanmesh::synth::Rng;
 
-/// Small deterministic generator (SplitMix64) so failures replay from a seed.
-struct SplitMix64(u64);
+/// The draws these tests need on top of the project's seeded generator.
+trait Draws {
+    fn index(&mut self, n: usize) -> usize;
+    fn vec3(&mut self, lo: f64, hi: f64) -> DVec3;
+}
 
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
+impl Draws for Rng {
+    fn index(&mut self, n: usize) -> usize {
+        self.below(n as u64) as usize
     }
     fn vec3(&mut self, lo: f64, hi: f64) -> DVec3 {
         DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
     }
 }
 
-fn uniform_cube(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+fn uniform_cube(rng: &mut Rng, n: usize) -> Vec<DVec3> {
     (0..n).map(|_| rng.vec3(-1.0, 1.0)).collect()
 }
 
-fn clustered(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+fn clustered(rng: &mut Rng, n: usize) -> Vec<DVec3> {
     let centres: Vec<DVec3> = (0..5).map(|_| rng.vec3(-50.0, 50.0)).collect();
     (0..n)
         .map(|_| {
-            let c = centres[rng.below(centres.len())];
-            let spread = if rng.unit() < 0.5 { 0.01 } else { 1.0 };
+            let c = centres[rng.index(centres.len())];
+            let spread = if rng.uniform() < 0.5 { 0.01 } else { 1.0 };
             c + rng.vec3(-spread, spread)
         })
         .collect()
 }
 
 /// Noisy unit sphere at UTM-like offsets.
-fn sphere_surface(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+fn sphere_surface(rng: &mut Rng, n: usize) -> Vec<DVec3> {
     let offset = DVec3::new(5.0e5, 4.2e6, 120.0);
     (0..n)
         .map(|_| {
@@ -63,9 +53,9 @@ fn sphere_surface(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
 }
 
 /// An integer lattice: every point has many exactly equidistant neighbours.
-fn lattice(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+fn lattice(rng: &mut Rng, n: usize) -> Vec<DVec3> {
     let side = (n as f64).cbrt().ceil() as i64;
-    let step = [0.5, 1.0, 0.25][rng.below(3)];
+    let step = [0.5, 1.0, 0.25][rng.index(3)];
     let mut pts = Vec::new();
     for z in 0..side {
         for y in 0..side {
@@ -79,24 +69,24 @@ fn lattice(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
 }
 
 /// A few locations repeated many times, plus some scatter.
-fn duplicates(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
+fn duplicates(rng: &mut Rng, n: usize) -> Vec<DVec3> {
     let spots: Vec<DVec3> = (0..4).map(|_| rng.vec3(-2.0, 2.0)).collect();
     (0..n)
         .map(|i| {
             if i % 7 == 0 {
                 rng.vec3(-2.0, 2.0)
             } else {
-                spots[rng.below(spots.len())]
+                spots[rng.index(spots.len())]
             }
         })
         .collect()
 }
 
 /// Unique tie keys in shuffled order, so tie order differs from index order.
-fn shuffled_ties(rng: &mut SplitMix64, n: usize) -> Vec<u64> {
+fn shuffled_ties(rng: &mut Rng, n: usize) -> Vec<u64> {
     let mut tie: Vec<u64> = (0..n as u64).map(|i| i * 3 + 1000).collect();
     for i in (1..n).rev() {
-        tie.swap(i, rng.below(i + 1));
+        tie.swap(i, rng.index(i + 1));
     }
     tie
 }
@@ -104,7 +94,7 @@ fn shuffled_ties(rng: &mut SplitMix64, n: usize) -> Vec<u64> {
 /// Queries: every data point (with and without excluding itself), random
 /// points around the data, and points far outside it.
 fn check_all(name: &str, seed: u64, points: &[DVec3], index: &dyn KnnIndex, k: usize, tie: &[u64]) {
-    let mut rng = SplitMix64(seed ^ 0xABCD);
+    let mut rng = Rng::new(seed ^ 0xABCD);
     let mut out = vec![
         Neighbour {
             dist2: -1.0,
@@ -151,7 +141,7 @@ fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
 
 /// Every backend, including grids with extreme cell sizes, on one cloud.
 fn check_backends(name: &str, seed: u64, points: &[DVec3], ks: &[usize]) {
-    let mut rng = SplitMix64(seed);
+    let mut rng = Rng::new(seed);
     let tie = shuffled_ties(&mut rng, points.len());
     let (lo, hi) = bounds(points);
     let size = (hi - lo).max_element().max(1e-9);
@@ -178,7 +168,7 @@ fn check_backends(name: &str, seed: u64, points: &[DVec3], ks: &[usize]) {
 #[test]
 fn uniform_cube_matches_oracle() {
     for seed in 1..4 {
-        let pts = uniform_cube(&mut SplitMix64(seed), 1500);
+        let pts = uniform_cube(&mut Rng::new(seed), 1500);
         check_backends("uniform cube", seed, &pts, &[1, 12]);
     }
 }
@@ -186,7 +176,7 @@ fn uniform_cube_matches_oracle() {
 #[test]
 fn clustered_matches_oracle() {
     for seed in 10..13 {
-        let pts = clustered(&mut SplitMix64(seed), 1500);
+        let pts = clustered(&mut Rng::new(seed), 1500);
         check_backends("clustered", seed, &pts, &[8, 30]);
     }
 }
@@ -194,7 +184,7 @@ fn clustered_matches_oracle() {
 #[test]
 fn surface_at_utm_offset_matches_oracle() {
     for seed in 20..23 {
-        let pts = sphere_surface(&mut SplitMix64(seed), 2000);
+        let pts = sphere_surface(&mut Rng::new(seed), 2000);
         check_backends("sphere", seed, &pts, &[12]);
     }
 }
@@ -202,7 +192,7 @@ fn surface_at_utm_offset_matches_oracle() {
 #[test]
 fn lattice_ties_match_oracle() {
     for seed in 30..32 {
-        let pts = lattice(&mut SplitMix64(seed), 1000);
+        let pts = lattice(&mut Rng::new(seed), 1000);
         check_backends("lattice", seed, &pts, &[1, 7, 19]);
     }
 }
@@ -210,7 +200,7 @@ fn lattice_ties_match_oracle() {
 #[test]
 fn many_duplicates_match_oracle() {
     for seed in 40..43 {
-        let pts = duplicates(&mut SplitMix64(seed), 700);
+        let pts = duplicates(&mut Rng::new(seed), 700);
         check_backends("duplicates", seed, &pts, &[3, 12, 200]);
     }
 }
@@ -218,7 +208,7 @@ fn many_duplicates_match_oracle() {
 #[test]
 fn k_beyond_n_returns_everything_in_order() {
     for seed in 50..53 {
-        let pts = uniform_cube(&mut SplitMix64(seed), 9);
+        let pts = uniform_cube(&mut Rng::new(seed), 9);
         check_backends("tiny", seed, &pts, &[8, 9, 10, 100]);
     }
 }
@@ -266,7 +256,7 @@ fn bad_input_is_an_error() {
 
 #[test]
 fn auto_cell_holds_a_few_points_on_a_surface() {
-    let pts = sphere_surface(&mut SplitMix64(70), 20_000);
+    let pts = sphere_surface(&mut Rng::new(70), 20_000);
     let tie: Vec<u64> = (0..pts.len() as u64).collect();
     let grid = GridIndex::new(&pts, &tie).expect("grid");
     let mean = pts.len() as f64 / grid.occupied_cells() as f64;
@@ -278,21 +268,21 @@ fn auto_cell_holds_a_few_points_on_a_surface() {
 #[test]
 fn small_quantised_clouds_with_random_cells_match_oracle() {
     for seed in 100..400u64 {
-        let mut rng = SplitMix64(seed);
-        let n = 1 + rng.below(80);
-        let quantum = [0.25, 0.5, 1.0][rng.below(3)];
+        let mut rng = Rng::new(seed);
+        let n = 1 + rng.index(80);
+        let quantum = [0.25, 0.5, 1.0][rng.index(3)];
         let pts: Vec<DVec3> = (0..n)
             .map(|_| (rng.vec3(0.0, 6.0) / quantum).round() * quantum)
             .collect();
         let tie = shuffled_ties(&mut rng, n);
-        let cell = [1e-3, 0.25, 0.5, 0.7, 1.0, 3.0, 50.0][rng.below(7)];
+        let cell = [1e-3, 0.25, 0.5, 0.7, 1.0, 3.0, 50.0][rng.index(7)];
         let grid = GridIndex::with_cell(&pts, &tie, cell).expect("grid");
         let kd = KdIndex::new(&pts, &tie).expect("kd-tree");
         let mut out = Vec::new();
         for _ in 0..40 {
-            let k = 1 + rng.below(n + 3);
+            let k = 1 + rng.index(n + 3);
             let q = (rng.vec3(-2.0, 8.0) / quantum).round() * quantum;
-            let exclude = (rng.unit() < 0.5).then(|| rng.below(n) as u32);
+            let exclude = (rng.uniform() < 0.5).then(|| rng.index(n) as u32);
             let want = brute_knn(&pts, &tie, q, k, exclude);
             for (name, index) in [("grid", &grid as &dyn KnnIndex), ("kd", &kd)] {
                 index.knn(q, k, exclude, &mut out);

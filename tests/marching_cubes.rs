@@ -8,23 +8,7 @@ use glam::DVec3;
 use scanmesh::recon::implicit::lattice::{edge_from_key, edge_key, Lattice};
 use scanmesh::recon::implicit::mc_table::{table, CORNER_OFFSETS, EDGE_AXIS, EDGE_CORNERS};
 use scanmesh::recon::implicit::polygonize::{polygonize_cube, polygonize_field, IndexedMesh};
-
-// ---------- seeded generator ----------
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use scanmesh::synth::Rng;
 
 // ---------- local edge-use checker ----------
 
@@ -359,20 +343,20 @@ fn check_vertices_on_edges(lat: &Lattice, mesh: &IndexedMesh) -> Result<(), Stri
 #[test]
 fn b_random_fields_give_closed_oriented_manifolds() {
     for seed in 0..400u64 {
-        let mut rng = SplitMix(seed);
-        let n = 2 + (rng.next() % 7) as i64;
-        let p_pos = 0.2 + 0.6 * rng.unit();
+        let mut rng = Rng::new(seed);
+        let n = 2 + (rng.next_u64() % 7) as i64;
+        let p_pos = 0.2 + 0.6 * rng.uniform();
         let lat = Lattice::new(
-            DVec3::new(rng.unit(), -rng.unit(), 3.0 * rng.unit()),
-            0.1 + rng.unit(),
+            DVec3::new(rng.uniform(), -rng.uniform(), 3.0 * rng.uniform()),
+            0.1 + rng.uniform(),
         )
         .unwrap();
         let mut values = HashMap::new();
         for c in box_cells([0; 3], [n + 1; 3]) {
             let boundary = c.iter().any(|&x| x == 0 || x == n);
-            let r = rng.unit();
-            let mag = if r < 0.1 { 0.0 } else { rng.unit() };
-            let v = if !boundary && rng.unit() < p_pos {
+            let r = rng.uniform();
+            let mag = if r < 0.1 { 0.0 } else { rng.uniform() };
+            let v = if !boundary && rng.uniform() < p_pos {
                 mag + 1e-3
             } else {
                 -mag

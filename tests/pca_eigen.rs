@@ -6,32 +6,12 @@ use glam::{DMat3, DQuat, DVec3};
 use scanmesh::normals::eigen::sym3_eigen;
 use scanmesh::normals::pca::{fit_plane, fit_plane_points, Degenerate};
 use scanmesh::spatial::{brute_knn, Neighbour};
+use scanmesh::synth::Rng;
 
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn rotation(&mut self) -> DMat3 {
-        let q = DQuat::from_xyzw(
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-        );
-        DMat3::from_quat(q.normalize())
-    }
+/// A random rotation (normalised random quaternion).
+fn rotation(rng: &mut Rng) -> DMat3 {
+    let mut c = || rng.range(-1.0, 1.0);
+    DMat3::from_quat(DQuat::from_xyzw(c(), c(), c(), c()).normalize())
 }
 
 const UTM: DVec3 = DVec3::new(5.0e5, 4.2e6, 310.0);
@@ -56,7 +36,7 @@ fn frobenius(m: [[f64; 3]; 3]) -> f64 {
 
 /// Eigenvalue triples with distinct, repeated, zero, negative and extreme
 /// entries; `s` scales them.
-fn spectra(rng: &mut SplitMix64) -> Vec<[f64; 3]> {
+fn spectra(rng: &mut Rng) -> Vec<[f64; 3]> {
     let (a, b, c) = (
         rng.range(0.1, 10.0),
         rng.range(0.1, 10.0),
@@ -83,9 +63,9 @@ fn spectra(rng: &mut SplitMix64) -> Vec<[f64; 3]> {
 #[test]
 fn eigen_reconstructs_random_rotations() {
     for seed in 0..300u64 {
-        let mut rng = SplitMix64(seed);
+        let mut rng = Rng::new(seed);
         for l in spectra(&mut rng) {
-            let r = rng.rotation();
+            let r = rotation(&mut rng);
             let m = to_rows(r * DMat3::from_diagonal(DVec3::from_array(l)) * r.transpose());
             let (values, vectors) = sym3_eigen(m);
             let scale = l.iter().fold(0.0f64, |s, x| s.max(x.abs()));
@@ -121,8 +101,8 @@ fn eigen_reconstructs_random_rotations() {
 #[test]
 fn eigenvectors_have_canonical_sign() {
     for seed in 0..100u64 {
-        let mut rng = SplitMix64(seed);
-        let r = rng.rotation();
+        let mut rng = Rng::new(seed);
+        let r = rotation(&mut rng);
         let m = to_rows(r * DMat3::from_diagonal(DVec3::new(1.0, 2.0, 3.0)) * r.transpose());
         for v in sym3_eigen(m).1 {
             let big = v.abs().max_element();
