@@ -3,13 +3,17 @@
 //! order (e.g. `scanmesh normals dragon_vrip.ply.gz` against the dragon's own
 //! triangles). Vertex normals are area-weighted face normals, right-hand
 //! winding (outward for a consistently wound closed mesh).
+//!
+//! The reference may also be a point file with true normals (e.g. written by
+//! `scangen --normals`), same points in the same order: then those normals
+//! are the truth.
 
 use anyhow::{bail, Result};
 use clap::Parser;
 use glam::DVec3;
 use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
 use scanmesh::normals::evaluate::accuracy;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -19,7 +23,8 @@ use std::path::PathBuf;
 struct Args {
     /// Point file with normals (as written by `scanmesh normals`).
     normals: PathBuf,
-    /// Triangle mesh whose vertices are the same points in the same order.
+    /// Triangle mesh whose vertices are the same points in the same order, or
+    /// a point file with true normals.
     #[arg(long)]
     reference: PathBuf,
     #[arg(long)]
@@ -52,9 +57,13 @@ fn print_by_angle(normals: &[DVec3], truth: &[DVec3]) {
     }
 }
 
-fn main() -> Result<()> {
-    let a = Args::parse();
-    let (vertices, faces) = read_mesh_any(&a.reference)?;
+/// Area-weighted vertex normals of the reference mesh, or the reference
+/// point file's own normals when it has no faces.
+fn truth_normals(path: &Path) -> Result<Vec<DVec3>> {
+    let (vertices, faces) = read_mesh_any(path)?;
+    if faces.is_empty() {
+        return read_normals(path);
+    }
     let mut truth = vec![DVec3::ZERO; vertices.len()];
     for f in &faces {
         let [p, q, r] = f.map(|i| vertices[i as usize]);
@@ -64,18 +73,29 @@ fn main() -> Result<()> {
             truth[*i as usize] += n;
         }
     }
-    let mut reader = open_reader(&a.normals, InvalidPolicy::Reject)?;
+    Ok(truth)
+}
+
+fn read_normals(path: &Path) -> Result<Vec<DVec3>> {
+    let mut reader = open_reader(path, InvalidPolicy::Reject)?;
     let mut chunk = PointChunk::default();
-    let mut normals = Vec::with_capacity(vertices.len());
+    let mut normals = Vec::new();
     while reader.read_chunk(&mut chunk, 1 << 16)? > 0 {
         let Some(ns) = &chunk.normals else {
-            bail!("{}: no normals", a.normals.display());
+            bail!("{}: no normals", path.display());
         };
         normals.extend(ns.iter().map(|n| n.as_dvec3()));
     }
+    Ok(normals)
+}
+
+fn main() -> Result<()> {
+    let a = Args::parse();
+    let truth = truth_normals(&a.reference)?;
+    let normals = read_normals(&a.normals)?;
     if normals.len() != truth.len() {
         bail!(
-            "{} points but the reference has {} vertices",
+            "{} points but the reference has {}",
             normals.len(),
             truth.len()
         );

@@ -87,12 +87,51 @@ impl<'a> KdIndex<'a> {
     }
 }
 
+impl KdIndex<'_> {
+    /// The single nearest point, exactly (ties by key): kiddo's allocation-free
+    /// `nearest_one` finds the distance, then a radius query just beyond it
+    /// collects every point that could tie. Several times faster than the
+    /// general path for far queries (marching-cubes corners).
+    fn nearest(&self, q: DVec3, out: &mut Vec<Neighbour>) {
+        let query = q.to_array();
+        let first = self
+            .tree
+            .query(&query)
+            .nearest_one::<SquaredEuclidean<f64>>()
+            .execute();
+        // Rounding of the two distance formulas differs by a few ulps; the
+        // gap (and a floor for an exact hit) keeps every tie in the ball.
+        let radius = first.distance * (1.0 + 4.0 * ROUNDING_GAP) + f64::MIN_POSITIVE;
+        let ball = self
+            .tree
+            .query(&query)
+            .within::<SquaredEuclidean<f64>>(radius)
+            .unsorted()
+            .execute();
+        let best = ball
+            .iter()
+            .chain(std::iter::once(&first))
+            .filter_map(|r| {
+                let p = self.points.get(r.item as usize)?;
+                Some(Neighbour {
+                    dist2: dist2(*p, q),
+                    index: r.item,
+                })
+            })
+            .min_by(|a, b| neighbour_order(self.tie, a, b));
+        out.extend(best);
+    }
+}
+
 impl KnnIndex for KdIndex<'_> {
     fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
         out.clear();
         let n = self.points.len();
         if k == 0 || n == 0 {
             return;
+        }
+        if k == 1 && exclude.is_none() {
+            return self.nearest(q, out);
         }
         let excluded = exclude.is_some_and(|e| (e as usize) < n) as usize;
         let mut want = k.saturating_add(excluded + 1).min(n);

@@ -9,6 +9,7 @@ use super::stitch::Stitcher;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
 use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
 use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::spatial::KnnBackend;
 use crate::store::{PointStore, StoreError, NORMAL_FILE};
 use crate::tiling::load::core_box;
 use glam::DVec3;
@@ -86,7 +87,11 @@ pub fn reconstruct_implicit(
     let kernel = ImplicitKernel {
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
-        backend: params.normals.backend,
+        // Corners lie up to a cube (several spacings) from the nearest
+        // sample; the grid, sized for k-th neighbours at about a spacing,
+        // widens ring after ring for them, the kd-tree does not (3x faster
+        // on the 1M dragon). Both are exact, so the mesh is the same.
+        backend: KnnBackend::KdTree,
         initial_margin: 4.0 * report.cell + 2.0 * reach,
         band: 1,
     };
