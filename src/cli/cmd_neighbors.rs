@@ -1,6 +1,7 @@
 //! `scanmesh neighbors`: every point's topological (paper 3) or k nearest
 //! neighbours, in input order, as a binary CSR file or text.
 
+use super::HoodKind;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::AtomicFile;
@@ -21,8 +22,8 @@ pub struct NeighborsArgs {
     output: PathBuf,
     /// Which neighbourhood: topological (paper 3, mean reverse shift) or
     /// the plain k nearest.
-    #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = Mode::Topological)]
-    neighbours: Mode,
+    #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = HoodKind::Topological)]
+    neighbours: HoodKind,
     /// Points per kNN query (paper 3: 8..30, usually 15).
     #[arg(long, default_value_t = 15)]
     k: usize,
@@ -40,12 +41,6 @@ pub struct NeighborsArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum Mode {
-    Topological,
-    Knn,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
 enum Layout {
     /// Binary CSR: header, u64 offsets, u32/u64 neighbour ids.
     Bin,
@@ -59,8 +54,8 @@ impl NeighborsArgs {
             bail!("--k must be in 1..={MAX_K}");
         }
         Ok(match self.neighbours {
-            Mode::Topological => NeighbourParams::topological(self.k, self.max_iterations),
-            Mode::Knn => NeighbourParams::knn(self.k),
+            HoodKind::Topological => NeighbourParams::topological(self.k, self.max_iterations),
+            HoodKind::Knn => NeighbourParams::knn(self.k),
         })
     }
 

@@ -1,10 +1,13 @@
 //! `scanmesh normals`: oriented normals for every point, in input order.
 
+use super::HoodKind;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use glam::DVec3;
 use scanmesh::io::{format_from_name, Format, WriterSpec};
-use scanmesh::normals::{compute_normals, EdgeCost, NormalParams, NormalsReport, Orientation};
+use scanmesh::normals::{
+    compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
+};
 use scanmesh::spatial::KnnBackend;
 use scanmesh::store::{build::scratch_store_dir, export_points, open_input};
 use std::path::{Path, PathBuf};
@@ -23,6 +26,8 @@ pub struct NormalsArgs {
     /// kNN structure.
     #[arg(long, value_enum, default_value_t = Knn::Grid)]
     knn: Knn,
+    #[command(flatten)]
+    hood: HoodArgs,
     /// How normals get their sign.
     #[arg(long, value_enum, default_value_t = Orient::Mst)]
     orient: Orient,
@@ -45,6 +50,31 @@ pub struct NormalsArgs {
     ascii: bool,
     #[command(flatten)]
     common: super::CommonArgs,
+}
+
+/// The tangent planes' neighbourhood (shared with `reconstruct`).
+#[derive(Args)]
+pub struct HoodArgs {
+    /// Neighbourhood of the tangent planes and the spanning tree: the k
+    /// nearest (paper 1), or the topological neighbours of paper 3 (mean
+    /// reverse shift, k per query), which add the sparse side of a density
+    /// change that the k nearest miss.
+    #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = HoodKind::Knn)]
+    neighbours: HoodKind,
+    /// Cap on reverse-shift iterations (--neighbours topological).
+    #[arg(long, default_value_t = 10)]
+    max_iterations: usize,
+}
+
+impl HoodArgs {
+    pub fn hood(&self) -> NormalHood {
+        match self.neighbours {
+            HoodKind::Knn => NormalHood::Knn,
+            HoodKind::Topological => NormalHood::Topological {
+                max_iterations: self.max_iterations,
+            },
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -118,6 +148,7 @@ impl NormalsArgs {
                 Knn::Grid => KnnBackend::Grid,
                 Knn::Kdtree => KnnBackend::KdTree,
             },
+            neighbourhood: self.hood.hood(),
             orientation,
             cost: match self.cost {
                 Cost::Paper => EdgeCost::Paper,

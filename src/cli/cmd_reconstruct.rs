@@ -30,9 +30,11 @@ pub struct ReconstructArgs {
     /// The surface is closed: no open boundaries (paper 1 section 4.1).
     #[arg(long)]
     closed: bool,
-    /// Neighbours per point for the normals.
+    /// Neighbours per point for the normals (per query when topological).
     #[arg(long, default_value_t = 12)]
     k: usize,
+    #[command(flatten)]
+    hood: super::cmd_normals::HoodArgs,
     /// Write PLY as ASCII instead of binary.
     #[arg(long)]
     ascii: bool,
@@ -65,6 +67,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
     let Method::Implicit = a.method;
+    if a.k < 3 {
+        bail!("--k must be at least 3 for a tangent plane");
+    }
     let mut params = ImplicitParams {
         cell: a.cell,
         noise: a.noise,
@@ -72,6 +77,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         ..ImplicitParams::default()
     };
     params.normals.k = a.k;
+    params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let opts = super::cmd_tile::build_options(&s, &params.normals);

@@ -12,7 +12,7 @@ mod cmd_tile;
 mod progress;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::InvalidPolicy;
 use scanmesh::pipeline::{MemoryBudget, RunOptions};
 
@@ -69,6 +69,16 @@ pub struct CommonArgs {
     /// Drop points with NaN/inf coordinates (counted) instead of failing.
     #[arg(long)]
     skip_invalid: bool,
+}
+
+/// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
+/// `normals --neighbours`, `reconstruct --neighbours`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum HoodKind {
+    /// Paper 3's topological neighbours: mean reverse shift over an R*-tree.
+    Topological,
+    /// The plain k nearest neighbours.
+    Knn,
 }
 
 /// Validated common options.

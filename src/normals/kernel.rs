@@ -1,6 +1,8 @@
-//! The normals tile kernel (paper 1 sections 2.2-2.4): exact kNN, PCA tangent
-//! planes for the core points, and the tile's minimum spanning forest of the
-//! Riemannian graph for the global orientation pass.
+//! The normals tile kernel (paper 1 sections 2.2-2.4): exact kNN (or paper
+//! 3's topological neighbours, see [`super::hood`]), PCA tangent planes for
+//! the core points, and the tile's minimum spanning forest of the Riemannian
+//! graph (an edge from each point to each of its neighbours) for the global
+//! orientation pass.
 //!
 //! To weigh an edge from a core point to a margin point the kernel needs the
 //! margin point's normal too, so it also fits the "ring" (margin points that
@@ -10,11 +12,11 @@
 //! asks for a wider margin otherwise.
 
 use super::forest::{spanning_forest, Edge, LocalEdge};
+use super::hood::{Hood, HoodIndex};
 use super::pca::fit_plane;
 use super::stats::SamplingHistograms;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
-use crate::spatial::{build_index, KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -49,29 +51,7 @@ struct Fitted {
     residual: f64,
 }
 
-/// Neighbourhood of one point: its neighbours and the room check.
-struct Hood {
-    nbrs: Vec<Neighbour>,
-    /// How much wider the margin must be for this neighbourhood to be
-    /// certainly complete (0 when it is).
-    short_by: f64,
-}
-
 impl NormalsKernel {
-    fn hood(&self, index: &dyn KnnIndex, tile: &TilePoints, i: usize) -> Hood {
-        let mut nbrs = Vec::with_capacity(self.params.k + 4);
-        let p = tile.points[i];
-        index.knn(p, self.params.k, Some(i as u32), &mut nbrs);
-        let reach = match nbrs.last() {
-            Some(n) if nbrs.len() >= self.params.k => n.dist2.sqrt(),
-            // Fewer than k loaded: complete only if nothing lies beyond.
-            _ => f64::INFINITY,
-        };
-        let room = tile.room(p);
-        let short_by = if reach <= room { 0.0 } else { reach - room };
-        Hood { nbrs, short_by }
-    }
-
     fn normal_of(&self, tile: &TilePoints, i: usize, hood: &Hood) -> Option<Fitted> {
         let fit = fit_plane(&tile.points, i, &hood.nbrs).ok()?;
         let n = fit.normal;
@@ -96,13 +76,8 @@ impl TileKernel for NormalsKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<NormalsTile, KernelError> {
-        let index = build_index(self.params.backend, &tile.points, &tile.ids)
-            .map_err(|e| KernelError::Failed(e.to_string()))?;
-        let index = index.as_ref();
-        let core: Vec<Hood> = (0..tile.n_core)
-            .into_par_iter()
-            .map(|i| self.hood(index, tile, i))
-            .collect();
+        let index = HoodIndex::build(tile, &self.params)?;
+        let core = index.hoods(tile, (0..tile.n_core).into_par_iter())?;
         check_room(&core, tile.margin)?;
         let mut normals: Vec<Option<Fitted>> = vec![None; tile.points.len()];
         let core_normals: Vec<Option<Fitted>> = core
@@ -124,7 +99,7 @@ impl TileKernel for NormalsKernel {
             sampling: sampling(&core, &core_normals, self.histogram_scale),
         };
         if self.params.orientation == Orientation::SpanningTree {
-            self.fit_ring(index, tile, &core, &mut normals)?;
+            self.fit_ring(&index, tile, &core, &mut normals)?;
             out.forest = tile_forest(tile, &core, &normals, self.params.cost);
         }
         Ok(out)
@@ -135,36 +110,27 @@ impl NormalsKernel {
     /// Normals of the margin points adjacent to core points.
     fn fit_ring(
         &self,
-        index: &dyn KnnIndex,
+        index: &HoodIndex,
         tile: &TilePoints,
         core: &[Hood],
         normals: &mut [Option<Fitted>],
     ) -> Result<(), KernelError> {
-        let mut ring: Vec<u32> = core
+        let mut ring: Vec<usize> = core
             .iter()
-            .flat_map(|h| h.nbrs.iter().map(|n| n.index))
-            .filter(|&j| j as usize >= tile.n_core)
+            .flat_map(|h| h.nbrs.iter().map(|n| n.index as usize))
+            .filter(|&j| j >= tile.n_core)
             .collect();
         ring.sort_unstable();
         ring.dedup();
-        let fitted: Vec<(Hood, Option<Fitted>)> = ring
-            .par_iter()
-            .map(|&j| {
-                let h = self.hood(index, tile, j as usize);
-                let n = self.normal_of(tile, j as usize, &h);
-                (h, n)
-            })
-            .collect();
-        let hoods: Vec<Hood> = fitted
-            .iter()
-            .map(|(h, _)| Hood {
-                nbrs: Vec::new(),
-                short_by: h.short_by,
-            })
-            .collect();
+        let hoods = index.hoods(tile, ring.par_iter().copied())?;
         check_room(&hoods, tile.margin)?;
-        for (&j, (_, n)) in ring.iter().zip(fitted) {
-            normals[j as usize] = n;
+        let fitted: Vec<Option<Fitted>> = ring
+            .par_iter()
+            .zip(&hoods)
+            .map(|(&j, h)| self.normal_of(tile, j, h))
+            .collect();
+        for (&j, n) in ring.iter().zip(fitted) {
+            normals[j] = n;
         }
         Ok(())
     }
@@ -220,7 +186,8 @@ fn edge_cost(cost: EdgeCost, d: DVec3, fi: &Fitted, fj: &Fitted, dot: f64) -> f6
 }
 
 /// The minimum spanning forest of this tile's Riemannian-graph edges: every
-/// edge from a core point to one of its k neighbours, both with normals.
+/// edge from a core point to one of its neighbours (k nearest or T), both
+/// with normals.
 fn tile_forest(
     tile: &TilePoints,
     core: &[Hood],

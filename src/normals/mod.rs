@@ -1,7 +1,8 @@
 //! Oriented normals (paper 1 sections 2.2-2.4): tangent planes by PCA of the
-//! exact k nearest neighbours, then orientation by a minimum spanning tree
-//! over the Riemannian graph (exact in tiles: see [`forest`]) or toward a
-//! scanner position.
+//! exact k nearest neighbours (or, optionally, paper 3's topological
+//! neighbours, see [`NormalHood`]), then orientation by a minimum spanning
+//! tree over the Riemannian graph (exact in tiles: see [`forest`]) or toward
+//! a scanner position.
 //!
 //! Results land in two store columns: `normal.f32` (unit, oriented; zero when
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
@@ -9,6 +10,7 @@
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
+pub mod hood;
 pub mod kernel;
 pub mod orient;
 pub mod pca;
@@ -18,6 +20,7 @@ pub mod stats;
 pub mod unionfind;
 
 use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
 use crate::store::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
 use glam::DVec3;
@@ -65,11 +68,38 @@ pub enum EdgeCost {
     TangentOffset,
 }
 
+/// Which neighbourhood a tangent plane (and the spanning tree's edges) uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum NormalHood {
+    /// The exact k nearest neighbours (paper 1 section 2.2).
+    #[default]
+    Knn,
+    /// Paper 3's topological neighbours (mean reverse shift over an R*-tree,
+    /// [`crate::spatial::topological`]): k per query, so `|T|` lies in
+    /// `[k, ~3k]`. Near a density change the k nearest crowd to the dense
+    /// side; T adds the sparse side, which balances the plane fit.
+    Topological { max_iterations: usize },
+}
+
+impl NormalHood {
+    /// The mean reverse shift's parameters for `k` neighbours per query
+    /// (`None` for kNN).
+    pub fn topo_params(&self, k: usize) -> Option<TopoParams> {
+        match *self {
+            NormalHood::Knn => None,
+            NormalHood::Topological { max_iterations } => Some(TopoParams { k, max_iterations }),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NormalParams {
-    /// Neighbours per point besides the point itself (paper: 8..15).
+    /// Neighbours per point besides the point itself (paper: 8..15); per
+    /// query for the topological neighbourhood.
     pub k: usize,
+    /// kNN structure (the topological neighbourhood uses paper 3's R*-tree).
     pub backend: KnnBackend,
+    pub neighbourhood: NormalHood,
     pub orientation: Orientation,
     pub cost: EdgeCost,
 }
@@ -79,6 +109,7 @@ impl Default for NormalParams {
         NormalParams {
             k: 12,
             backend: KnnBackend::default(),
+            neighbourhood: NormalHood::default(),
             orientation: Orientation::SpanningTree,
             cost: EdgeCost::default(),
         }
@@ -87,9 +118,27 @@ impl Default for NormalParams {
 
 impl NormalParams {
     /// Peak bytes per loaded point of the kernel (index, neighbour lists,
-    /// normals, edges), for the memory planner.
+    /// normals, edges), for the memory planner. Topological: the R*-tree's
+    /// entries and nodes (~40 more bytes a point) and lists of about 2k
+    /// (paper 3: `|T|` in `[k, 3k]`).
     pub fn bytes_per_point(&self) -> u64 {
-        120 + 20 * self.k as u64
+        let k = self.k as u64;
+        match self.neighbourhood {
+            NormalHood::Knn => 120 + 20 * k,
+            NormalHood::Topological { .. } => 160 + 20 * 2 * k,
+        }
+    }
+
+    /// First margin to try (see [`initial_margin`]): the reverse shift's
+    /// reach is about twice the k-th neighbour distance (the shift plus the
+    /// shifted query's radius), so the topological margin is doubled, as
+    /// in [`crate::neighbours::NeighbourParams::initial_margin`].
+    pub fn initial_margin(&self, spacing: f64) -> f64 {
+        let factor = match self.neighbourhood {
+            NormalHood::Knn => 1.0,
+            NormalHood::Topological { .. } => 2.0,
+        };
+        factor * initial_margin(spacing, self.k)
     }
 }
 
@@ -161,7 +210,7 @@ fn normals_into(
     let kernel = NormalsKernel {
         params: *params,
         origin: store.origin(),
-        initial_margin: initial_margin(spacing, params.k),
+        initial_margin: params.initial_margin(spacing),
         histogram_scale: scale,
     };
     let mut sampling = SamplingHistograms::new(scale);
