@@ -12,6 +12,7 @@ use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
+use scanmesh::spatial::{build_index, KnnBackend};
 use scanmesh::synth::{generate, Shape};
 
 struct Recon {
@@ -113,6 +114,26 @@ fn plane_with_a_hole_has_two_boundary_loops() {
             "{v}"
         );
         assert!(v.truncate().length() >= 0.4 - limit, "{v} inside the hole");
+    }
+}
+
+#[test]
+fn terrain_has_one_outer_boundary_and_nothing_beyond_the_data() {
+    // Buildings on uneven ground, denser near the middle: roof edges and
+    // wall feet are where nearest-plane projections fall off the data.
+    let scan = generate(&Shape::terrain(), 200_000, 0.0, 1).expect("generate");
+    let r = reconstruct(&scan.points, u64::MAX, 2, false);
+    assert_eq!(r.quality.boundary_loops, 1, "{}", r.quality);
+    assert_eq!(r.quality.non_manifold_edges, 0);
+    assert_eq!(r.quality.components, 1);
+    let ids: Vec<u64> = (0..scan.points.len() as u64).collect();
+    let index = build_index(KnnBackend::KdTree, &scan.points, &ids).expect("index");
+    let limit = r.report.rho + r.report.delta;
+    let mut nbr = Vec::new();
+    for v in &r.mesh.vertices {
+        index.knn(*v, 1, None, &mut nbr);
+        let d = nbr[0].dist2.sqrt();
+        assert!(d <= limit, "vertex {v} is {d} from the data, limit {limit}");
     }
 }
 

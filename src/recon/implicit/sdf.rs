@@ -26,6 +26,19 @@ pub enum Corner {
     Short(f64),
 }
 
+/// Nearest samples whose tangent planes are tried, nearest first, before a
+/// corner is declared undefined.
+///
+/// Deviation from paper 1 section 2.5, which tries only the nearest sample:
+/// beside a convex sharp edge (a roof edge of a building in a terrain scan)
+/// the nearest sample may lie on the wall, whose plane, extended past the
+/// edge, projects the corner into the air beyond `rho + delta` of any sample,
+/// so the corner is undefined and a hole opens in the middle of the data.
+/// A sample of the other face (the roof) projects it onto data. Beyond an
+/// open boundary every nearby plane projects the corner beyond the boundary,
+/// so open boundaries still appear.
+pub const PLANES_TRIED: usize = 8;
+
 /// Evaluates `f` at `p`; `limit` is `rho + delta` (infinite for `--closed`).
 pub fn signed_distance(
     s: &Samples,
@@ -34,29 +47,51 @@ pub fn signed_distance(
     limit: f64,
     nbr: &mut Vec<Neighbour>,
 ) -> Corner {
-    s.index.knn(p, 1, None, nbr);
-    let Some(near) = nbr.first().copied() else {
+    let want = if limit.is_infinite() { 1 } else { PLANES_TRIED };
+    s.index.knn(p, want, None, nbr);
+    let Some(last) = nbr.last() else {
         return Corner::Value(None);
     };
-    let reach = near.dist2.sqrt();
+    // Fewer than `want` loaded: complete only if nothing lies beyond.
+    let reach = if nbr.len() == want {
+        last.dist2.sqrt()
+    } else {
+        f64::INFINITY
+    };
     let room = tile.room(p);
     if reach > room {
         return Corner::Short(reach - room);
     }
-    let (x, n) = (
-        s.points[near.index as usize],
-        s.normals[near.index as usize],
-    );
-    let f = (p - x).dot(n);
-    if limit.is_infinite() {
-        return Corner::Value(Some(f));
+    let candidates: Vec<u32> = nbr.iter().map(|m| m.index).collect();
+    for i in candidates {
+        let (x, n) = (s.points[i as usize], s.normals[i as usize]);
+        let f = (p - x).dot(n);
+        if limit.is_infinite() {
+            return Corner::Value(Some(f));
+        }
+        match projection_on_data(s, tile, p - f * n, limit, nbr) {
+            Ok(true) => return Corner::Value(Some(f)),
+            Ok(false) => continue,
+            Err(short) => return Corner::Short(short),
+        }
     }
-    let z = p - f * n;
+    Corner::Value(None)
+}
+
+/// Whether some sample lies within `limit` of `z`; `Err` with the shortfall
+/// when the loaded region cannot tell.
+fn projection_on_data(
+    s: &Samples,
+    tile: &TilePoints,
+    z: DVec3,
+    limit: f64,
+    nbr: &mut Vec<Neighbour>,
+) -> Result<bool, f64> {
     s.index.knn(z, 1, None, nbr);
     match nbr.first() {
-        Some(m) if m.dist2.sqrt() < limit => Corner::Value(Some(f)),
+        Some(m) if m.dist2.sqrt() < limit => Ok(true),
         // Nothing loaded within the limit: true only if nothing unloaded is.
-        _ if tile.room(z) >= limit => Corner::Value(None),
-        _ => Corner::Short(limit - tile.room(z)),
+        _ if tile.room(z) >= limit => Ok(false),
+        _ => Err(limit - tile.room(z)),
     }
 }
