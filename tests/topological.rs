@@ -4,6 +4,7 @@
 //! (`reach`) and thread-count determinism.
 
 use glam::DVec3;
+use scanmesh::normals::pca::fit_plane_points;
 use scanmesh::spatial::rtree::{RTreeError, RTreeIndex};
 use scanmesh::spatial::topological::{
     all_topological, topological_neighbours, TopoError, TopoParams, TopoResult, TopoScratch,
@@ -251,64 +252,15 @@ fn paraboloid_normal(p: DVec3) -> DVec3 {
     DVec3::new(-p.x / CURVE_RADIUS, -(p.y - 60.0) / CURVE_RADIUS, 1.0).normalize()
 }
 
-/// Smallest-eigenvalue eigenvector of a symmetric 3x3 matrix by cyclic
-/// Jacobi rotations (robust for repeated eigenvalues).
-fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> DVec3 {
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for _ in 0..30 {
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q].abs() < 1e-300 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = if theta >= 0.0 { 1.0 } else { -1.0 }
-                / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let (c, s) = (1.0 / (t * t + 1.0).sqrt(), t / (t * t + 1.0).sqrt());
-            let mut j = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-            (j[p][p], j[q][q], j[p][q], j[q][p]) = (c, c, s, -s);
-            a = mul(mul(transpose(j), a), j);
-            v = mul(v, j);
-        }
-    }
-    let m = (0..3).min_by(|&x, &y| a[x][x].total_cmp(&a[y][y])).unwrap();
-    DVec3::new(v[0][m], v[1][m], v[2][m])
-}
-
-fn mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut r = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    r
-}
-
-fn transpose(a: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut r = a;
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = a[j][i];
-        }
-    }
-    r
-}
-
-/// PCA normal of O and its neighbourhood, centred in f64.
+/// PCA normal of O and its neighbourhood: the library's tangent plane
+/// (centred, f64, Jacobi), which tests/pca_eigen.rs checks on its own.
 fn pca_normal(points: &[DVec3], o: DVec3, hood: &[Neighbour]) -> DVec3 {
     let pts: Vec<DVec3> = std::iter::once(o)
         .chain(hood.iter().map(|n| points[n.index as usize]))
         .collect();
-    let c = pts.iter().sum::<DVec3>() / pts.len() as f64;
-    let mut cov = [[0.0; 3]; 3];
-    for d in pts.iter().map(|p| (*p - c).to_array()) {
-        for i in 0..3 {
-            for j in 0..3 {
-                cov[i][j] += d[i] * d[j];
-            }
-        }
-    }
-    smallest_eigenvector(cov)
+    fit_plane_points(&pts)
+        .expect("non-degenerate neighbourhood")
+        .normal
 }
 
 fn angle_deg(a: DVec3, b: DVec3) -> f64 {
