@@ -90,8 +90,8 @@ impl<'a> KdIndex<'a> {
 impl KdIndex<'_> {
     /// The single nearest point, exactly (ties by key): kiddo's allocation-free
     /// `nearest_one` finds the distance, then a radius query just beyond it
-    /// collects every point that could tie. Several times faster than the
-    /// general path for far queries (marching-cubes corners).
+    /// collects every point that could tie. Spares the general path's
+    /// candidate list and sort for the commonest query of marching cubes.
     fn nearest(&self, q: DVec3, out: &mut Vec<Neighbour>) {
         let query = q.to_array();
         let first = self

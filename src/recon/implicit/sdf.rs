@@ -62,8 +62,13 @@ pub fn signed_distance(
     if reach > room {
         return Corner::Short(reach - room);
     }
-    let candidates: Vec<u32> = nbr.iter().map(|m| m.index).collect();
-    for i in candidates {
+    // `nbr` is reused by the projection queries: copy the candidates out.
+    let mut candidates = [0u32; PLANES_TRIED];
+    let count = nbr.len().min(PLANES_TRIED);
+    for (c, m) in candidates.iter_mut().zip(nbr.iter()) {
+        *c = m.index;
+    }
+    for &i in &candidates[..count] {
         let (x, n) = (s.points[i as usize], s.normals[i as usize]);
         let f = (p - x).dot(n);
         if limit.is_infinite() {
