@@ -1,6 +1,9 @@
 //! Round trips through every writer and reader (exact for PLY and XYZ,
 //! within half a quantum for LAS/LAZ), gzip input and chunk boundaries.
 
+mod common;
+
+use common::read_all;
 use flate2::write::GzEncoder;
 use flate2::Compression;
 use glam::{DVec3, Vec3};
@@ -80,49 +83,6 @@ fn write_cloud(path: &Path, spec: &WriterSpec, c: &Cloud, step: usize) -> u64 {
         w.write_chunk(&chunk, Some(&c.flags[start..end])).unwrap();
     }
     w.finish().unwrap()
-}
-
-struct ReadBack {
-    xyz: Vec<DVec3>,
-    normals: Option<Vec<Vec3>>,
-    indices: Vec<u64>,
-    chunks: usize,
-}
-
-/// Reads every point with chunks of at most `max`, checking the chunk
-/// contract (size bound, index bookkeeping) on the way.
-fn read_all(path: &Path, policy: InvalidPolicy, max: usize) -> ReadBack {
-    let mut r = open_reader(path, policy).unwrap();
-    let mut out = ReadBack {
-        xyz: Vec::new(),
-        normals: r.info().has_normals.then(Vec::new),
-        indices: Vec::new(),
-        chunks: 0,
-    };
-    let mut chunk = PointChunk::default();
-    loop {
-        let n = r.read_chunk(&mut chunk, max).unwrap();
-        assert_eq!(n, chunk.len());
-        assert!(n <= max.max(1), "chunk of {n} > max {max}");
-        if n == 0 {
-            break;
-        }
-        out.chunks += 1;
-        assert_eq!(
-            chunk.index_of(0),
-            chunk.first_index,
-            "first_index is xyz[0]'s"
-        );
-        out.indices.extend((0..n).map(|i| chunk.index_of(i)));
-        out.xyz.extend_from_slice(&chunk.xyz);
-        match (&mut out.normals, &chunk.normals) {
-            (Some(all), Some(n)) => all.extend_from_slice(n),
-            (None, None) => {}
-            _ => panic!("normals present in some chunks only"),
-        }
-    }
-    assert_eq!(r.read_chunk(&mut chunk, max).unwrap(), 0, "stays exhausted");
-    out
 }
 
 fn tmp() -> tempfile::TempDir {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::store_of;
+use common::{store_of, with_store};
 use glam::DVec3;
 use scanmesh::neighbours::{
     compute_neighbours, read_csr, Csr, NeighbourParams, Neighbourhood, NeighboursError,
@@ -34,20 +34,14 @@ fn run(
     format: OutputFormat,
     window_points: u64,
 ) -> Run {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    pool.install(|| {
-        let mut store = store_of(points, &dir.path().join("store"), tile_points);
-        let out = dir.path().join("out.nbr");
+    with_store(points, tile_points, threads, |store, dir| {
+        let out = dir.join("out.nbr");
         let opts = OutputOptions {
             format,
             window_points,
         };
         let report = compute_neighbours(
-            &mut store,
+            store,
             params,
             &out,
             &opts,

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::store_of;
+use common::with_store;
 use glam::DVec3;
 use scanmesh::io::read_mesh_any;
 use scanmesh::mesh::{quality, Mesh, MeshFormat, QualityReport};
@@ -22,20 +22,14 @@ struct Recon {
 }
 
 fn reconstruct(points: &[DVec3], tile_points: u64, threads: usize, closed: bool) -> Recon {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    pool.install(|| {
-        let mut store = store_of(points, &dir.path().join("store"), tile_points);
-        let out = dir.path().join("mesh.ply");
+    with_store(points, tile_points, threads, |store, dir| {
+        let out = dir.join("mesh.ply");
         let params = ImplicitParams {
             closed,
             ..ImplicitParams::default()
         };
         let report = reconstruct_implicit(
-            &mut store,
+            store,
             &params,
             &out,
             MeshFormat::PlyBinary,

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{angle_deg, store_of};
+use common::{angle_deg, with_store};
 use glam::{DVec3, Vec3};
 use scanmesh::normals::sources::{
     orient_by_sources, Neighbourhood, Order, SourceParams, Sources, SourcesError, DEFAULT_TAU,
@@ -39,21 +39,15 @@ fn run(
     orientation: Orientation,
     spacing: f64,
 ) -> Run {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    pool.install(|| {
-        let mut store = store_of(points, &dir.path().join("store"), tile_points);
+    with_store(points, tile_points, threads, |store, _dir| {
         store.manifest.spacing = Some(spacing);
         let params = NormalParams {
             orientation,
             ..NormalParams::default()
         };
-        let report = compute_normals(&mut store, &params, RunOptions::new(threads), &NoProgress)
+        let report = compute_normals(store, &params, RunOptions::new(threads), &NoProgress)
             .expect("normals");
-        let (points, normals, flags) = read_back(&store);
+        let (points, normals, flags) = read_back(store);
         Run {
             report,
             points,

@@ -28,6 +28,25 @@ pub struct NormalsOut {
     pub bytes: Vec<u8>,
 }
 
+/// Runs `f` on a fresh store of `points` (tiles of at most `tile_points`)
+/// inside a rayon pool of `threads`, with a scratch directory for outputs.
+pub fn with_store<R: Send>(
+    points: &[DVec3],
+    tile_points: u64,
+    threads: usize,
+    f: impl FnOnce(&mut PointStore, &Path) -> R + Send,
+) -> R {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let mut store = store_of(points, &dir.path().join("store"), tile_points);
+        f(&mut store, dir.path())
+    })
+}
+
 /// Runs normals through the whole pipeline with `threads` workers (and a
 /// rayon pool of that size), exporting a binary PLY and reading it back.
 pub fn normals_of(
@@ -36,16 +55,10 @@ pub fn normals_of(
     threads: usize,
     params: &NormalParams,
 ) -> NormalsOut {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    pool.install(|| {
-        let mut store = store_of(points, &dir.path().join("store"), tile_points);
-        let report = compute_normals(&mut store, params, RunOptions::new(threads), &NoProgress)
-            .expect("normals");
-        let out = dir.path().join("out.ply");
+    with_store(points, tile_points, threads, |store, dir| {
+        let report =
+            compute_normals(store, params, RunOptions::new(threads), &NoProgress).expect("normals");
+        let out = dir.join("out.ply");
         let spec = WriterSpec {
             format: Format::PlyBinaryLe,
             with_normals: true,
@@ -53,7 +66,7 @@ pub fn normals_of(
             bounds: None,
             las_transform: None,
         };
-        export_points(&store, &out, &spec, 7777, &NoProgress).expect("export");
+        export_points(store, &out, &spec, 7777, &NoProgress).expect("export");
         let (normals, flags) = read_normals(&out);
         NormalsOut {
             report,
@@ -96,4 +109,48 @@ pub fn angle_deg(a: DVec3, b: DVec3, unsigned: bool) -> f64 {
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
+}
+
+/// Every point of a file, read back in chunks.
+pub struct ReadBack {
+    pub xyz: Vec<DVec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub indices: Vec<u64>,
+    pub chunks: usize,
+}
+
+/// Reads every point with chunks of at most `max`, checking the chunk
+/// contract (size bound, index bookkeeping) on the way.
+pub fn read_all(path: &Path, policy: InvalidPolicy, max: usize) -> ReadBack {
+    let mut r = open_reader(path, policy).unwrap();
+    let mut out = ReadBack {
+        xyz: Vec::new(),
+        normals: r.info().has_normals.then(Vec::new),
+        indices: Vec::new(),
+        chunks: 0,
+    };
+    let mut chunk = PointChunk::default();
+    loop {
+        let n = r.read_chunk(&mut chunk, max).unwrap();
+        assert_eq!(n, chunk.len());
+        assert!(n <= max.max(1), "chunk of {n} > max {max}");
+        if n == 0 {
+            break;
+        }
+        out.chunks += 1;
+        assert_eq!(
+            chunk.index_of(0),
+            chunk.first_index,
+            "first_index is xyz[0]'s"
+        );
+        out.indices.extend((0..n).map(|i| chunk.index_of(i)));
+        out.xyz.extend_from_slice(&chunk.xyz);
+        match (&mut out.normals, &chunk.normals) {
+            (Some(all), Some(n)) => all.extend_from_slice(n),
+            (None, None) => {}
+            _ => panic!("normals present in some chunks only"),
+        }
+    }
+    assert_eq!(r.read_chunk(&mut chunk, max).unwrap(), 0, "stays exhausted");
+    out
 }
