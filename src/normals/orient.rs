@@ -45,16 +45,7 @@ pub fn orient_by_forest(
     progress: &dyn Progress,
 ) -> Result<OrientStats, NormalsError> {
     let mut uf = ParityUnionFind::new(store.len() as usize);
-    progress.begin("orient: spanning tree", runs.edges());
-    let mut seen = 0u64;
-    runs.merge(16 << 20, |e| {
-        uf.union(e.a, e.b, e.flips());
-        seen += 1;
-        if seen.is_multiple_of(65536) {
-            progress.advance(65536);
-        }
-    })?;
-    progress.end();
+    runs.union_all(&mut uf, "orient: spanning tree", progress)?;
     let comps = components(store, &mut uf, normals, flags, progress)?;
     let oriented = island_rule(&comps);
     let unoriented = apply(store, &mut uf, &oriented, normals, flags, progress)?;

@@ -4,6 +4,8 @@
 //! to fit in memory.
 
 use super::forest::Edge;
+use super::unionfind::ParityUnionFind;
+use crate::pipeline::Progress;
 use crate::io::IoError;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -51,6 +53,27 @@ impl EdgeRuns {
 
     pub fn edges(&self) -> u64 {
         self.written
+    }
+
+    /// Kruskal over all runs: joins every edge's ends in `uf` with its flip
+    /// parity, in global key order, reporting progress as stage `stage`.
+    pub fn union_all(
+        self,
+        uf: &mut ParityUnionFind,
+        stage: &str,
+        progress: &dyn Progress,
+    ) -> Result<(), IoError> {
+        progress.begin(stage, self.edges());
+        let mut seen = 0u64;
+        self.merge(16 << 20, |e| {
+            uf.union(e.a, e.b, e.flips());
+            seen += 1;
+            if seen.is_multiple_of(65536) {
+                progress.advance(65536);
+            }
+        })?;
+        progress.end();
+        Ok(())
     }
 
     /// Calls `f` on every edge of every run in global [`Edge::key`] order.

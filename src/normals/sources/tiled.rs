@@ -99,16 +99,7 @@ pub fn orient_store(
     for &(e, flip) in &sources {
         uf.union(e.id as u32, root, flip);
     }
-    progress.begin("orient: six sources, forest", runs.edges());
-    let mut seen = 0u64;
-    runs.merge(16 << 20, |e| {
-        uf.union(e.a, e.b, e.flips());
-        seen += 1;
-        if seen.is_multiple_of(65536) {
-            progress.advance(65536);
-        }
-    })?;
-    progress.end();
+    runs.union_all(&mut uf, "orient: six sources, forest", progress)?;
     let roots = component_roots(
         store,
         params.first_direction(),
