@@ -8,7 +8,7 @@ use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
     compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions, MAX_K,
 };
-use scanmesh::store::{build::scratch_store_dir, open_input, BuildOptions, TileTarget};
+use scanmesh::store::{BuildOptions, TileTarget};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -80,14 +80,12 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let mut ws = open_input(
+    let mut ws = s.open_input(
         &a.input,
-        &scratch_store_dir(&a.output),
+        &a.output,
         &build_options(&s, &params),
-        s.policy,
         progress.as_ref(),
-    )
-    .with_context(|| format!("reading {}", a.input.display()))?;
+    )?;
     let out = OutputOptions {
         format: a.format(),
         window_points: (s.mem / 8 / params.window_bytes_per_point()).max(1 << 12),

@@ -9,7 +9,7 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
 };
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::{build::scratch_store_dir, export_points, open_input};
+use scanmesh::store::export_points;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -167,14 +167,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let opts = super::cmd_tile::build_options(&s, &params);
-    let mut ws = open_input(
-        &a.input,
-        &scratch_store_dir(&a.output),
-        &opts,
-        s.policy,
-        progress.as_ref(),
-    )
-    .with_context(|| format!("reading {}", a.input.display()))?;
+    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
     let report = compute_normals(&mut ws.store, &params, s.run_options(), progress.as_ref())?;
     let window = (s.mem / 8 / 48).max(1 << 16);
     export_points(&ws.store, &a.output, &spec, window, progress.as_ref())

@@ -1,13 +1,12 @@
 //! `scanmesh reconstruct`: a mesh from a point cloud (paper 1's implicit
 //! method), streaming, seam-exact in tiles.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
-use scanmesh::store::{build::scratch_store_dir, open_input};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -81,14 +80,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let opts = super::cmd_tile::build_options(&s, &params.normals);
-    let mut ws = open_input(
-        &a.input,
-        &scratch_store_dir(&a.output),
-        &opts,
-        s.policy,
-        progress.as_ref(),
-    )
-    .with_context(|| format!("reading {}", a.input.display()))?;
+    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
     let r = reconstruct_implicit(
         &mut ws.store,
         &params,

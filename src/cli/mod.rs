@@ -14,7 +14,10 @@ mod progress;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::InvalidPolicy;
-use scanmesh::pipeline::{MemoryBudget, RunOptions};
+use scanmesh::pipeline::{MemoryBudget, Progress, RunOptions};
+use scanmesh::store::build::scratch_store_dir;
+use scanmesh::store::{open_input, BuildOptions, Workspace};
+use std::path::Path;
 
 #[derive(Parser)]
 #[command(
@@ -130,6 +133,20 @@ impl Settings {
 
     pub fn run_options(&self) -> RunOptions {
         RunOptions::new(self.threads)
+    }
+
+    /// The store to work on: `input` itself when it is one, else a scratch
+    /// store beside `output` built from the input file.
+    pub fn open_input(
+        &self,
+        input: &Path,
+        output: &Path,
+        opts: &BuildOptions,
+        progress: &dyn Progress,
+    ) -> Result<Workspace> {
+        let scratch = scratch_store_dir(output);
+        open_input(input, &scratch, opts, self.policy, progress)
+            .with_context(|| format!("reading {}", input.display()))
     }
 
     /// Sizes rayon's pool once per process.

@@ -5,8 +5,8 @@
 
 use super::forest::Edge;
 use super::unionfind::ParityUnionFind;
-use crate::pipeline::Progress;
 use crate::io::IoError;
+use crate::pipeline::Progress;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
