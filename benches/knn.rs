@@ -10,51 +10,30 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 use rayon::prelude::*;
 use scanmesh::spatial::{GridIndex, KdIndex, KnnIndex, Neighbour};
+use scanmesh::synth::{fibonacci_direction, Rng};
 
 const N: usize = 1_000_000;
 const K: usize = 12;
 
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn noise(&mut self, amplitude: f64) -> f64 {
-        ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2.0 * amplitude
-    }
-}
-
 /// Fibonacci sphere of radius 10 m at a UTM-like offset, 1 mm radial noise.
 fn sphere(n: usize) -> Vec<DVec3> {
-    let mut rng = SplitMix64(1);
+    let mut rng = Rng::new(1);
     let centre = DVec3::new(5.0e5, 4.2e6, 100.0);
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
-        .map(|i| {
-            let z = 1.0 - (2 * i + 1) as f64 / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * i as f64;
-            let radius = 10.0 + rng.noise(1e-3);
-            centre + radius * DVec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
+        .map(|i| centre + (10.0 + rng.range(-1e-3, 1e-3)) * fibonacci_direction(i, n))
         .collect()
 }
 
 /// 100 m x 100 m jittered sheet with 2 m waves, scan-line order.
 fn wavy_sheet(n: usize) -> Vec<DVec3> {
-    let mut rng = SplitMix64(2);
+    let mut rng = Rng::new(2);
     let side = (n as f64).sqrt().ceil() as usize;
     let step = 100.0 / side as f64;
     (0..n)
         .map(|i| {
-            let x = (i % side) as f64 * step + rng.noise(0.3 * step);
-            let y = (i / side) as f64 * step + rng.noise(0.3 * step);
-            let z = 2.0 * (x * 0.2).sin() * (y * 0.15).cos() + rng.noise(0.01);
+            let x = (i % side) as f64 * step + rng.range(-0.3 * step, 0.3 * step);
+            let y = (i / side) as f64 * step + rng.range(-0.3 * step, 0.3 * step);
+            let z = 2.0 * (x * 0.2).sin() * (y * 0.15).cos() + rng.range(-0.01, 0.01);
             DVec3::new(x, y, z)
         })
         .collect()

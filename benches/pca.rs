@@ -10,6 +10,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use scanmesh::normals::pca::fit_plane;
 use scanmesh::spatial::{GridIndex, KnnIndex, Neighbour};
+use scanmesh::synth::fibonacci_direction;
 
 const N: usize = 1_000_000;
 const K: usize = 12;
@@ -17,15 +18,11 @@ const K: usize = 12;
 /// Fibonacci sphere of radius 10 m, radial noise from a hash of the index.
 fn sphere(n: usize) -> Vec<DVec3> {
     let centre = DVec3::new(5.0e5, 4.2e6, 100.0);
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
         .map(|i| {
-            let z = 1.0 - (2 * i + 1) as f64 / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * i as f64;
             let h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11;
             let radius = 10.0 + 1e-3 * (h as f64 / (1u64 << 53) as f64 - 0.5);
-            centre + radius * DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            centre + radius * fibonacci_direction(i, n)
         })
         .collect()
 }

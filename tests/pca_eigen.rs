@@ -6,7 +6,7 @@ use glam::{DMat3, DQuat, DVec3};
 use scanmesh::normals::eigen::sym3_eigen;
 use scanmesh::normals::pca::{fit_plane, fit_plane_points, Degenerate};
 use scanmesh::spatial::{brute_knn, Neighbour};
-use scanmesh::synth::Rng;
+use scanmesh::synth::{fibonacci_sphere, Rng};
 
 /// A random rotation (normalised random quaternion).
 fn rotation(rng: &mut Rng) -> DMat3 {
@@ -206,22 +206,9 @@ fn cube_corners_leave_the_normal_undetermined() {
     assert_eq!(fit_plane_points(&corners), Err(Degenerate::Colinear));
 }
 
-/// Fibonacci sphere of radius 1 around `centre`.
-fn fibonacci_sphere(centre: DVec3, n: usize) -> Vec<DVec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2 * i + 1) as f64 / n as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * i as f64;
-            centre + DVec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
-}
-
 #[test]
 fn sphere_neighbourhoods_give_radial_normals() {
-    let pts = fibonacci_sphere(UTM, 5000);
+    let pts = fibonacci_sphere(UTM, 1.0, 5000);
     let tie: Vec<u64> = (0..pts.len() as u64).collect();
     for i in (0..pts.len()).step_by(37) {
         let nbrs = brute_knn(&pts, &tie, pts[i], 12, Some(i as u32));

@@ -14,6 +14,7 @@
 
 pub mod closed;
 pub mod error;
+pub mod fibonacci;
 pub mod mesh;
 pub mod rng;
 pub mod sheets;
@@ -21,6 +22,7 @@ mod stream;
 pub mod terrain;
 
 pub use error::SynthError;
+pub use fibonacci::{fibonacci_direction, fibonacci_sphere};
 pub use mesh::TriMesh;
 pub use rng::Rng;
 pub use stream::{stream, ShapeSampler, Stream};
