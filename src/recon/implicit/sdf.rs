@@ -8,6 +8,7 @@
 //! long as every distance it relied on fits in the loaded region; otherwise
 //! the evaluation says by how much the margin falls short.
 
+use crate::spatial::brute::dist2;
 use crate::spatial::{KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use glam::DVec3;
@@ -40,6 +41,12 @@ pub enum Corner {
 pub const PLANES_TRIED: usize = 8;
 
 /// Evaluates `f` at `p`; `limit` is `rho + delta` (infinite for `--closed`).
+///
+/// The nearest sample's plane is tried first, from a single-nearest query;
+/// only when its projection misses the data (boundaries, sharp edges: a few
+/// per cent of the corners) are the [`PLANES_TRIED`] nearest fetched. The
+/// nearest is the first of those in the same (distance, id) order, so the
+/// value is the same as trying them all from one query.
 pub fn signed_distance(
     s: &Samples,
     tile: &TilePoints,
@@ -47,10 +54,46 @@ pub fn signed_distance(
     limit: f64,
     nbr: &mut Vec<Neighbour>,
 ) -> Corner {
-    let want = if limit.is_infinite() { 1 } else { PLANES_TRIED };
+    let nearest = match nearest_planes(s, tile, p, 1, nbr) {
+        Ok(Some((c, _))) => c[0],
+        Ok(None) => return Corner::Value(None),
+        Err(short) => return Corner::Short(short),
+    };
+    if limit.is_infinite() {
+        return Corner::Value(Some(plane_value(s, nearest, p)));
+    }
+    match try_plane(s, tile, p, nearest, limit, nbr) {
+        Ok(Some(f)) => return Corner::Value(Some(f)),
+        Ok(None) => {}
+        Err(short) => return Corner::Short(short),
+    }
+    let (candidates, count) = match nearest_planes(s, tile, p, PLANES_TRIED, nbr) {
+        Ok(Some(c)) => c,
+        Ok(None) => return Corner::Value(None),
+        Err(short) => return Corner::Short(short),
+    };
+    for &i in candidates[..count].iter().skip(1) {
+        match try_plane(s, tile, p, i, limit, nbr) {
+            Ok(Some(f)) => return Corner::Value(Some(f)),
+            Ok(None) => continue,
+            Err(short) => return Corner::Short(short),
+        }
+    }
+    Corner::Value(None)
+}
+
+/// The `want` (at most [`PLANES_TRIED`]) nearest samples of `p` (indices
+/// into `s`) and their count, `None` when nothing is loaded, `Err` with the shortfall when the loaded region cannot tell.
+fn nearest_planes(
+    s: &Samples,
+    tile: &TilePoints,
+    p: DVec3,
+    want: usize,
+    nbr: &mut Vec<Neighbour>,
+) -> Result<Option<([u32; PLANES_TRIED], usize)>, f64> {
     s.index.knn(p, want, None, nbr);
     let Some(last) = nbr.last() else {
-        return Corner::Value(None);
+        return Ok(None);
     };
     // Fewer than `want` loaded: complete only if nothing lies beyond.
     let reach = if nbr.len() == want {
@@ -60,27 +103,39 @@ pub fn signed_distance(
     };
     let room = tile.room(p);
     if reach > room {
-        return Corner::Short(reach - room);
+        return Err(reach - room);
     }
     // `nbr` is reused by the projection queries: copy the candidates out.
     let mut candidates = [0u32; PLANES_TRIED];
-    let count = nbr.len().min(PLANES_TRIED);
     for (c, m) in candidates.iter_mut().zip(nbr.iter()) {
         *c = m.index;
     }
-    for &i in &candidates[..count] {
-        let (x, n) = (s.points[i as usize], s.normals[i as usize]);
-        let f = (p - x).dot(n);
-        if limit.is_infinite() {
-            return Corner::Value(Some(f));
-        }
-        match projection_on_data(s, tile, p - f * n, limit, nbr) {
-            Ok(true) => return Corner::Value(Some(f)),
-            Ok(false) => continue,
-            Err(short) => return Corner::Short(short),
-        }
+    Ok(Some((candidates, nbr.len().min(PLANES_TRIED))))
+}
+
+fn plane_value(s: &Samples, i: u32, p: DVec3) -> f64 {
+    (p - s.points[i as usize]).dot(s.normals[i as usize])
+}
+
+/// Sample `i`'s plane value at `p` if its projection lands on data.
+fn try_plane(
+    s: &Samples,
+    tile: &TilePoints,
+    p: DVec3,
+    i: u32,
+    limit: f64,
+    nbr: &mut Vec<Neighbour>,
+) -> Result<Option<f64>, f64> {
+    let f = plane_value(s, i, p);
+    let z = p - f * s.normals[i as usize];
+    // The sample's own distance to its projection usually settles it: the
+    // nearest sample to `z` is no farther (same distance formula as the
+    // index), so the query below would say the same.
+    if dist2(s.points[i as usize], z).sqrt() < limit {
+        return Ok(Some(f));
     }
-    Corner::Value(None)
+    let on_data = projection_on_data(s, tile, z, limit, nbr)?;
+    Ok(on_data.then_some(f))
 }
 
 /// Whether some sample lies within `limit` of `z`; `Err` with the shortfall
