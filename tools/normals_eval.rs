@@ -12,7 +12,7 @@ use anyhow::{bail, Result};
 use clap::Parser;
 use glam::DVec3;
 use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
-use scanmesh::normals::evaluate::accuracy;
+use scanmesh::normals::evaluate::{accuracy, accuracy_where, coincident};
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -57,12 +57,12 @@ fn print_by_angle(normals: &[DVec3], truth: &[DVec3]) {
     }
 }
 
-/// Area-weighted vertex normals of the reference mesh, or the reference
-/// point file's own normals when it has no faces.
-fn truth_normals(path: &Path) -> Result<Vec<DVec3>> {
+/// Area-weighted vertex normals of the reference mesh (or the reference
+/// point file's own normals when it has no faces), and its positions.
+fn truth_normals(path: &Path) -> Result<(Vec<DVec3>, Vec<DVec3>)> {
     let (vertices, faces) = read_mesh_any(path)?;
     if faces.is_empty() {
-        return read_normals(path);
+        return Ok((read_normals(path)?, vertices));
     }
     let mut truth = vec![DVec3::ZERO; vertices.len()];
     for f in &faces {
@@ -73,7 +73,7 @@ fn truth_normals(path: &Path) -> Result<Vec<DVec3>> {
             truth[*i as usize] += n;
         }
     }
-    Ok(truth)
+    Ok((truth, vertices))
 }
 
 fn read_normals(path: &Path) -> Result<Vec<DVec3>> {
@@ -91,7 +91,7 @@ fn read_normals(path: &Path) -> Result<Vec<DVec3>> {
 
 fn main() -> Result<()> {
     let a = Args::parse();
-    let truth = truth_normals(&a.reference)?;
+    let (truth, positions) = truth_normals(&a.reference)?;
     let normals = read_normals(&a.normals)?;
     if normals.len() != truth.len() {
         bail!(
@@ -101,11 +101,15 @@ fn main() -> Result<()> {
         );
     }
     let acc = accuracy(&normals, &truth);
+    let unique: Vec<bool> = coincident(&positions).iter().map(|c| !c).collect();
+    let acc_unique = accuracy_where(&normals, &truth, &unique);
+    let shared = unique.iter().filter(|u| !**u).count();
     if a.by_angle {
         print_by_angle(&normals, &truth);
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&acc)?);
+        let report = serde_json::json!({ "all": acc, "unique_positions": acc_unique, "coincident_points": shared });
+        println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
             "normals-eval: {} points compared, median angle {:.3} deg, 95th percentile {:.3} deg, oriented with the mesh {:.4} %",
@@ -113,6 +117,11 @@ fn main() -> Result<()> {
             acc.median_angle_deg,
             acc.p95_angle_deg,
             100.0 * acc.oriented_fraction
+        );
+        println!(
+            "  without the {shared} points at a position another reference point shares: median {:.3} deg, oriented {:.4} %",
+            acc_unique.median_angle_deg,
+            100.0 * acc_unique.oriented_fraction
         );
     }
     Ok(())
