@@ -194,29 +194,39 @@ fn tile_forest(
     normals: &[Option<Fitted>],
     cost: EdgeCost,
 ) -> Vec<Edge> {
-    let mut edges = Vec::with_capacity(core.len() * 8);
-    for (i, h) in core.iter().enumerate() {
-        let Some(ni) = normals[i] else { continue };
-        for nb in &h.nbrs {
-            let j = nb.index as usize;
-            // A mutual pair of core points is added once, from its lower end.
-            let mutual = j < core.len() && core[j].nbrs.iter().any(|m| m.index as usize == i);
-            if mutual && j < i {
-                continue;
-            }
-            if let Some(nj) = normals[j] {
-                let dot = ni.n.dot(nj.n);
-                let c = edge_cost(cost, tile.points[j] - tile.points[i], &ni, &nj, dot);
-                let edge = Edge::with_cost(tile.ids[i] as u32, tile.ids[j] as u32, c, dot);
-                // Local numbers in the same (id) order as the edge's ends.
-                let local = if tile.ids[i] < tile.ids[j] {
-                    [i as u32, j as u32]
-                } else {
-                    [j as u32, i as u32]
-                };
-                edges.push(LocalEdge { edge, local });
-            }
-        }
-    }
+    let edges: Vec<LocalEdge> = (0..core.len())
+        .into_par_iter()
+        .flat_map_iter(|i| point_edges(tile, core, normals, cost, i))
+        .collect();
     spanning_forest(edges, tile.points.len())
+}
+
+/// The Riemannian-graph edges from core point `i` to its neighbours.
+fn point_edges<'a>(
+    tile: &'a TilePoints,
+    core: &'a [Hood],
+    normals: &'a [Option<Fitted>],
+    cost: EdgeCost,
+    i: usize,
+) -> impl Iterator<Item = LocalEdge> + 'a {
+    let ni = normals[i];
+    core[i].nbrs.iter().filter_map(move |nb| {
+        let (ni, j) = (ni?, nb.index as usize);
+        // A mutual pair of core points is added once, from its lower end.
+        let mutual = j < core.len() && core[j].nbrs.iter().any(|m| m.index as usize == i);
+        if mutual && j < i {
+            return None;
+        }
+        let nj = normals[j]?;
+        let dot = ni.n.dot(nj.n);
+        let c = edge_cost(cost, tile.points[j] - tile.points[i], &ni, &nj, dot);
+        let edge = Edge::with_cost(tile.ids[i] as u32, tile.ids[j] as u32, c, dot);
+        // Local numbers in the same (id) order as the edge's ends.
+        let local = if tile.ids[i] < tile.ids[j] {
+            [i as u32, j as u32]
+        } else {
+            [j as u32, i as u32]
+        };
+        Some(LocalEdge { edge, local })
+    })
 }
