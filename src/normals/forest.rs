@@ -7,9 +7,16 @@
 //! the tiles' forests finds the same tree (cycle property; ties broken by
 //! point ids make the tree unique). The flip of each point relative to the
 //! root is the parity of its tree path, as Prim's walk would set it.
+//!
+//! This module owns the edge type and a tile's forest. Implementation
+//! choice: the forest is found by filter-Kruskal (Osipov, Sanders, Singler,
+//! "The filter-Kruskal minimum spanning tree algorithm", ALENEX 2009), not by
+//! sorting every edge: a Riemannian graph has about six edges per point and
+//! only one per point ends in the forest, so after Kruskal on the lighter
+//! half, most heavy edges already close a cycle and are dropped unsorted.
+//! The result (edges and order) is that of plain Kruskal on the sorted edges.
 
-use super::unionfind::ParityUnionFind;
-use rayon::slice::ParallelSliceMut;
+use super::unionfind::UnionFind;
 
 /// A Riemannian-graph edge between two points (input-order ids, `a < b`).
 /// `w` is the cost `1 - |n_a . n_b|` carrying the sign of `n_a . n_b`, so a
@@ -73,22 +80,263 @@ pub struct LocalEdge {
     pub local: [u32; 2],
 }
 
-/// Minimum spanning forest of `edges` over `n` local vertices: sorts by
-/// [`Edge::key`], drops repeats, and returns the forest edges in that order.
-pub fn spanning_forest(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
-    edges.par_sort_unstable_by_key(|e| e.edge.key());
-    edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
-    let mut uf = ParityUnionFind::new(n);
-    edges
-        .into_iter()
-        .filter(|e| uf.union(e.local[0], e.local[1], false))
-        .map(|e| e.edge)
-        .collect()
+/// Minimum spanning forest of `edges` over `n` local vertices, in
+/// [`Edge::key`] order. The same as sorting by key, dropping repeats of a
+/// pair and running Kruskal, but computed by filter-Kruskal (see the module
+/// doc); a pair given twice with one key and both signs keeps the sign that
+/// sorts first by the `w` bits (a tie the old sort left to chance).
+///
+/// Every `local` must be below `n`.
+pub fn spanning_forest(edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
+    forest_sorting_below(edges, n, SORT_DIRECTLY)
+}
+
+/// [`spanning_forest`] with parts of at most `base` edges sorted directly.
+fn forest_sorting_below(mut edges: Vec<LocalEdge>, n: usize, base: usize) -> Vec<Edge> {
+    let mut uf = UnionFind::new(n);
+    let mut out = Vec::with_capacity(edges.len().min(n.saturating_sub(1)));
+    let depth = 2 * (usize::BITS - edges.len().leading_zeros());
+    let parts = Parts { base, depth };
+    parts.filter_kruskal(&mut edges, &mut uf, &mut out);
+    out
+}
+
+/// Parts at most this long are sorted and run through Kruskal directly.
+const SORT_DIRECTLY: usize = 1 << 12;
+
+/// Number of evenly spaced keys whose median is the pivot.
+const PIVOT_SAMPLE: usize = 63;
+
+/// [`Edge::key`] then the sign of `w`, packed so that one integer compare
+/// orders edges: `|w|` bits use 63 bits (the sign bit of `|w|` is 0).
+fn sort_key(e: &LocalEdge) -> u128 {
+    let (w, a, b) = e.edge.key();
+    let sign = e.edge.w.is_sign_negative() as u128;
+    (w as u128) << 65 | (a as u128) << 33 | (b as u128) << 1 | sign
+}
+
+/// How filter-Kruskal splits: parts of at most `base` edges are sorted
+/// directly, and so is any part once `depth` splits were used on the way down
+/// (introsort's guard against unlucky pivots).
+#[derive(Clone, Copy)]
+struct Parts {
+    base: usize,
+    depth: u32,
+}
+
+impl Parts {
+    /// Kruskal on `edges` with the forest so far in `uf`: the light part
+    /// (keys up to a sampled median) first, then what of the heavy part still
+    /// joins two components.
+    fn filter_kruskal(
+        mut self,
+        mut edges: &mut [LocalEdge],
+        uf: &mut UnionFind,
+        out: &mut Vec<Edge>,
+    ) {
+        loop {
+            if edges.len() <= self.base || self.depth == 0 {
+                return sorted_kruskal(edges, uf, out);
+            }
+            self.depth -= 1;
+            let light = partition(edges, pivot_key(edges));
+            if light == edges.len() {
+                // The pivot is the largest key: nothing to split off.
+                return sorted_kruskal(edges, uf, out);
+            }
+            let (lo, hi) = edges.split_at_mut(light);
+            self.filter_kruskal(lo, uf, out);
+            let kept = retain_joining(hi, uf);
+            edges = &mut hi[..kept];
+        }
+    }
+}
+
+fn sorted_kruskal(edges: &mut [LocalEdge], uf: &mut UnionFind, out: &mut Vec<Edge>) {
+    edges.sort_unstable_by_key(sort_key);
+    // A repeated pair is rejected by `union` once its first copy is in.
+    out.extend(
+        edges
+            .iter()
+            .filter(|e| uf.union(e.local[0], e.local[1]))
+            .map(|e| e.edge),
+    );
+}
+
+/// Median key of a deterministic, evenly spaced sample (`edges` not empty).
+fn pivot_key(edges: &[LocalEdge]) -> u128 {
+    let count = PIVOT_SAMPLE.min(edges.len());
+    let step = edges.len() / count;
+    let mut sample: Vec<u128> = (0..count)
+        .map(|i| sort_key(&edges[i * step + step / 2]))
+        .collect();
+    *sample.select_nth_unstable(count / 2).1
+}
+
+/// Moves the edges with keys `<= pivot` to the front; returns their count.
+fn partition(edges: &mut [LocalEdge], pivot: u128) -> usize {
+    let (mut i, mut j) = (0, edges.len());
+    loop {
+        while i < j && sort_key(&edges[i]) <= pivot {
+            i += 1;
+        }
+        while i < j && sort_key(&edges[j - 1]) > pivot {
+            j -= 1;
+        }
+        if i >= j {
+            return i;
+        }
+        edges.swap(i, j - 1);
+        i += 1;
+        j -= 1;
+    }
+}
+
+/// Keeps (in order, at the front) the edges whose ends are not yet joined;
+/// returns their count. The others would close a cycle of lighter edges.
+fn retain_joining(edges: &mut [LocalEdge], uf: &mut UnionFind) -> usize {
+    let mut kept = 0;
+    for k in 0..edges.len() {
+        let e = edges[k];
+        if !uf.connected(e.local[0], e.local[1]) {
+            edges[kept] = e;
+            kept += 1;
+        }
+    }
+    kept
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::normals::unionfind::ParityUnionFind;
+    use proptest::prelude::*;
+
+    /// The algorithm before filter-Kruskal: sort everything by key, drop
+    /// repeats, Kruskal.
+    fn sorted_kruskal_oracle(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
+        edges.sort_unstable_by_key(|e| e.edge.key());
+        edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
+        let mut uf = ParityUnionFind::new(n);
+        edges
+            .into_iter()
+            .filter(|e| uf.union(e.local[0], e.local[1], false))
+            .map(|e| e.edge)
+            .collect()
+    }
+
+    /// A random graph on `n` vertices whose ids are a shuffled spread of the
+    /// local numbers; costs from `levels` distinct values (many ties), every
+    /// `repeat`-th edge given twice (reversed, as from its other end), and
+    /// only the first `n - gap` vertices used (the rest isolated).
+    fn random_edges(seed: u64, n: usize, m: usize, levels: u64, repeat: usize) -> Vec<LocalEdge> {
+        let mut rng = crate::synth::Rng::new(seed);
+        let ids: Vec<u32> = (0..n as u32).map(|i| i * 3 + (i % 2) * 7).collect();
+        let used = (n - n / 10).max(1) as u64;
+        let mut edges = Vec::new();
+        for k in 0..m {
+            let (i, j) = (rng.below(used) as u32, rng.below(used) as u32);
+            if i == j {
+                continue;
+            }
+            let cost = rng.below(levels) as f64 / levels as f64;
+            // The sign is the pair's, as in the kernels (a pair given with
+            // one key and both signs is the tie the oracle leaves to chance).
+            let dot = if (i ^ j) % 3 == 0 { -0.5 } else { 0.5 };
+            let edge = Edge::with_cost(ids[i as usize], ids[j as usize], cost, dot);
+            let local = if ids[i as usize] < ids[j as usize] {
+                [i, j]
+            } else {
+                [j, i]
+            };
+            edges.push(LocalEdge { edge, local });
+            if repeat > 0 && k % repeat == 0 {
+                edges.push(LocalEdge {
+                    edge: Edge::with_cost(ids[j as usize], ids[i as usize], cost, dot),
+                    local,
+                });
+            }
+        }
+        edges
+    }
+
+    fn same_as_oracle(edges: Vec<LocalEdge>, n: usize, what: &str) {
+        let want = sorted_kruskal_oracle(edges.clone(), n);
+        let got = spanning_forest(edges, n);
+        assert_eq!(got.len(), want.len(), "{what}: forest size");
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert_eq!(g.w.to_bits(), w.w.to_bits(), "{what}: edge {k} cost");
+            assert_eq!((g.a, g.b), (w.a, w.b), "{what}: edge {k} ends");
+        }
+    }
+
+    #[test]
+    fn large_graphs_match_sorted_kruskal() {
+        // Big enough to take several filter rounds below the sort threshold.
+        for (seed, n, levels) in [(1, 20_000, 7), (2, 30_000, 1 << 20), (3, 5_000, 1)] {
+            let edges = random_edges(seed, n, 6 * n, levels, 5);
+            same_as_oracle(
+                edges,
+                n,
+                &format!("seed {seed}, n {n}, {levels} cost levels"),
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs_match_sorted_kruskal() {
+        assert!(spanning_forest(Vec::new(), 0).is_empty());
+        assert!(spanning_forest(Vec::new(), 5).is_empty());
+        let self_loop = LocalEdge {
+            edge: Edge::new(4, 4, 0.9),
+            local: [0, 0],
+        };
+        assert!(spanning_forest(vec![self_loop; 3], 1).is_empty());
+        // One pair, many copies: one forest edge.
+        let e = LocalEdge {
+            edge: Edge::new(2, 9, -0.3),
+            local: [0, 1],
+        };
+        same_as_oracle(vec![e; 10_000], 2, "one pair repeated");
+    }
+
+    #[test]
+    fn a_pair_with_both_signs_keeps_the_positive_one_in_any_order() {
+        let plus = LocalEdge {
+            edge: Edge::new(1, 5, 0.25),
+            local: [0, 1],
+        };
+        let minus = LocalEdge {
+            edge: Edge::new(1, 5, -0.25),
+            local: [0, 1],
+        };
+        for input in [vec![plus, minus], vec![minus, plus]] {
+            let got = spanning_forest(input, 2);
+            assert_eq!(got, vec![plus.edge]);
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn small_graphs_match_sorted_kruskal(
+            seed in 0u64..1_000_000,
+            n in 1usize..300,
+            per_vertex in 0usize..8,
+            levels in 1u64..6,
+            repeat in 0usize..4,
+        ) {
+            let edges = random_edges(seed, n, n * per_vertex, levels, repeat);
+            let want = sorted_kruskal_oracle(edges.clone(), n);
+            for base in [1, 16, SORT_DIRECTLY] {
+                let got = forest_sorting_below(edges.clone(), n, base);
+                prop_assert_eq!(
+                    got.iter().map(|e| (e.w.to_bits(), e.a, e.b)).collect::<Vec<_>>(),
+                    want.iter().map(|e| (e.w.to_bits(), e.a, e.b)).collect::<Vec<_>>(),
+                    "seed {}, n {}, sorted below {}", seed, n, base
+                );
+            }
+        }
+    }
 
     #[test]
     fn edge_sign_and_bytes_round_trip() {

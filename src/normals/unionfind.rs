@@ -1,8 +1,13 @@
-//! Union-find whose every element carries a parity bit relative to its
+//! The union-finds of the spanning-forest passes (paper 1 section 2.4).
+//!
+//! [`ParityUnionFind`]: every element carries a parity bit relative to its
 //! parent: joining `a` and `b` with parity `p` records "a and b differ by p".
 //! Following the parities along find paths gives each point's flip relative
-//! to its component's root, which is how the spanning forest orients normals
+//! to its component's root, which is how the global pass orients normals
 //! without ever storing the tree (ARCHITECTURE.md, normal orientation).
+//!
+//! [`UnionFind`]: plain connectivity for a tile's own forest, which needs no
+//! parities (the global pass derives them from the forest's edge signs).
 
 /// Parity union-find over `0..n` (u32 ids: 5 bytes and 1 bit per element).
 #[derive(Clone, Debug)]
@@ -43,26 +48,24 @@ impl ParityUnionFind {
         }
     }
 
-    /// Root of `i` and the parity of `i` relative to it; compresses the path.
-    pub fn find(&mut self, i: u32) -> (u32, bool) {
-        let mut root = i;
+    /// Root of `i` and the parity of `i` relative to it. Path halving: each
+    /// node on the way is pointed at its grandparent, its parity bit becoming
+    /// the sum of the two it skips (one pass; the ranks, and so every later
+    /// root choice, do not depend on how paths are shortened).
+    pub fn find(&mut self, mut i: u32) -> (u32, bool) {
         let mut acc = false;
-        while self.parent[root as usize] != root {
-            acc ^= self.bit(root);
-            root = self.parent[root as usize];
+        loop {
+            let p = self.parent[i as usize];
+            let g = self.parent[p as usize];
+            if p == g {
+                return (p, acc ^ (p != i && self.bit(i)));
+            }
+            let to_g = self.bit(i) ^ self.bit(p);
+            self.parent[i as usize] = g;
+            self.set_bit(i, to_g);
+            acc ^= to_g;
+            i = g;
         }
-        // Second walk: point every node at the root with its full parity.
-        let mut cur = i;
-        let mut cur_par = acc;
-        while self.parent[cur as usize] != root && cur != root {
-            let next = self.parent[cur as usize];
-            let next_par = cur_par ^ self.bit(cur);
-            self.parent[cur as usize] = root;
-            self.set_bit(cur, cur_par);
-            cur = next;
-            cur_par = next_par;
-        }
-        (root, acc)
     }
 
     /// Joins the sets of `a` and `b`, recording that they differ by `parity`.
@@ -88,9 +91,157 @@ impl ParityUnionFind {
     }
 }
 
+/// Union-find over `0..n` without parities: union by rank, path halving,
+/// u32 parents (5 bytes per element).
+#[derive(Clone, Debug)]
+pub struct UnionFind {
+    parent: Vec<u32>,
+    rank: Vec<u8>,
+}
+
+impl UnionFind {
+    pub fn new(n: usize) -> Self {
+        UnionFind {
+            parent: (0..n as u32).collect(),
+            rank: vec![0; n],
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.parent.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.parent.is_empty()
+    }
+
+    /// Root of `i`; every node on the way is pointed at its grandparent
+    /// (path halving: one pass, no stack).
+    pub fn find(&mut self, mut i: u32) -> u32 {
+        loop {
+            let p = self.parent[i as usize];
+            let g = self.parent[p as usize];
+            if p == g {
+                return p;
+            }
+            self.parent[i as usize] = g;
+            i = g;
+        }
+    }
+
+    /// Whether `a` and `b` are in one set.
+    pub fn connected(&mut self, a: u32, b: u32) -> bool {
+        self.find(a) == self.find(b)
+    }
+
+    /// Joins the sets of `a` and `b`; false (and no change) when they were
+    /// already joined.
+    pub fn union(&mut self, a: u32, b: u32) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb {
+            return false;
+        }
+        let (lo, hi) = (self.rank[ra as usize], self.rank[rb as usize]);
+        let (child, root) = if lo < hi { (ra, rb) } else { (rb, ra) };
+        self.parent[child as usize] = root;
+        if lo == hi {
+            self.rank[root as usize] += 1;
+        }
+        true
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Components by brute force: label propagation until nothing changes.
+    fn brute_components(n: usize, pairs: &[(u32, u32)]) -> Vec<usize> {
+        let mut label: Vec<usize> = (0..n).collect();
+        loop {
+            let mut changed = false;
+            for &(a, b) in pairs {
+                let m = label[a as usize].min(label[b as usize]);
+                for v in [a, b] {
+                    if label[v as usize] != m {
+                        label[v as usize] = m;
+                        changed = true;
+                    }
+                }
+            }
+            if !changed {
+                return label;
+            }
+        }
+    }
+
+    #[test]
+    fn parities_match_brute_force_relabelling() {
+        for seed in 0..20u64 {
+            let mut rng = crate::synth::Rng::new(seed);
+            let n = 1 + rng.below(300) as usize;
+            // Brute force: every element's component label and parity to it.
+            let mut label: Vec<usize> = (0..n).collect();
+            let mut par = vec![false; n];
+            let mut uf = ParityUnionFind::new(n);
+            for _ in 0..rng.below(600) {
+                let (a, b) = (rng.below(n as u64) as u32, rng.below(n as u64) as u32);
+                let p = rng.below(2) == 1;
+                let (la, lb) = (label[a as usize], label[b as usize]);
+                assert_eq!(uf.union(a, b, p), la != lb, "seed {seed}: union({a}, {b})");
+                if la != lb {
+                    let flip = par[a as usize] ^ par[b as usize] ^ p;
+                    for v in 0..n {
+                        if label[v] == lb {
+                            label[v] = la;
+                            par[v] ^= flip;
+                        }
+                    }
+                }
+                let (c, d) = (rng.below(n as u64) as u32, rng.below(n as u64) as u32);
+                let ((rc, pc), (rd, pd)) = (uf.find(c), uf.find(d));
+                assert_eq!(
+                    rc == rd,
+                    label[c as usize] == label[d as usize],
+                    "seed {seed}"
+                );
+                if rc == rd {
+                    let want = par[c as usize] ^ par[d as usize];
+                    assert_eq!(pc ^ pd, want, "seed {seed}: parity {c} ~ {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn plain_union_find_matches_brute_force_components() {
+        for seed in 0..20u64 {
+            let mut rng = crate::synth::Rng::new(seed);
+            let n = 1 + rng.below(200) as usize;
+            let pairs: Vec<(u32, u32)> = (0..rng.below(300))
+                .map(|_| (rng.below(n as u64) as u32, rng.below(n as u64) as u32))
+                .collect();
+            let mut uf = UnionFind::new(n);
+            let mut joins = 0;
+            for &(a, b) in &pairs {
+                let before = uf.connected(a, b);
+                let joined = uf.union(a, b);
+                assert_eq!(joined, !before, "seed {seed}: union({a}, {b})");
+                joins += joined as usize;
+            }
+            let label = brute_components(n, &pairs);
+            let mut comps = label.clone();
+            comps.sort_unstable();
+            comps.dedup();
+            assert_eq!(n - joins, comps.len(), "seed {seed}: component count");
+            for a in 0..n as u32 {
+                for b in 0..n as u32 {
+                    let same = label[a as usize] == label[b as usize];
+                    assert_eq!(uf.connected(a, b), same, "seed {seed}: {a} ~ {b}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn parity_follows_chains() {
