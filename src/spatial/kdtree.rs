@@ -92,8 +92,8 @@ impl KdIndex<'_> {
     /// query of marching cubes: kiddo's two nearest settle it when the second
     /// is clearly farther (no tie is possible, whatever the rounding of the
     /// two distance formulas); otherwise the general path sorts it out.
-    /// One traversal: `nearest_one` followed by a tie-ball `within` query
-    /// cost 1.5x the instructions (callgrind, 200k dragon corners).
+    /// One traversal: the former `nearest_one` plus a tie-ball `within`
+    /// query took 1.5x the instructions (callgrind, 200k dragon corners).
     fn nearest(&self, q: DVec3, out: &mut Vec<Neighbour>) {
         let found = self
             .tree
@@ -119,6 +119,27 @@ impl KdIndex<'_> {
         }
         self.general(q, 1, None, out);
     }
+
+    /// Any k >= 1: kiddo's candidates under the canonical order, asked again
+    /// for twice as many until the k-th is clearly inside what kiddo
+    /// returned.
+    fn general(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
+        let n = self.points.len();
+        let excluded = exclude.is_some_and(|e| (e as usize) < n) as usize;
+        let mut want = k.saturating_add(excluded + 1).min(n);
+        while let Some(m) = NonZeroUsize::new(want) {
+            let (returned, farthest) = self.candidates(q, m, exclude, out);
+            let all_seen = returned >= n;
+            let beyond_kth = out
+                .get(k - 1)
+                .is_some_and(|kth| kth.dist2 * (1.0 + ROUNDING_GAP) < farthest);
+            if all_seen || beyond_kth || want == n {
+                break;
+            }
+            want = want.saturating_mul(2).min(n);
+        }
+        out.truncate(k);
+    }
 }
 
 impl KnnIndex for KdIndex<'_> {
@@ -136,25 +157,5 @@ impl KnnIndex for KdIndex<'_> {
 
     fn len(&self) -> usize {
         self.points.len()
-    }
-}
-
-impl KdIndex<'_> {
-    fn general(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
-        let n = self.points.len();
-        let excluded = exclude.is_some_and(|e| (e as usize) < n) as usize;
-        let mut want = k.saturating_add(excluded + 1).min(n);
-        while let Some(m) = NonZeroUsize::new(want) {
-            let (returned, farthest) = self.candidates(q, m, exclude, out);
-            let all_seen = returned >= n;
-            let beyond_kth = out
-                .get(k - 1)
-                .is_some_and(|kth| kth.dist2 * (1.0 + ROUNDING_GAP) < farthest);
-            if all_seen || beyond_kth || want == n {
-                break;
-            }
-            want = want.saturating_mul(2).min(n);
-        }
-        out.truncate(k);
     }
 }

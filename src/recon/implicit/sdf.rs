@@ -83,7 +83,8 @@ pub fn signed_distance(
 }
 
 /// The `want` (at most [`PLANES_TRIED`]) nearest samples of `p` (indices
-/// into `s`) and their count, `None` when nothing is loaded, `Err` with the shortfall when the loaded region cannot tell.
+/// into `s`) and their count; `None` when nothing is loaded, `Err` with the
+/// shortfall when the loaded region cannot tell.
 fn nearest_planes(
     s: &Samples,
     tile: &TilePoints,
