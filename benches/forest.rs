@@ -15,9 +15,8 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use glam::DVec3;
 use rayon::prelude::*;
-use scanmesh::normals::forest::{spanning_forest, Edge, LocalEdge};
+use scanmesh::normals::forest::{reference_forest, spanning_forest, Edge, LocalEdge};
 use scanmesh::normals::pca::fit_plane;
-use scanmesh::normals::unionfind::ParityUnionFind;
 use scanmesh::spatial::{GridIndex, KnnIndex, Neighbour};
 use scanmesh::synth::{generate, Shape};
 
@@ -93,24 +92,13 @@ fn riemannian_graph(points: &[DVec3]) -> Vec<LocalEdge> {
     edges
 }
 
-fn sort_then_kruskal(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
-    edges.par_sort_unstable_by_key(|e| e.edge.key());
-    edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
-    let mut uf = ParityUnionFind::new(n);
-    edges
-        .into_iter()
-        .filter(|e| uf.union(e.local[0], e.local[1], false))
-        .map(|e| e.edge)
-        .collect()
-}
-
 fn bench_forest(c: &mut Criterion) {
     let scan = generate(&Shape::torus(1.0, 0.3), N, 0.0002, 1).expect("generate");
     let edges = riemannian_graph(&morton_ordered(scan.points));
     eprintln!("{} points, {} edges", N, edges.len());
     assert_eq!(
         spanning_forest(edges.clone(), N),
-        sort_then_kruskal(edges.clone(), N)
+        reference_forest(edges.clone(), N)
     );
     let mut group = c.benchmark_group("forest_500k_k12");
     group.sample_size(10);
@@ -124,7 +112,7 @@ fn bench_forest(c: &mut Criterion) {
     group.bench_function("sort_then_kruskal", |b| {
         b.iter_batched(
             || edges.clone(),
-            |e| black_box(sort_then_kruskal(e, N)),
+            |e| black_box(reference_forest(e, N)),
             BatchSize::LargeInput,
         )
     });

@@ -91,6 +91,21 @@ pub fn spanning_forest(edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
     forest_sorting_below(edges, n, SORT_DIRECTLY)
 }
 
+/// The plain algorithm [`spanning_forest`] must equal: sort every edge by
+/// key, drop repeats of a pair, Kruskal. Kept as the oracle of the tests
+/// and the baseline of `benches/forest.rs`, not for the kernel.
+#[doc(hidden)]
+pub fn reference_forest(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
+    edges.sort_unstable_by_key(|e| e.edge.key());
+    edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
+    let mut uf = UnionFind::new(n);
+    edges
+        .into_iter()
+        .filter(|e| uf.union(e.local[0], e.local[1]))
+        .map(|e| e.edge)
+        .collect()
+}
+
 /// [`spanning_forest`] with parts of at most `base` edges sorted directly.
 fn forest_sorting_below(mut edges: Vec<LocalEdge>, n: usize, base: usize) -> Vec<Edge> {
     let mut uf = UnionFind::new(n);
@@ -209,21 +224,7 @@ fn retain_joining(edges: &mut [LocalEdge], uf: &mut UnionFind) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::normals::unionfind::ParityUnionFind;
     use proptest::prelude::*;
-
-    /// The algorithm before filter-Kruskal: sort everything by key, drop
-    /// repeats, Kruskal.
-    fn sorted_kruskal_oracle(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
-        edges.sort_unstable_by_key(|e| e.edge.key());
-        edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
-        let mut uf = ParityUnionFind::new(n);
-        edges
-            .into_iter()
-            .filter(|e| uf.union(e.local[0], e.local[1], false))
-            .map(|e| e.edge)
-            .collect()
-    }
 
     /// A random graph on `n` vertices whose ids are a shuffled spread of the
     /// local numbers; costs from `levels` distinct values (many ties), every
@@ -261,7 +262,7 @@ mod tests {
     }
 
     fn same_as_oracle(edges: Vec<LocalEdge>, n: usize, what: &str) {
-        let want = sorted_kruskal_oracle(edges.clone(), n);
+        let want = reference_forest(edges.clone(), n);
         let got = spanning_forest(edges, n);
         assert_eq!(got.len(), want.len(), "{what}: forest size");
         for (k, (g, w)) in got.iter().zip(&want).enumerate() {
@@ -326,7 +327,7 @@ mod tests {
             repeat in 0usize..4,
         ) {
             let edges = random_edges(seed, n, n * per_vertex, levels, repeat);
-            let want = sorted_kruskal_oracle(edges.clone(), n);
+            let want = reference_forest(edges.clone(), n);
             for base in [1, 16, SORT_DIRECTLY] {
                 let got = forest_sorting_below(edges.clone(), n, base);
                 prop_assert_eq!(
