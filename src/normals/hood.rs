@@ -11,6 +11,14 @@
 //! [`TopoResult::reach`](crate::spatial::topological::TopoResult::reach) for
 //! the reverse shift; either is infinite when a query found fewer than k
 //! points (then only a tile holding everything is complete).
+//!
+//! Storage: only the neighbours' local indices are kept ([`Hoods`]), four
+//! bytes each in chunks of [`CHUNK`] points. A `Vec<Neighbour>` per point
+//! cost ~280 bytes a point at k = 12 (16-byte entries, spare capacity, the
+//! vector itself): a third of the 1M-point run's peak, and its page faults
+//! were ~8 % of the CPU time. Whatever needs the distances (the plane fit,
+//! the sampling statistics) is computed from the full list while it is at
+//! hand, by the `visit` callback of [`HoodIndex::hoods`].
 
 use super::NormalParams;
 use crate::pipeline::KernelError;
@@ -20,15 +28,47 @@ use crate::spatial::{build_index, KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use rayon::prelude::*;
 
-/// Neighbourhood of one point: its neighbours and the room check.
-pub(super) struct Hood {
-    pub nbrs: Vec<Neighbour>,
-    /// How much wider the margin must be for this neighbourhood to be
-    /// certainly complete (0 when it is).
+/// Points per storage chunk: one rayon task each, so also the grain of the
+/// parallel loop (enough tasks to balance two to a few dozen threads).
+const CHUNK: usize = 1024;
+
+/// The neighbour lists (local indices) of a sequence of loaded points.
+pub(super) struct Hoods {
+    chunks: Vec<HoodChunk>,
+    /// How much wider the margin must be for every list to be certainly
+    /// complete (0 when it is).
     pub short_by: f64,
 }
 
-/// An index over one tile's loaded points, answering [`Hood`]s.
+/// The lists of up to [`CHUNK`] consecutive points, end to end.
+#[derive(Default)]
+struct HoodChunk {
+    /// `ends[i]` is where point i's list ends in `nbrs`.
+    ends: Vec<u32>,
+    nbrs: Vec<u32>,
+}
+
+impl Hoods {
+    /// The neighbours of the `n`-th point of the sequence, nearest first.
+    pub fn get(&self, n: usize) -> &[u32] {
+        let chunk = &self.chunks[n / CHUNK];
+        let i = n % CHUNK;
+        let start = if i == 0 { 0 } else { chunk.ends[i - 1] };
+        &chunk.nbrs[start as usize..chunk.ends[i] as usize]
+    }
+
+    /// Every list, in order.
+    pub fn iter(&self) -> impl Iterator<Item = &[u32]> + '_ {
+        self.chunks.iter().flat_map(|c| {
+            let starts = std::iter::once(0).chain(c.ends.iter().copied());
+            starts
+                .zip(&c.ends)
+                .map(|(s, &e)| &c.nbrs[s as usize..e as usize])
+        })
+    }
+}
+
+/// An index over one tile's loaded points, answering neighbourhoods.
 pub(super) enum HoodIndex<'a> {
     Knn {
         index: Box<dyn KnnIndex + 'a>,
@@ -42,6 +82,12 @@ pub(super) enum HoodIndex<'a> {
 
 fn failed(e: impl std::fmt::Display) -> KernelError {
     KernelError::Failed(e.to_string())
+}
+
+/// Per-worker query buffers.
+struct Scratch {
+    topo: TopoScratch,
+    nbrs: Vec<Neighbour>,
 }
 
 impl<'a> HoodIndex<'a> {
@@ -60,48 +106,128 @@ impl<'a> HoodIndex<'a> {
         })
     }
 
-    /// The neighbourhood of loaded point `i`.
-    pub fn hood(
+    /// The usual list length: k for kNN; about 2k for the reverse shift
+    /// (paper 3: `|T|` in `[k, 3k]`).
+    fn typical_len(&self) -> usize {
+        match self {
+            HoodIndex::Knn { k, .. } => *k,
+            HoodIndex::Topological { params, .. } => 2 * params.k,
+        }
+    }
+
+    /// The neighbours of loaded point `i` into `scratch.nbrs`, and how much
+    /// wider the margin must be for them to be certainly complete.
+    fn query(
         &self,
         tile: &TilePoints,
         i: usize,
-        scratch: &mut TopoScratch,
-    ) -> Result<Hood, KernelError> {
-        let (nbrs, reach) = match self {
-            HoodIndex::Knn { index, k } => knn(index.as_ref(), tile, i, *k),
+        scratch: &mut Scratch,
+    ) -> Result<f64, KernelError> {
+        let reach = match self {
+            HoodIndex::Knn { index, k } => knn(index.as_ref(), tile, i, *k, &mut scratch.nbrs),
             HoodIndex::Topological { index, params } => {
                 let i = u32::try_from(i).map_err(failed)?;
-                let r = topological_neighbours(index, &tile.points, &tile.ids, i, params, scratch)
-                    .map_err(failed)?;
-                (r.neighbours, r.reach)
+                let r = topological_neighbours(
+                    index,
+                    &tile.points,
+                    &tile.ids,
+                    i,
+                    params,
+                    &mut scratch.topo,
+                )
+                .map_err(failed)?;
+                scratch.nbrs = r.neighbours;
+                r.reach
             }
         };
         let room = tile.room(tile.points[i]);
-        let short_by = if reach <= room { 0.0 } else { reach - room };
-        Ok(Hood { nbrs, short_by })
+        Ok(if reach <= room { 0.0 } else { reach - room })
     }
 
-    /// The neighbourhoods of `points`, in their order, with one scratch per
-    /// worker. Each depends only on its point, so the thread count does not
+    /// The neighbourhoods of the points `point_at(0..count)`, in that order,
+    /// and `visit(point, its neighbours)` for each, while the distances are
+    /// at hand. Each depends only on its point, so the thread count does not
     /// matter.
-    pub fn hoods<I>(&self, tile: &TilePoints, points: I) -> Result<Vec<Hood>, KernelError>
+    pub fn hoods<T, P, V>(
+        &self,
+        tile: &TilePoints,
+        count: usize,
+        point_at: P,
+        visit: V,
+    ) -> Result<(Hoods, Vec<T>), KernelError>
     where
-        I: IndexedParallelIterator<Item = usize>,
+        T: Send,
+        P: Fn(usize) -> usize + Sync,
+        V: Fn(usize, &[Neighbour]) -> T + Sync,
     {
-        points
-            .map_init(TopoScratch::new, |scratch, i| self.hood(tile, i, scratch))
-            .collect()
+        let parts: Vec<(HoodChunk, Vec<T>, f64)> = (0..count.div_ceil(CHUNK))
+            .into_par_iter()
+            .map_init(
+                || Scratch {
+                    topo: TopoScratch::new(),
+                    nbrs: Vec::new(),
+                },
+                |scratch, c| {
+                    let range = c * CHUNK..count.min((c + 1) * CHUNK);
+                    self.chunk(tile, range.map(&point_at), &visit, scratch)
+                },
+            )
+            .collect::<Result<_, _>>()?;
+        let mut visited = Vec::with_capacity(count);
+        let mut hoods = Hoods {
+            chunks: Vec::with_capacity(parts.len()),
+            short_by: 0.0,
+        };
+        for (chunk, values, short_by) in parts {
+            hoods.chunks.push(chunk);
+            visited.extend(values);
+            hoods.short_by = hoods.short_by.max(short_by);
+        }
+        Ok((hoods, visited))
+    }
+
+    fn chunk<T, V>(
+        &self,
+        tile: &TilePoints,
+        points: impl ExactSizeIterator<Item = usize>,
+        visit: &V,
+        scratch: &mut Scratch,
+    ) -> Result<(HoodChunk, Vec<T>, f64), KernelError>
+    where
+        V: Fn(usize, &[Neighbour]) -> T,
+    {
+        let mut chunk = HoodChunk {
+            ends: Vec::with_capacity(points.len()),
+            nbrs: Vec::with_capacity(points.len() * self.typical_len()),
+        };
+        let mut values = Vec::with_capacity(points.len());
+        let mut short_by = 0.0f64;
+        for i in points {
+            short_by = short_by.max(self.query(tile, i, scratch)?);
+            values.push(visit(i, &scratch.nbrs));
+            chunk.nbrs.extend(scratch.nbrs.iter().map(|n| n.index));
+            chunk
+                .ends
+                .push(u32::try_from(chunk.nbrs.len()).map_err(failed)?);
+        }
+        chunk.nbrs.shrink_to_fit();
+        Ok((chunk, values, short_by))
     }
 }
 
-/// The k nearest of point `i` (itself excluded) and their k-th distance.
-fn knn(index: &dyn KnnIndex, tile: &TilePoints, i: usize, k: usize) -> (Vec<Neighbour>, f64) {
-    let mut nbrs = Vec::with_capacity(k + 4);
-    index.knn(tile.points[i], k, Some(i as u32), &mut nbrs);
-    let reach = match nbrs.last() {
+/// The k nearest of point `i` (itself excluded) into `nbrs`, and their k-th
+/// distance.
+fn knn(
+    index: &dyn KnnIndex,
+    tile: &TilePoints,
+    i: usize,
+    k: usize,
+    nbrs: &mut Vec<Neighbour>,
+) -> f64 {
+    index.knn(tile.points[i], k, Some(i as u32), nbrs);
+    match nbrs.last() {
         Some(n) if nbrs.len() >= k => n.dist2.sqrt(),
         // Fewer than k loaded: complete only if nothing lies beyond.
         _ => f64::INFINITY,
-    };
-    (nbrs, reach)
+    }
 }

@@ -12,14 +12,14 @@
 //! asks for a wider margin otherwise.
 
 use super::forest::{spanning_forest, Edge, LocalEdge};
-use super::hood::{Hood, HoodIndex};
+use super::hood::{HoodIndex, Hoods};
 use super::pca::fit_plane;
 use super::stats::SamplingHistograms;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
+use crate::spatial::Neighbour;
 use crate::tiling::TilePoints;
 use glam::DVec3;
-use rayon::prelude::*;
 
 /// What one tile contributes.
 #[derive(Debug)]
@@ -51,16 +51,31 @@ struct Fitted {
     residual: f64,
 }
 
+/// A core point's fit and its nearest-neighbour distance (for the
+/// sampling statistics).
+#[derive(Clone, Copy, Debug)]
+struct CoreFit {
+    fitted: Option<Fitted>,
+    nn: Option<f64>,
+}
+
 impl NormalsKernel {
-    fn normal_of(&self, tile: &TilePoints, i: usize, hood: &Hood) -> Option<Fitted> {
-        let fit = fit_plane(&tile.points, i, &hood.nbrs).ok()?;
+    fn normal_of(&self, tile: &TilePoints, i: usize, nbrs: &[Neighbour]) -> Option<Fitted> {
+        let fit = fit_plane(&tile.points, i, nbrs).ok()?;
         let n = fit.normal;
         let n = match self.params.orientation {
             Orientation::Viewpoint(v) if n.dot(v - self.origin - tile.points[i]) < 0.0 => -n,
             _ => n,
         };
-        let residual = (fit.eigenvalues[0].max(0.0) / (hood.nbrs.len() + 1) as f64).sqrt();
+        let residual = (fit.eigenvalues[0].max(0.0) / (nbrs.len() + 1) as f64).sqrt();
         Some(Fitted { n, residual })
+    }
+
+    fn core_fit(&self, tile: &TilePoints, i: usize, nbrs: &[Neighbour]) -> CoreFit {
+        CoreFit {
+            fitted: self.normal_of(tile, i, nbrs),
+            nn: nbrs.first().map(|n| n.dist2.sqrt()),
+        }
     }
 }
 
@@ -77,28 +92,37 @@ impl TileKernel for NormalsKernel {
 
     fn run(&self, tile: &TilePoints) -> Result<NormalsTile, KernelError> {
         let index = HoodIndex::build(tile, &self.params)?;
-        let core = index.hoods(tile, (0..tile.n_core).into_par_iter())?;
-        check_room(&core, tile.margin)?;
-        let mut normals: Vec<Option<Fitted>> = vec![None; tile.points.len()];
-        let core_normals: Vec<Option<Fitted>> = core
-            .par_iter()
-            .enumerate()
-            .map(|(i, h)| self.normal_of(tile, i, h))
-            .collect();
-        normals[..tile.n_core].copy_from_slice(&core_normals);
+        let (core, fits) = index.hoods(
+            tile,
+            tile.n_core,
+            |i| i,
+            |i, nbrs| self.core_fit(tile, i, nbrs),
+        )?;
+        check_room(core.short_by, tile.margin)?;
         let mut out = NormalsTile {
-            normals: core_normals
+            normals: fits
                 .iter()
-                .map(|n| n.map_or([0.0; 3], |f| f.n.as_vec3().to_array()))
+                .map(|f| f.fitted.map_or([0.0; 3], |f| f.n.as_vec3().to_array()))
                 .collect(),
-            flags: core_normals
+            flags: fits
                 .iter()
-                .map(|n| if n.is_some() { 0 } else { FLAG_DEGENERATE })
+                .map(|f| {
+                    if f.fitted.is_some() {
+                        0
+                    } else {
+                        FLAG_DEGENERATE
+                    }
+                })
                 .collect(),
             forest: Vec::new(),
-            sampling: sampling(&core, &core_normals, self.histogram_scale),
+            sampling: sampling(&fits, self.histogram_scale),
         };
         if self.params.orientation == Orientation::SpanningTree {
+            let mut normals: Vec<Option<DVec3>> = vec![None; tile.points.len()];
+            for (n, f) in normals.iter_mut().zip(&fits) {
+                *n = f.fitted.map(|f| f.n);
+            }
+            drop(fits);
             self.fit_ring(&index, tile, &core, &mut normals)?;
             out.forest = tile_forest(tile, &core, &normals, self.params.cost);
         }
@@ -112,46 +136,47 @@ impl NormalsKernel {
         &self,
         index: &HoodIndex,
         tile: &TilePoints,
-        core: &[Hood],
-        normals: &mut [Option<Fitted>],
+        core: &Hoods,
+        normals: &mut [Option<DVec3>],
     ) -> Result<(), KernelError> {
-        let mut ring: Vec<usize> = core
+        let mut ring: Vec<u32> = core
             .iter()
-            .flat_map(|h| h.nbrs.iter().map(|n| n.index as usize))
-            .filter(|&j| j >= tile.n_core)
+            .flatten()
+            .copied()
+            .filter(|&j| j as usize >= tile.n_core)
             .collect();
         ring.sort_unstable();
         ring.dedup();
-        let hoods = index.hoods(tile, ring.par_iter().copied())?;
-        check_room(&hoods, tile.margin)?;
-        let fitted: Vec<Option<Fitted>> = ring
-            .par_iter()
-            .zip(&hoods)
-            .map(|(&j, h)| self.normal_of(tile, j, h))
-            .collect();
+        let (hoods, fitted) = index.hoods(
+            tile,
+            ring.len(),
+            |r| ring[r] as usize,
+            |j, nbrs| self.normal_of(tile, j, nbrs).map(|f| f.n),
+        )?;
+        check_room(hoods.short_by, tile.margin)?;
         for (&j, n) in ring.iter().zip(fitted) {
-            normals[j] = n;
+            normals[j as usize] = n;
         }
         Ok(())
     }
 }
 
-fn sampling(core: &[Hood], fitted: &[Option<Fitted>], scale: f64) -> SamplingHistograms {
+fn sampling(fits: &[CoreFit], scale: f64) -> SamplingHistograms {
     let mut h = SamplingHistograms::new(scale);
-    for (hood, f) in core.iter().zip(fitted) {
-        if let Some(nb) = hood.nbrs.first() {
-            h.nn.add(nb.dist2.sqrt());
+    for f in fits {
+        if let Some(nn) = f.nn {
+            h.nn.add(nn);
         }
-        if let Some(f) = f {
+        if let Some(f) = f.fitted {
             h.residual.add(f.residual);
         }
     }
     h
 }
 
-/// Fails with the margin that would make every neighbourhood complete.
-fn check_room(hoods: &[Hood], margin: f64) -> Result<(), KernelError> {
-    let short = hoods.iter().map(|h| h.short_by).fold(0.0, f64::max);
+/// Fails with the margin that would make every neighbourhood complete,
+/// given the largest shortfall.
+fn check_room(short: f64, margin: f64) -> Result<(), KernelError> {
     if short > 0.0 {
         // A little extra so rounding at the region's edge cannot loop.
         let needed = if short.is_finite() {
@@ -168,9 +193,8 @@ fn check_room(hoods: &[Hood], margin: f64) -> Result<(), KernelError> {
 
 /// See [`EdgeCost`]. Symmetric in (i, j), so both tiles that see an edge
 /// weigh it the same.
-fn edge_cost(cost: EdgeCost, d: DVec3, fi: &Fitted, fj: &Fitted, dot: f64) -> f64 {
+fn edge_cost(cost: EdgeCost, d: DVec3, ni: DVec3, nj: DVec3, dot: f64) -> f64 {
     let paper = 1.0 - dot.abs();
-    let (ni, nj) = (fi.n, fj.n);
     match cost {
         EdgeCost::Paper => paper,
         EdgeCost::TangentOffset => {
@@ -190,15 +214,15 @@ fn edge_cost(cost: EdgeCost, d: DVec3, fi: &Fitted, fj: &Fitted, dot: f64) -> f6
 /// with normals.
 fn tile_forest(
     tile: &TilePoints,
-    core: &[Hood],
-    normals: &[Option<Fitted>],
+    core: &Hoods,
+    normals: &[Option<DVec3>],
     cost: EdgeCost,
 ) -> Vec<Edge> {
     // Sequential on purpose: a parallel collect holds the edges twice at its
     // peak (10M points, --mem 256MiB: 230 -> 267 MiB measured), and this loop
     // is a few per cent of the kernel.
-    let mut edges = Vec::with_capacity(core.len() * 8);
-    for i in 0..core.len() {
+    let mut edges = Vec::with_capacity(tile.n_core * 8);
+    for i in 0..tile.n_core {
         edges.extend(point_edges(tile, core, normals, cost, i));
     }
     spanning_forest(edges, tile.points.len())
@@ -207,22 +231,21 @@ fn tile_forest(
 /// The Riemannian-graph edges from core point `i` to its neighbours.
 fn point_edges<'a>(
     tile: &'a TilePoints,
-    core: &'a [Hood],
-    normals: &'a [Option<Fitted>],
+    core: &'a Hoods,
+    normals: &'a [Option<DVec3>],
     cost: EdgeCost,
     i: usize,
 ) -> impl Iterator<Item = LocalEdge> + 'a {
     let ni = normals[i];
-    core[i].nbrs.iter().filter_map(move |nb| {
-        let (ni, j) = (ni?, nb.index as usize);
+    core.get(i).iter().filter_map(move |&j| {
+        let (ni, j) = (ni?, j as usize);
         // A mutual pair of core points is added once, from its lower end.
-        let mutual = j < core.len() && core[j].nbrs.iter().any(|m| m.index as usize == i);
-        if mutual && j < i {
+        if j < i && j < tile.n_core && core.get(j).contains(&(i as u32)) {
             return None;
         }
         let nj = normals[j]?;
-        let dot = ni.n.dot(nj.n);
-        let c = edge_cost(cost, tile.points[j] - tile.points[i], &ni, &nj, dot);
+        let dot = ni.dot(nj);
+        let c = edge_cost(cost, tile.points[j] - tile.points[i], ni, nj, dot);
         let edge = Edge::with_cost(tile.ids[i] as u32, tile.ids[j] as u32, c, dot);
         // Local numbers in the same (id) order as the edge's ends.
         let local = if tile.ids[i] < tile.ids[j] {
