@@ -15,7 +15,7 @@ use super::polygonize::{polygonize_cube, CubeVertex};
 use super::sdf::{signed_distance, Corner, Samples};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
-use crate::spatial::{build_index, KnnBackend};
+use crate::spatial::grid::GridIndex;
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -33,11 +33,20 @@ pub struct ImplicitKernel {
     pub lattice: Lattice,
     /// `rho + delta`, infinite when the surface is known to be closed.
     pub limit: f64,
-    pub backend: KnnBackend,
     pub initial_margin: f64,
     /// Cubes within this many cubes of a sample's cube form the band.
     pub band: i64,
 }
+
+/// Edge of the signed distance's grid index, in lattice cubes. Its queries
+/// are lattice corners, which lie up to two cubes from the nearest sample
+/// (the band), so a grid sized for the k-th neighbour (~2 spacings, the
+/// automatic size) widens ring after ring for them; cells of 1.5 cubes
+/// settle most corners in the first 27 cells. callgrind, reconstruct from a
+/// 200k-point store with normals, 1 thread: kd-tree 2.15 G instructions,
+/// grid of 0.5 / 1 / 1.5 / 2 / 3 cubes 4.11 / 1.88 / 1.55 / 1.56 / 1.79 G;
+/// the same mesh from all (exact nearest either way).
+const SDF_GRID_CELLS: f64 = 1.5;
 
 /// A lattice corner (its [`corner_key`]) and its signed distance (`None`:
 /// undefined).
@@ -93,11 +102,12 @@ impl TileKernel for ImplicitKernel {
             return Err(KernelError::MarginTooSmall { needed: band_reach });
         }
         let (points, normals, ids) = usable_samples(tile);
-        let index = build_index(self.backend, &points, &ids).map_err(failed)?;
+        let index = GridIndex::with_cell(&points, &ids, SDF_GRID_CELLS * self.lattice.cell)
+            .map_err(failed)?;
         let samples = Samples {
             points: &points,
             normals: &normals,
-            index: index.as_ref(),
+            index: &index,
         };
         let cubes = band(&self.lattice, &points, &tile.core, self.band)?;
         let corners = self.corner_values(&samples, tile, &cubes)?;

@@ -9,7 +9,6 @@ use super::stitch::Stitcher;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
 use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
 use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
-use crate::spatial::KnnBackend;
 use crate::store::{PointStore, StoreError, NORMAL_FILE};
 use crate::tiling::load::core_box;
 use glam::DVec3;
@@ -87,11 +86,6 @@ pub fn reconstruct_implicit(
     let kernel = ImplicitKernel {
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
-        // Corners lie up to a cube (several spacings) from the nearest
-        // sample; the grid, sized for k-th neighbours at about a spacing,
-        // widens ring after ring for them, the kd-tree does not (stage 2.1 s
-        // -> 1.7 s on the 1M dragon). Both are exact: the mesh is the same.
-        backend: KnnBackend::KdTree,
         initial_margin: 4.0 * report.cell + 2.0 * reach,
         band: 1,
     };
