@@ -52,14 +52,38 @@ impl Progress for Bars {
 }
 
 /// Stage timings on stderr (`SCANMESH_TIMINGS=1`), for profiling runs.
+/// Time spent between stages (store setup, spacing, dropping and removing
+/// scratch data) is printed as `(between stages)` so no cost hides; each
+/// stage line ends with the peak RSS so far, to see which stage sets it.
 struct Timings {
     start: Mutex<Option<(String, std::time::Instant)>>,
+    last_end: Mutex<std::time::Instant>,
+}
+
+impl Timings {
+    fn gap(&self, now: std::time::Instant) {
+        if let Ok(mut last) = self.last_end.lock() {
+            let gap = now.duration_since(*last).as_secs_f64();
+            if gap >= 0.005 {
+                eprintln!("{:>24}: {:.3} s", "(between stages)", gap);
+            }
+            *last = now;
+        }
+    }
+}
+
+impl Drop for Timings {
+    fn drop(&mut self) {
+        self.gap(std::time::Instant::now());
+    }
 }
 
 impl Progress for Timings {
     fn begin(&self, stage: &str, _: u64) {
+        let now = std::time::Instant::now();
+        self.gap(now);
         if let Ok(mut s) = self.start.lock() {
-            *s = Some((stage.to_string(), std::time::Instant::now()));
+            *s = Some((stage.to_string(), now));
         }
     }
 
@@ -68,7 +92,15 @@ impl Progress for Timings {
     fn end(&self) {
         if let Ok(mut s) = self.start.lock() {
             if let Some((stage, t0)) = s.take() {
-                eprintln!("{:>24}: {:.3} s", stage, t0.elapsed().as_secs_f64());
+                eprintln!(
+                    "{:>24}: {:.3} s (peak {})",
+                    stage,
+                    t0.elapsed().as_secs_f64(),
+                    super::peak()
+                );
+                if let Ok(mut last) = self.last_end.lock() {
+                    *last = std::time::Instant::now();
+                }
             }
         }
     }
@@ -79,6 +111,7 @@ pub fn progress(quiet: bool) -> Box<dyn Progress> {
     if std::env::var_os("SCANMESH_TIMINGS").is_some() {
         return Box::new(Timings {
             start: Mutex::new(None),
+            last_end: Mutex::new(std::time::Instant::now()),
         });
     }
     if quiet || !std::io::stderr().is_terminal() {
