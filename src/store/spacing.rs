@@ -1,9 +1,18 @@
 //! The store's spacing estimate: mean nearest-neighbour distance over a
 //! sample of points spread across tiles (exact duplicates left out, since a
 //! zero distance says nothing about sampling density).
+//!
+//! The nearest neighbour of a sampled point is found by brute force over the
+//! tile's blocks of [`BLOCK`] consecutive (Morton-ordered) points, skipping
+//! blocks whose bounds lie farther than the best distance so far. It is the
+//! exact nearest distance, the same value a kNN index gives, without
+//! building an index over whole tiles for a thousand queries (a kd-tree over
+//! two 500k-point tiles took 0.35 s, more than the rest of the store build).
 
-use super::{PointStore, StoreError};
-use crate::spatial::{build_index, KnnBackend};
+use super::{PointStore, StoreError, BLOCK};
+use crate::geom::Aabb;
+use glam::DVec3;
+use rayon::prelude::*;
 
 /// Tiles sampled and points sampled per tile.
 const SAMPLE_TILES: usize = 16;
@@ -25,20 +34,21 @@ pub fn ensure_spacing(store: &mut PointStore) -> Result<f64, StoreError> {
 pub fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
     let tiles: Vec<_> = store.tiles().iter().filter(|t| t.count > 1).collect();
     let step = tiles.len().div_ceil(SAMPLE_TILES).max(1);
-    let (mut pts, mut ids) = (Vec::new(), Vec::new());
+    let mut pts = Vec::new();
     let (mut sum, mut n) = (0.0, 0u64);
-    let mut nbrs = Vec::new();
     for t in tiles.iter().step_by(step) {
         store.read_points(t.start, t.count, &mut pts)?;
-        store.read_indices(t.start, t.count, &mut ids)?;
-        let index = build_index(KnnBackend::KdTree, &pts, &ids)?;
         let stride = (pts.len() / SAMPLE_POINTS).max(1);
-        for i in (0..pts.len()).step_by(stride) {
-            index.knn(pts[i], 1, Some(i as u32), &mut nbrs);
-            if let Some(nb) = nbrs.first().filter(|nb| nb.dist2 > 0.0) {
-                sum += nb.dist2.sqrt();
-                n += 1;
-            }
+        let samples: Vec<usize> = (0..pts.len()).step_by(stride).collect();
+        let blocks = block_bounds(&pts);
+        let nearest: Vec<Option<f64>> = samples
+            .par_iter()
+            .map(|&i| nearest_dist2(&pts, &blocks, i))
+            .collect();
+        // Summed in sample order, so the estimate does not depend on threads.
+        for d2 in nearest.into_iter().flatten().filter(|&d2| d2 > 0.0) {
+            sum += d2.sqrt();
+            n += 1;
         }
     }
     if n > 0 {
@@ -50,4 +60,155 @@ pub fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
     } else {
         1.0
     })
+}
+
+/// Bounds of every [`BLOCK`] consecutive points.
+fn block_bounds(pts: &[DVec3]) -> Vec<Aabb> {
+    pts.chunks(BLOCK as usize)
+        .map(|b| {
+            let mut a = Aabb::EMPTY;
+            b.iter().for_each(|p| a.add(*p));
+            a
+        })
+        .collect()
+}
+
+/// Squared distance from `pts[i]` to its nearest other point (`None` when
+/// there is none), computed as `(p - q).length_squared()` like every kNN
+/// backend, so the value is the one an index would report.
+fn nearest_dist2(pts: &[DVec3], blocks: &[Aabb], i: usize) -> Option<f64> {
+    let q = pts[i];
+    let own = i / BLOCK as usize;
+    let mut best = scan_block(pts, own, i, q, f64::INFINITY);
+    if best == 0.0 {
+        return Some(0.0);
+    }
+    let mut candidates: Vec<(f64, usize)> = blocks
+        .iter()
+        .enumerate()
+        .filter(|&(b, _)| b != own)
+        .map(|(b, bounds)| (lower_bound2(bounds, q), b))
+        .filter(|&(lb, _)| lb <= best)
+        .collect();
+    candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    for (lb, b) in candidates {
+        if lb > best {
+            break;
+        }
+        best = scan_block(pts, b, i, q, best);
+    }
+    best.is_finite().then_some(best)
+}
+
+/// The smaller of `best` and the squared distances from `q` to block `b`'s
+/// points other than `pts[skip]`.
+fn scan_block(pts: &[DVec3], b: usize, skip: usize, q: DVec3, mut best: f64) -> f64 {
+    let first = b * BLOCK as usize;
+    let end = (first + BLOCK as usize).min(pts.len());
+    for (j, p) in pts[first..end].iter().enumerate() {
+        let d2 = (*p - q).length_squared();
+        if d2 < best && first + j != skip {
+            best = d2;
+        }
+    }
+    best
+}
+
+/// A lower bound of the squared distance from `q` to any point inside `b`,
+/// never above the distance computed to such a point: every step (the axis
+/// gap, its square, the sum in the same order) is monotonic in floating
+/// point, and the gap to a face is at most the gap to a point beyond it.
+fn lower_bound2(b: &Aabb, q: DVec3) -> f64 {
+    let gap = (b.min - q).max(q - b.max).max(DVec3::ZERO);
+    gap.length_squared()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spatial::brute_knn;
+
+    /// Points on a wavy sheet with clusters of exact duplicates and a few
+    /// far outliers, shuffled by a seeded generator.
+    fn cloud(seed: u64, n: usize) -> Vec<DVec3> {
+        let mut rng = crate::synth::Rng::new(seed);
+        let mut pts = Vec::with_capacity(n);
+        while pts.len() < n {
+            let (u, v) = (rng.below(1 << 20) as f64, rng.below(1 << 20) as f64);
+            let (x, y) = (u / (1 << 20) as f64 * 10.0, v / (1 << 20) as f64 * 10.0);
+            let p = DVec3::new(x, y, (x * 1.3).sin() * 0.5);
+            pts.push(p);
+            if rng.below(50) == 0 {
+                pts.push(p);
+            }
+            if rng.below(500) == 0 {
+                pts.push(p + DVec3::new(0.0, 0.0, 30.0 + rng.below(100) as f64));
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn nearest_matches_brute_force_exactly() {
+        for seed in 0..6u64 {
+            let pts = cloud(seed, 3000 + 700 * seed as usize);
+            let ties: Vec<u64> = (0..pts.len() as u64).collect();
+            let blocks = block_bounds(&pts);
+            for i in (0..pts.len()).step_by(7) {
+                let nbrs = brute_knn(&pts, &ties, pts[i], 1, Some(i as u32));
+                let want = nbrs.first().map(|nb| nb.dist2);
+                let got = nearest_dist2(&pts, &blocks, i);
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    want.map(f64::to_bits),
+                    "seed {seed}, point {i}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn single_point_has_no_neighbour() {
+        let pts = [DVec3::new(1.0, 2.0, 3.0)];
+        assert_eq!(nearest_dist2(&pts, &block_bounds(&pts), 0), None);
+    }
+
+    #[test]
+    fn store_estimate_is_the_mean_nearest_distance() {
+        for seed in [3u64, 11] {
+            let pts = cloud(seed, 20_000);
+            let dir = tempfile::tempdir().unwrap();
+            let mut reader = crate::io::memory::MemoryReader::new("cloud", pts, None);
+            let opts = crate::store::BuildOptions {
+                tiles: crate::store::TileTarget::Points(6000),
+                ..Default::default()
+            };
+            let store = crate::store::build_store(
+                &mut reader,
+                &dir.path().join("s"),
+                &opts,
+                &crate::pipeline::NoProgress,
+            )
+            .unwrap();
+            // Oracle: the same sample, nearest distances by brute force.
+            let (mut sum, mut n) = (0.0, 0u64);
+            let (mut p, mut ids) = (Vec::new(), Vec::new());
+            let tiles: Vec<_> = store.tiles().iter().filter(|t| t.count > 1).collect();
+            let step = tiles.len().div_ceil(SAMPLE_TILES).max(1);
+            for t in tiles.iter().step_by(step) {
+                store.read_points(t.start, t.count, &mut p).unwrap();
+                store.read_indices(t.start, t.count, &mut ids).unwrap();
+                for i in (0..p.len()).step_by((p.len() / SAMPLE_POINTS).max(1)) {
+                    let nbrs = brute_knn(&p, &ids, p[i], 1, Some(i as u32));
+                    if let Some(nb) = nbrs.first().filter(|nb| nb.dist2 > 0.0) {
+                        sum += nb.dist2.sqrt();
+                        n += 1;
+                    }
+                }
+            }
+            assert!(tiles.len() > 2, "seed {seed}: {} tiles", tiles.len());
+            let got = estimate_spacing(&store).unwrap();
+            assert_eq!(got.to_bits(), (sum / n as f64).to_bits(), "seed {seed}");
+        }
+    }
 }
