@@ -8,6 +8,7 @@
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 
 pub mod build;
+mod cells;
 pub mod column;
 pub mod export;
 pub mod manifest;
