@@ -14,6 +14,10 @@ use std::io::{BufWriter, Write};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
+/// Edges handed to the union-find at a time (see
+/// [`ParityUnionFind::union_batch`]).
+const UNION_BATCH: usize = 512;
+
 /// Sorted runs of edges in one scratch file, removed on drop.
 pub struct EdgeRuns {
     path: PathBuf,
@@ -64,14 +68,16 @@ impl EdgeRuns {
         progress: &dyn Progress,
     ) -> Result<(), IoError> {
         progress.begin(stage, self.edges());
-        let mut seen = 0u64;
+        let mut batch = Vec::with_capacity(UNION_BATCH);
         self.merge(16 << 20, |e| {
-            uf.union(e.a, e.b, e.flips());
-            seen += 1;
-            if seen.is_multiple_of(65536) {
-                progress.advance(65536);
+            batch.push((e.a, e.b, e.flips()));
+            if batch.len() == UNION_BATCH {
+                uf.union_batch(&batch);
+                batch.clear();
+                progress.advance(UNION_BATCH as u64);
             }
         })?;
+        uf.union_batch(&batch);
         progress.end();
         Ok(())
     }

@@ -174,6 +174,17 @@ impl PointStore {
         Ok(())
     }
 
+    /// Stored coordinates as flat f32 `x, y, z` triples (relative to the
+    /// origin), without widening to f64: for passes that read one axis.
+    pub fn read_coords(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<f32>,
+    ) -> Result<(), StoreError> {
+        self.xyz.read_f32(first, count, out)
+    }
+
     /// Input-order index of points `[first, first+count)`.
     pub fn read_indices(
         &self,
