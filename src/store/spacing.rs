@@ -3,13 +3,14 @@
 //! zero distance says nothing about sampling density).
 //!
 //! The nearest neighbour of a sampled point is found by brute force over the
-//! tile's blocks of [`BLOCK`] consecutive (Morton-ordered) points, skipping
-//! blocks whose bounds lie farther than the best distance so far. It is the
+//! tile's blocks of consecutive (Morton-ordered) points, coarse then fine,
+//! skipping blocks whose bounds lie farther than the best distance so far;
+//! sampled tiles run in parallel. It is the
 //! exact nearest distance, the same value a kNN index gives, without
 //! building an index over whole tiles for a thousand queries (a kd-tree over
 //! two 500k-point tiles took 0.35 s, more than the rest of the store build).
 
-use super::{PointStore, StoreError, BLOCK};
+use super::{PointStore, StoreError, TileEntry, BLOCK};
 use crate::geom::Aabb;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -34,22 +35,16 @@ pub fn ensure_spacing(store: &mut PointStore) -> Result<f64, StoreError> {
 pub fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
     let tiles: Vec<_> = store.tiles().iter().filter(|t| t.count > 1).collect();
     let step = tiles.len().div_ceil(SAMPLE_TILES).max(1);
-    let mut pts = Vec::new();
+    let sampled: Vec<&TileEntry> = tiles.iter().step_by(step).copied().collect();
+    let nearest: Vec<Vec<f64>> = sampled
+        .par_iter()
+        .map(|t| sample_distances(store, t))
+        .collect::<Result<_, _>>()?;
+    // Summed in sample order, so the estimate does not depend on threads.
     let (mut sum, mut n) = (0.0, 0u64);
-    for t in tiles.iter().step_by(step) {
-        store.read_points(t.start, t.count, &mut pts)?;
-        let stride = (pts.len() / SAMPLE_POINTS).max(1);
-        let samples: Vec<usize> = (0..pts.len()).step_by(stride).collect();
-        let blocks = block_bounds(&pts);
-        let nearest: Vec<Option<f64>> = samples
-            .par_iter()
-            .map(|&i| nearest_dist2(&pts, &blocks, i))
-            .collect();
-        // Summed in sample order, so the estimate does not depend on threads.
-        for d2 in nearest.into_iter().flatten().filter(|&d2| d2 > 0.0) {
-            sum += d2.sqrt();
-            n += 1;
-        }
+    for d in nearest.iter().flatten() {
+        sum += d;
+        n += 1;
     }
     if n > 0 {
         return Ok(sum / n as f64);
@@ -62,49 +57,96 @@ pub fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
     })
 }
 
-/// Bounds of every [`BLOCK`] consecutive points.
-fn block_bounds(pts: &[DVec3]) -> Vec<Aabb> {
-    pts.chunks(BLOCK as usize)
-        .map(|b| {
-            let mut a = Aabb::EMPTY;
-            b.iter().for_each(|p| a.add(*p));
-            a
-        })
-        .collect()
+/// Nearest-neighbour distances of a tile's sampled points, in sample order,
+/// leaving out points with an exact duplicate.
+fn sample_distances(store: &PointStore, t: &TileEntry) -> Result<Vec<f64>, StoreError> {
+    let mut pts = Vec::new();
+    store.read_points(t.start, t.count, &mut pts)?;
+    let stride = (pts.len() / SAMPLE_POINTS).max(1);
+    let blocks = Blocks::new(&pts);
+    Ok((0..pts.len())
+        .step_by(stride)
+        .filter_map(|i| blocks.nearest_dist2(&pts, i))
+        .filter(|&d2| d2 > 0.0)
+        .map(f64::sqrt)
+        .collect())
 }
 
-/// Squared distance from `pts[i]` to its nearest other point (`None` when
-/// there is none), computed as `(p - q).length_squared()` like every kNN
-/// backend, so the value is the one an index would report.
-fn nearest_dist2(pts: &[DVec3], blocks: &[Aabb], i: usize) -> Option<f64> {
-    let q = pts[i];
-    let own = i / BLOCK as usize;
-    let mut best = scan_block(pts, own, i, q, f64::INFINITY);
-    if best == 0.0 {
-        return Some(0.0);
+/// Points per fine block; a coarse block ([`BLOCK`] points) holds
+/// `BLOCK / FINE` of them. Morton blocks of 512 points often have loose,
+/// overlapping bounds; the fine ones keep the points scanned per query few.
+const FINE: usize = 32;
+
+/// Bounds of every [`FINE`] and every [`BLOCK`] consecutive points.
+struct Blocks {
+    fine: Vec<Aabb>,
+    coarse: Vec<Aabb>,
+}
+
+impl Blocks {
+    fn new(pts: &[DVec3]) -> Self {
+        let fine: Vec<Aabb> = pts.chunks(FINE).map(bounds_of).collect();
+        let coarse = fine
+            .chunks(BLOCK as usize / FINE)
+            .map(|f| {
+                let mut a = Aabb::EMPTY;
+                f.iter().for_each(|b| {
+                    a.add(b.min);
+                    a.add(b.max);
+                });
+                a
+            })
+            .collect();
+        Blocks { fine, coarse }
     }
-    let mut candidates: Vec<(f64, usize)> = blocks
-        .iter()
-        .enumerate()
-        .filter(|&(b, _)| b != own)
-        .map(|(b, bounds)| (lower_bound2(bounds, q), b))
-        .filter(|&(lb, _)| lb <= best)
-        .collect();
-    candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    for (lb, b) in candidates {
-        if lb > best {
-            break;
+
+    /// Squared distance from `pts[i]` to its nearest other point (`None`
+    /// when there is none), computed as `(p - q).length_squared()` like
+    /// every kNN backend, so the value is the one an index would report.
+    /// Blocks whose lower bound exceeds the best distance so far hold no
+    /// point that could improve it, so skipping them keeps it exact.
+    fn nearest_dist2(&self, pts: &[DVec3], i: usize) -> Option<f64> {
+        let q = pts[i];
+        let mut best = scan_block(pts, i / FINE, i, q, f64::INFINITY);
+        if best == 0.0 {
+            return Some(0.0);
         }
-        best = scan_block(pts, b, i, q, best);
+        let mut candidates: Vec<(f64, usize)> = self
+            .coarse
+            .iter()
+            .map(|bounds| lower_bound2(bounds, q))
+            .enumerate()
+            .filter(|&(_, lb)| lb <= best)
+            .map(|(c, lb)| (lb, c))
+            .collect();
+        candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let per = BLOCK as usize / FINE;
+        for (lb, c) in candidates {
+            if lb > best {
+                break;
+            }
+            let fine = c * per..((c + 1) * per).min(self.fine.len());
+            for f in fine {
+                if lower_bound2(&self.fine[f], q) <= best {
+                    best = scan_block(pts, f, i, q, best);
+                }
+            }
+        }
+        best.is_finite().then_some(best)
     }
-    best.is_finite().then_some(best)
 }
 
-/// The smaller of `best` and the squared distances from `q` to block `b`'s
-/// points other than `pts[skip]`.
-fn scan_block(pts: &[DVec3], b: usize, skip: usize, q: DVec3, mut best: f64) -> f64 {
-    let first = b * BLOCK as usize;
-    let end = (first + BLOCK as usize).min(pts.len());
+fn bounds_of(pts: &[DVec3]) -> Aabb {
+    let mut a = Aabb::EMPTY;
+    pts.iter().for_each(|p| a.add(*p));
+    a
+}
+
+/// The smaller of `best` and the squared distances from `q` to fine block
+/// `f`'s points other than `pts[skip]`.
+fn scan_block(pts: &[DVec3], f: usize, skip: usize, q: DVec3, mut best: f64) -> f64 {
+    let first = f * FINE;
+    let end = (first + FINE).min(pts.len());
     for (j, p) in pts[first..end].iter().enumerate() {
         let d2 = (*p - q).length_squared();
         if d2 < best && first + j != skip {
@@ -153,11 +195,11 @@ mod tests {
         for seed in 0..6u64 {
             let pts = cloud(seed, 3000 + 700 * seed as usize);
             let ties: Vec<u64> = (0..pts.len() as u64).collect();
-            let blocks = block_bounds(&pts);
+            let blocks = Blocks::new(&pts);
             for i in (0..pts.len()).step_by(7) {
                 let nbrs = brute_knn(&pts, &ties, pts[i], 1, Some(i as u32));
                 let want = nbrs.first().map(|nb| nb.dist2);
-                let got = nearest_dist2(&pts, &blocks, i);
+                let got = blocks.nearest_dist2(&pts, i);
                 assert_eq!(
                     got.map(f64::to_bits),
                     want.map(f64::to_bits),
@@ -170,7 +212,7 @@ mod tests {
     #[test]
     fn single_point_has_no_neighbour() {
         let pts = [DVec3::new(1.0, 2.0, 3.0)];
-        assert_eq!(nearest_dist2(&pts, &block_bounds(&pts), 0), None);
+        assert_eq!(Blocks::new(&pts).nearest_dist2(&pts, 0), None);
     }
 
     #[test]
