@@ -68,17 +68,21 @@ impl ParityUnionFind {
         }
     }
 
-    /// [`Self::union`] of each `(a, b, parity)` in order. The endpoints'
-    /// parent slots and their parents are read for the whole batch first:
+    /// [`Self::union`] of each `(a, b, parity)` in order. What the unions
+    /// will read is read for the whole batch first (each endpoint's parent,
+    /// grandparent, the grandparent's rank, their parity words):
     /// independent loads the CPU overlaps, where one union at a time waits
     /// for each cache miss in turn (Kruskal over input ids jumps randomly
     /// through the arrays). The unions then find those slots in cache.
     pub fn union_batch(&mut self, batch: &[(u32, u32, bool)]) {
-        let mut touched = 0u32;
+        let mut touched = 0u64;
         for &(a, b, _) in batch {
             for i in [a, b] {
                 let p = self.parent[i as usize];
-                touched ^= self.parent[p as usize];
+                let g = self.parent[p as usize];
+                touched ^= u64::from(self.rank[g as usize])
+                    ^ self.parity[i as usize / 64]
+                    ^ self.parity[p as usize / 64];
             }
         }
         std::hint::black_box(touched);
