@@ -7,6 +7,7 @@
 //! Results land in two store columns: `normal.f32` (unit, oriented; zero when
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
+pub mod components;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;

@@ -19,8 +19,9 @@
 //! per-component fact is order-free (a count, and a maximum under a total
 //! order), so the thread count cannot change a result.
 
+use super::components::Components;
 use super::runs::EdgeRuns;
-use super::unionfind::{Components, ParityUnionFind};
+use super::unionfind::ParityUnionFind;
 use super::{NormalsError, FLAG_DEGENERATE, FLAG_UNORIENTED};
 use crate::pipeline::Progress;
 use crate::store::{Column, PointStore, TileEntry};
