@@ -9,7 +9,13 @@
 //! write per point (scans come in scanner order, tiles in spatial order), so
 //! it is the costly part and the one that divides; every slot is written by
 //! exactly one point, so the result does not depend on the threads.
+//!
+//! With more than one window, a pass per window would read the whole store
+//! once per window (15 times for 10M points in 256 MiB, n^2 / memory in
+//! general); the points are then first sorted into their windows' regions
+//! of a scratch file ([`super::reorder`]) and each window read back from it.
 
+use super::reorder::Reorder;
 use super::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
 use crate::io::{create_writer, PointChunk, WriterSpec};
 use crate::pipeline::Progress;
@@ -55,6 +61,11 @@ pub fn export_points(
     };
     let mut chunk_flags = Vec::new();
     progress.begin("write", n);
+    let buckets = if window < n {
+        Some(Reorder::build(store, &cols, window)?)
+    } else {
+        None
+    };
     let mut w0 = 0;
     while w0 < n {
         let len = ((w0 + window).min(n) - w0) as usize;
@@ -73,7 +84,10 @@ pub fn export_points(
             normals: chunk.normals.as_deref_mut(),
             flags: cols.flags.as_ref().map(|_| chunk_flags.as_mut_slice()),
         };
-        fill_window(store, &cols, slots)?;
+        match &buckets {
+            Some(b) => b.fill(store.origin(), slots)?,
+            None => fill_window(store, &cols, slots)?,
+        }
         writer.write_chunk(&chunk, cols.flags.as_ref().map(|_| chunk_flags.as_slice()))?;
         progress.advance(len as u64);
         w0 += len as u64;
@@ -83,22 +97,47 @@ pub fn export_points(
 }
 
 /// The attribute columns the output carries.
-struct Columns {
-    normals: Option<Column>,
-    flags: Option<Column>,
+pub(super) struct Columns {
+    pub(super) normals: Option<Column>,
+    pub(super) flags: Option<Column>,
 }
 
 /// Output slots for the consecutive input ids from `first`.
-struct Slots<'a> {
-    first: u64,
-    xyz: &'a mut [DVec3],
-    normals: Option<&'a mut [Vec3]>,
-    flags: Option<&'a mut [u8]>,
+pub(super) struct Slots<'a> {
+    pub(super) first: u64,
+    pub(super) xyz: &'a mut [DVec3],
+    pub(super) normals: Option<&'a mut [Vec3]>,
+    pub(super) flags: Option<&'a mut [u8]>,
 }
 
 impl<'a> Slots<'a> {
+    /// Input ids of the slots.
+    pub(super) fn range(&self) -> std::ops::Range<u64> {
+        self.first..self.first + self.xyz.len() as u64
+    }
+
+    /// Fills slot `slot` (an offset from `first`) from a point's stored
+    /// coordinates (f32, relative to `origin`), normal and flags.
+    #[inline]
+    pub(super) fn place(
+        &mut self,
+        slot: usize,
+        origin: DVec3,
+        xyz: &[f32],
+        normal: &[f32],
+        flags: u8,
+    ) {
+        self.xyz[slot] = origin + DVec3::new(xyz[0] as f64, xyz[1] as f64, xyz[2] as f64);
+        if let Some(ns) = &mut self.normals {
+            ns[slot] = Vec3::new(normal[0], normal[1], normal[2]);
+        }
+        if let Some(fs) = &mut self.flags {
+            fs[slot] = flags;
+        }
+    }
+
     /// Splits into `parts` consecutive id ranges (the last may be shorter).
-    fn split(self, parts: usize) -> Vec<Slots<'a>> {
+    pub(super) fn split(self, parts: usize) -> Vec<Slots<'a>> {
         let per = self.xyz.len().div_ceil(parts.max(1)).max(1);
         let mut normals = self.normals.map(|s| s.chunks_mut(per));
         let mut flags = self.flags.map(|s| s.chunks_mut(per));
@@ -125,7 +164,7 @@ fn fill_window(store: &PointStore, cols: &Columns, slots: Slots) -> Result<(), S
 
 /// Places the points whose input ids fall in `part`, passing over all tiles.
 fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), StoreError> {
-    let range = part.first..part.first + part.xyz.len() as u64;
+    let range = part.range();
     let origin = store.origin();
     let (mut ids, mut xyz, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for t in store.tiles() {
@@ -144,15 +183,10 @@ fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), 
             if !range.contains(&id) {
                 continue;
             }
+            let normal = nrm.get(3 * k..3 * k + 3).unwrap_or(&[0.0; 3]);
+            let f = flg.get(k).copied().unwrap_or(0);
             let slot = (id - range.start) as usize;
-            let p = &xyz[3 * k..3 * k + 3];
-            part.xyz[slot] = origin + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            if let Some(ns) = &mut part.normals {
-                ns[slot] = Vec3::new(nrm[3 * k], nrm[3 * k + 1], nrm[3 * k + 2]);
-            }
-            if let Some(fs) = &mut part.flags {
-                fs[slot] = flg[k];
-            }
+            part.place(slot, origin, &xyz[3 * k..3 * k + 3], normal, f);
         }
     }
     Ok(())

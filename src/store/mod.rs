@@ -12,6 +12,7 @@ mod cells;
 pub mod column;
 pub mod export;
 pub mod manifest;
+mod reorder;
 mod sort;
 pub mod source;
 pub mod spacing;
