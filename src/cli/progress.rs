@@ -52,14 +52,87 @@ impl Progress for Bars {
 }
 
 /// Stage timings on stderr (`SCANMESH_TIMINGS=1`), for profiling runs.
+/// Time spent between stages (store setup, spacing, dropping and removing
+/// scratch data) is printed as `(between stages)` so no cost hides. Each
+/// line gives the wall time, the process CPU time (all threads; steadier
+/// than wall time on a shared machine), the RSS at the end and the peak RSS
+/// so far, to see which stage sets it.
 struct Timings {
-    start: Mutex<Option<(String, std::time::Instant)>>,
+    start: Mutex<Option<(String, Mark)>>,
+    last_end: Mutex<Mark>,
+}
+
+/// A point in wall time and process CPU time.
+#[derive(Clone, Copy)]
+struct Mark {
+    wall: std::time::Instant,
+    cpu: f64,
+}
+
+impl Mark {
+    fn now() -> Self {
+        Mark {
+            wall: std::time::Instant::now(),
+            cpu: cpu_seconds().unwrap_or(0.0),
+        }
+    }
+
+    fn report(&self, name: &str) {
+        let now = Mark::now();
+        eprintln!(
+            "{:>24}: {:.3} s (cpu {:.2} s, rss {}, peak {})",
+            name,
+            now.wall.duration_since(self.wall).as_secs_f64(),
+            now.cpu - self.cpu,
+            rss(),
+            super::peak()
+        );
+    }
+}
+
+/// User + system CPU time of the whole process (Linux; 10 ms ticks).
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let fields: Vec<&str> = stat
+        .get(stat.rfind(')')? + 1..)?
+        .split_whitespace()
+        .collect();
+    let ticks = |i: usize| fields.get(i)?.parse::<f64>().ok();
+    // Fields 14 and 15 of stat(5), counted after the command name.
+    Some((ticks(11)? + ticks(12)?) / 100.0)
+}
+
+fn rss() -> String {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let kib = status
+        .lines()
+        .find(|l| l.starts_with("VmRSS:"))
+        .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok());
+    kib.map_or("?".into(), |k| scanmesh::units::human_bytes(k * 1024))
+}
+
+impl Timings {
+    fn gap(&self) {
+        if let Ok(mut last) = self.last_end.lock() {
+            if last.wall.elapsed().as_secs_f64() >= 0.005 {
+                last.report("(between stages)");
+            }
+            *last = Mark::now();
+        }
+    }
+}
+
+impl Drop for Timings {
+    fn drop(&mut self) {
+        self.gap();
+    }
 }
 
 impl Progress for Timings {
     fn begin(&self, stage: &str, _: u64) {
+        self.gap();
         if let Ok(mut s) = self.start.lock() {
-            *s = Some((stage.to_string(), std::time::Instant::now()));
+            *s = Some((stage.to_string(), Mark::now()));
         }
     }
 
@@ -68,7 +141,10 @@ impl Progress for Timings {
     fn end(&self) {
         if let Ok(mut s) = self.start.lock() {
             if let Some((stage, t0)) = s.take() {
-                eprintln!("{:>24}: {:.3} s", stage, t0.elapsed().as_secs_f64());
+                t0.report(&stage);
+                if let Ok(mut last) = self.last_end.lock() {
+                    *last = Mark::now();
+                }
             }
         }
     }
@@ -79,6 +155,7 @@ pub fn progress(quiet: bool) -> Box<dyn Progress> {
     if std::env::var_os("SCANMESH_TIMINGS").is_some() {
         return Box::new(Timings {
             start: Mutex::new(None),
+            last_end: Mutex::new(Mark::now()),
         });
     }
     if quiet || !std::io::stderr().is_terminal() {

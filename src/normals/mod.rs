@@ -7,6 +7,7 @@
 //! Results land in two store columns: `normal.f32` (unit, oriented; zero when
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
+pub mod components;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
@@ -186,8 +187,8 @@ pub fn compute_normals(
     let normals = store.create_attribute(NORMAL_FILE, 12)?;
     let flags = store.create_attribute(FLAGS_FILE, 1)?;
     let report = normals_into(store, params, spacing, opts, progress, &normals, &flags)?;
-    normals.sync()?;
-    flags.sync()?;
+    store.sync_column(&normals)?;
+    store.sync_column(&flags)?;
     store.manifest.sampling = Some(report.sampling);
     store.save_manifest()?;
     Ok(report)

@@ -12,12 +12,21 @@
 //!    each further component (largest first) is rooted at its own highest
 //!    point, until the points left are fewer than 1/1000. Finding the nearest
 //!    point across components needs a global search the tiles do not give.
+//!
+//! After step 1 the union-find is flattened into dense component labels
+//! ([`Components`]), so steps 2 and 3 are array lookups that run over the
+//! tiles in parallel; per-component facts live in a `Vec` by label. Every
+//! per-component fact is order-free (a count, and a maximum under a total
+//! order), so the thread count cannot change a result.
 
+use super::components::Components;
 use super::runs::EdgeRuns;
 use super::unionfind::ParityUnionFind;
 use super::{NormalsError, FLAG_DEGENERATE, FLAG_UNORIENTED};
 use crate::pipeline::Progress;
-use crate::store::{Column, PointStore};
+use crate::store::{Column, PointStore, TileEntry};
+use rayon::prelude::*;
+use std::cmp::Reverse;
 use std::collections::HashMap;
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -27,14 +36,28 @@ pub struct OrientStats {
     pub unoriented: u64,
 }
 
-/// Per-component facts gathered in one pass.
-#[derive(Clone, Copy, Debug)]
+/// Per-component facts (over non-degenerate points; ids fit u32, see
+/// `store::build::MAX_POINTS`).
+#[derive(Clone, Copy, Debug, Default)]
 struct Component {
-    size: u64,
+    size: u32,
     top_z: f32,
-    top_id: u64,
+    top_id: u32,
     /// Flip every member's parity by this to make the top point face +z.
     sign: bool,
+}
+
+impl Component {
+    /// Joins the facts of two disjoint sets of the same component.
+    fn absorb(&mut self, o: &Component) {
+        if o.size == 0 {
+            return;
+        }
+        if self.size == 0 || (o.top_z, Reverse(o.top_id)) > (self.top_z, Reverse(self.top_id)) {
+            (self.top_z, self.top_id, self.sign) = (o.top_z, o.top_id, o.sign);
+        }
+        self.size += o.size;
+    }
 }
 
 pub fn orient_by_forest(
@@ -46,130 +69,172 @@ pub fn orient_by_forest(
 ) -> Result<OrientStats, NormalsError> {
     let mut uf = ParityUnionFind::new(store.len() as usize);
     runs.union_all(&mut uf, "orient: spanning tree", progress)?;
-    let comps = components(store, &mut uf, normals, flags, progress)?;
-    let oriented = island_rule(&comps);
-    let unoriented = apply(store, &mut uf, &oriented, normals, flags, progress)?;
+    progress.begin("orient: components", store.len());
+    let comps = uf.into_components();
+    let facts = components(store, &comps, normals, flags, progress)?;
+    progress.end();
+    let oriented = island_rule(&facts, &comps);
+    let unoriented = apply(store, &comps, &oriented, normals, flags, progress)?;
     Ok(OrientStats {
-        components: comps.len(),
-        oriented_components: oriented.len(),
+        components: facts.iter().filter(|c| c.size > 0).count(),
+        oriented_components: oriented.iter().filter(|o| o.is_some()).count(),
         unoriented,
     })
 }
 
-/// Visits every tile's points with their input ids, normals and flags.
-fn for_each_tile(
-    store: &PointStore,
-    normals: &Column,
-    flags: &Column,
-    mut f: impl FnMut(u64, &[glam::DVec3], &[u64], &mut [f32], &mut [u8]) -> Result<bool, NormalsError>,
-) -> Result<(), NormalsError> {
-    let (mut pts, mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for t in store.tiles() {
-        store.read_points(t.start, t.count, &mut pts)?;
-        store.read_indices(t.start, t.count, &mut ids)?;
-        normals.read_f32(t.start, t.count, &mut nrm)?;
-        flags.read_u8(t.start, t.count, &mut flg)?;
-        if f(t.start, &pts, &ids, &mut nrm, &mut flg)? {
-            normals.write_f32(t.start, &nrm)?;
-            flags.write_bytes(t.start, &flg)?;
-        }
-    }
-    Ok(())
-}
-
+/// Facts of every component, by label (size 0: only degenerate members).
 fn components(
     store: &PointStore,
-    uf: &mut ParityUnionFind,
+    comps: &Components,
     normals: &Column,
     flags: &Column,
     progress: &dyn Progress,
-) -> Result<HashMap<u32, Component>, NormalsError> {
-    let mut comps: HashMap<u32, Component> = HashMap::new();
-    progress.begin("orient: components", store.len());
-    for_each_tile(store, normals, flags, |_, pts, ids, nrm, flg| {
-        for i in 0..pts.len() {
-            if flg[i] & FLAG_DEGENERATE != 0 {
-                continue;
-            }
-            let (root, parity) = uf.find(ids[i] as u32);
-            let z = pts[i].z as f32;
-            let sign = parity ^ (nrm[3 * i + 2] < 0.0);
-            let c = comps.entry(root).or_insert(Component {
-                size: 0,
-                top_z: z,
-                top_id: ids[i],
-                sign,
-            });
-            c.size += 1;
-            if (z, std::cmp::Reverse(ids[i])) > (c.top_z, std::cmp::Reverse(c.top_id)) {
-                c.top_z = z;
-                c.top_id = ids[i];
-                c.sign = sign;
-            }
-        }
-        progress.advance(pts.len() as u64);
-        Ok(false)
-    })?;
-    progress.end();
-    Ok(comps)
+) -> Result<Vec<Component>, NormalsError> {
+    let partials: Vec<Vec<(u32, Component)>> = store
+        .tiles()
+        .par_iter()
+        .map(|t| {
+            let part = tile_components(store, t, comps, normals, flags);
+            progress.advance(t.count);
+            part
+        })
+        .collect::<Result<_, _>>()?;
+    let mut facts = vec![Component::default(); comps.count()];
+    for (label, c) in partials.iter().flatten() {
+        facts[*label as usize].absorb(c);
+    }
+    Ok(facts)
 }
 
-/// Roots to orient, with their sign, by the island rule.
-fn island_rule(comps: &HashMap<u32, Component>) -> HashMap<u32, bool> {
-    let total: u64 = comps.values().map(|c| c.size).sum();
-    let mut order: Vec<(&u32, &Component)> = comps.iter().collect();
+/// One tile's share of the component facts, one entry per label it meets.
+fn tile_components(
+    store: &PointStore,
+    t: &TileEntry,
+    comps: &Components,
+    normals: &Column,
+    flags: &Column,
+) -> Result<Vec<(u32, Component)>, NormalsError> {
+    let (mut xyz, mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    store.read_coords(t.start, t.count, &mut xyz)?;
+    store.read_indices(t.start, t.count, &mut ids)?;
+    normals.read_f32(t.start, t.count, &mut nrm)?;
+    flags.read_u8(t.start, t.count, &mut flg)?;
+    let mut part: Vec<(u32, Component)> = Vec::new();
+    // Neighbouring points nearly always share a component: the map is
+    // consulted only when the label changes.
+    let mut slot_of: HashMap<u32, usize> = HashMap::new();
+    let mut last: Option<(u32, usize)> = None;
+    for (i, &id) in ids.iter().enumerate() {
+        if flg[i] & FLAG_DEGENERATE != 0 {
+            continue;
+        }
+        let (label, parity) = comps.get(id as u32);
+        let slot = match last {
+            Some((l, s)) if l == label => s,
+            _ => *slot_of.entry(label).or_insert_with(|| {
+                part.push((label, Component::default()));
+                part.len() - 1
+            }),
+        };
+        last = Some((label, slot));
+        part[slot].1.absorb(&Component {
+            size: 1,
+            top_z: xyz[3 * i + 2],
+            top_id: id as u32,
+            sign: parity ^ (nrm[3 * i + 2] < 0.0),
+        });
+    }
+    Ok(part)
+}
+
+/// Sign of each component to orient (by label), by the island rule.
+fn island_rule(facts: &[Component], comps: &Components) -> Vec<Option<bool>> {
+    let total: u64 = facts.iter().map(|c| u64::from(c.size)).sum();
+    let mut order: Vec<u32> = (0..facts.len() as u32)
+        .filter(|&l| facts[l as usize].size > 0)
+        .collect();
+    let key = |l: u32| {
+        let c = &facts[l as usize];
+        (c.top_z, Reverse(c.top_id))
+    };
     // The component of the highest point first, then by size.
-    let first = order
-        .iter()
-        .max_by(|a, b| {
-            (a.1.top_z, std::cmp::Reverse(a.1.top_id))
-                .partial_cmp(&(b.1.top_z, std::cmp::Reverse(b.1.top_id)))
-                .unwrap_or(std::cmp::Ordering::Equal)
-        })
-        .map(|(r, _)| **r);
-    order.sort_by_key(|(r, c)| (Some(**r) != first, std::cmp::Reverse(c.size), **r));
-    let mut oriented = HashMap::new();
+    let first = order.iter().copied().max_by(|&a, &b| {
+        key(a)
+            .partial_cmp(&key(b))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    order.sort_by_key(|&l| {
+        (
+            Some(l) != first,
+            Reverse(facts[l as usize].size),
+            comps.root(l),
+        )
+    });
+    let mut oriented = vec![None; facts.len()];
     let mut left = total;
-    for (root, c) in order {
-        if !oriented.is_empty() && left * 1000 < total {
+    for (n, l) in order.into_iter().enumerate() {
+        if n > 0 && left * 1000 < total {
             break;
         }
-        oriented.insert(*root, c.sign);
-        left -= c.size;
+        let c = &facts[l as usize];
+        oriented[l as usize] = Some(c.sign);
+        left -= u64::from(c.size);
     }
     oriented
 }
 
+/// Flips or flags every tile's normals (tiles in parallel: disjoint ranges);
+/// returns the number of unoriented points.
 fn apply(
     store: &PointStore,
-    uf: &mut ParityUnionFind,
-    oriented: &HashMap<u32, bool>,
+    comps: &Components,
+    oriented: &[Option<bool>],
     normals: &Column,
     flags: &Column,
     progress: &dyn Progress,
 ) -> Result<u64, NormalsError> {
-    let mut unoriented = 0;
     progress.begin("orient: write", store.len());
-    for_each_tile(store, normals, flags, |_, pts, ids, nrm, flg| {
-        for i in 0..pts.len() {
-            if flg[i] & FLAG_DEGENERATE != 0 {
-                continue;
-            }
-            let (root, parity) = uf.find(ids[i] as u32);
-            match oriented.get(&root) {
-                Some(sign) if parity ^ sign => {
-                    nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v)
-                }
-                Some(_) => {}
-                None => {
-                    flg[i] |= FLAG_UNORIENTED;
-                    unoriented += 1;
-                }
+    let counts: Vec<u64> = store
+        .tiles()
+        .par_iter()
+        .map(|t| {
+            let n = apply_tile(t, store, comps, oriented, normals, flags);
+            progress.advance(t.count);
+            n
+        })
+        .collect::<Result<_, _>>()?;
+    progress.end();
+    Ok(counts.iter().sum())
+}
+
+fn apply_tile(
+    t: &TileEntry,
+    store: &PointStore,
+    comps: &Components,
+    oriented: &[Option<bool>],
+    normals: &Column,
+    flags: &Column,
+) -> Result<u64, NormalsError> {
+    let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
+    store.read_indices(t.start, t.count, &mut ids)?;
+    normals.read_f32(t.start, t.count, &mut nrm)?;
+    flags.read_u8(t.start, t.count, &mut flg)?;
+    let mut unoriented = 0;
+    for (i, &id) in ids.iter().enumerate() {
+        if flg[i] & FLAG_DEGENERATE != 0 {
+            continue;
+        }
+        let (label, parity) = comps.get(id as u32);
+        match oriented[label as usize] {
+            Some(sign) if parity ^ sign => nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v),
+            Some(_) => {}
+            None => {
+                flg[i] |= FLAG_UNORIENTED;
+                unoriented += 1;
             }
         }
-        progress.advance(pts.len() as u64);
-        Ok(true)
-    })?;
-    progress.end();
+    }
+    normals.write_f32(t.start, &nrm)?;
+    flags.write_bytes(t.start, &flg)?;
     Ok(unoriented)
 }

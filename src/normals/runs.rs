@@ -7,12 +7,24 @@ use super::forest::Edge;
 use super::unionfind::ParityUnionFind;
 use crate::io::IoError;
 use crate::pipeline::Progress;
+use crossbeam::channel;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+
+/// Edges handed to the union-find at a time (see
+/// [`ParityUnionFind::union_batch`]).
+const UNION_BATCH: usize = 512;
+/// Edges per batch passed from the merging thread to the union-find.
+const HANDOFF: usize = 8 * UNION_BATCH;
+/// Read buffers of the k-way merge, shared among the runs.
+const MERGE_BUFFER: usize = 16 << 20;
+
+/// An edge's ends and flip parity, as the union-find takes them.
+type Pair = (u32, u32, bool);
 
 /// Sorted runs of edges in one scratch file, removed on drop.
 pub struct EdgeRuns {
@@ -57,6 +69,9 @@ impl EdgeRuns {
 
     /// Kruskal over all runs: joins every edge's ends in `uf` with its flip
     /// parity, in global key order, reporting progress as stage `stage`.
+    /// With two or more threads the merge (reading, decoding, the heap) runs
+    /// on a second thread, handing over batches in order, while this one
+    /// does the unions; the unions and their order are the same.
     pub fn union_all(
         self,
         uf: &mut ParityUnionFind,
@@ -64,18 +79,57 @@ impl EdgeRuns {
         progress: &dyn Progress,
     ) -> Result<(), IoError> {
         progress.begin(stage, self.edges());
-        let mut seen = 0u64;
-        self.merge(16 << 20, |e| {
-            uf.union(e.a, e.b, e.flips());
-            seen += 1;
-            if seen.is_multiple_of(65536) {
-                progress.advance(65536);
-            }
-        })?;
+        let result = if rayon::current_num_threads() > 1 {
+            self.union_pipelined(uf, progress)
+        } else {
+            let mut batch = Vec::with_capacity(UNION_BATCH);
+            let merged = self.merge(MERGE_BUFFER, |e| {
+                batch.push((e.a, e.b, e.flips()));
+                if batch.len() == UNION_BATCH {
+                    uf.union_batch(&batch);
+                    batch.clear();
+                    progress.advance(UNION_BATCH as u64);
+                }
+            });
+            uf.union_batch(&batch);
+            merged
+        };
         progress.end();
-        Ok(())
+        result
     }
 
+    fn union_pipelined(
+        self,
+        uf: &mut ParityUnionFind,
+        progress: &dyn Progress,
+    ) -> Result<(), IoError> {
+        let (full_tx, full_rx) = channel::bounded::<Vec<Pair>>(4);
+        let (empty_tx, empty_rx) = channel::unbounded::<Vec<Pair>>();
+        std::thread::scope(|s| {
+            let merger = s.spawn(move || {
+                let mut batch = Vec::with_capacity(HANDOFF);
+                let merged = self.merge(MERGE_BUFFER, |e| {
+                    batch.push((e.a, e.b, e.flips()));
+                    if batch.len() == HANDOFF {
+                        let next = empty_rx.try_recv().unwrap_or_default();
+                        // The receiver lives until this thread is joined.
+                        let _ = full_tx.send(std::mem::replace(&mut batch, next));
+                    }
+                });
+                let _ = full_tx.send(batch);
+                merged
+            });
+            for mut batch in full_rx {
+                batch.chunks(UNION_BATCH).for_each(|b| uf.union_batch(b));
+                progress.advance(batch.len() as u64);
+                batch.clear();
+                let _ = empty_tx.send(batch);
+            }
+            merger
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p))
+        })
+    }
     /// Calls `f` on every edge of every run in global [`Edge::key`] order.
     /// `buffer_bytes` is shared among the runs' read buffers.
     pub fn merge(mut self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {

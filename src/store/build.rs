@@ -9,6 +9,7 @@
 //! 5. sort: order each tile along a Morton curve, count exact duplicates,
 //!    record block bounds.
 
+use super::cells::CellCounts;
 use super::manifest::{GridSpec, Manifest, STORE_VERSION};
 use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
@@ -17,7 +18,6 @@ use crate::io::{PointChunk, PointReader, DEFAULT_CHUNK};
 use crate::pipeline::{MemoryBudget, Progress};
 use crate::tiling::{plan_tiles, TilePlan};
 use glam::DVec3;
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
@@ -191,7 +191,9 @@ fn grid_for(bounds: &Aabb, count: u64) -> GridSpec {
 fn cell_of(grid: &GridSpec, p: DVec3) -> [u32; 3] {
     let mut c = [0u32; 3];
     for a in 0..3 {
-        let f = ((p[a] - grid.min[a]) / grid.cell).floor();
+        // The cast truncates, which is the floor once negatives are clamped
+        // (`floor` is a libm call on baseline x86-64).
+        let f = (p[a] - grid.min[a]) / grid.cell;
         c[a] = (f.max(0.0) as u32).min(grid.dims[a] - 1);
     }
     c
@@ -230,18 +232,18 @@ fn histogram(
     count: u64,
     progress: &dyn Progress,
 ) -> Result<Vec<([u32; 3], u64)>, StoreError> {
-    let mut cells: HashMap<[u32; 3], u64> = HashMap::new();
+    let mut cells = CellCounts::new(grid.dims);
     progress.begin("histogram", count);
     for_each_spilled(path, count, |_, pts| {
         for p in pts {
-            *cells.entry(cell_of(grid, *p)).or_insert(0) += 1;
+            cells.add(cell_of(grid, *p));
         }
         progress.advance(pts.len() as u64);
         Ok(())
     })?;
+    let cells = cells.into_cells();
     progress.end();
-    // Order does not matter: the planner sorts.
-    Ok(cells.into_iter().collect())
+    Ok(cells)
 }
 
 fn tile_entries(plan: &TilePlan) -> Vec<TileEntry> {

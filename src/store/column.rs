@@ -123,13 +123,21 @@ impl Column {
         self.with_bytes(first, count, |b| out.extend_from_slice(b))
     }
 
+    // The byte buffers are sized up front: collecting a `flat_map` grows
+    // them by doubling (its size hint is 0), copying each several times.
     pub fn write_f32(&self, first: u64, values: &[f32]) -> Result<(), StoreError> {
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let mut bytes = Vec::with_capacity(values.len() * 4);
+        values
+            .iter()
+            .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
         self.write_bytes(first, &bytes)
     }
 
     pub fn write_u64(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let mut bytes = Vec::with_capacity(values.len() * 8);
+        values
+            .iter()
+            .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
         self.write_bytes(first, &bytes)
     }
 

@@ -8,9 +8,11 @@
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 
 pub mod build;
+mod cells;
 pub mod column;
 pub mod export;
 pub mod manifest;
+mod reorder;
 mod sort;
 pub mod source;
 pub mod spacing;
@@ -74,6 +76,9 @@ pub struct PointStore {
     xyz: Column,
     index: Column,
     blocks: Column,
+    /// Removed when the run ends (see [`Workspace`]): nothing needs to
+    /// reach the disk.
+    scratch: bool,
 }
 
 impl PointStore {
@@ -100,6 +105,7 @@ impl PointStore {
             blocks: Column::open(&dir.join(BLOCKS_FILE), 24, false)?,
             dir: dir.to_path_buf(),
             manifest,
+            scratch: false,
         };
         store.validate()?;
         Ok(store)
@@ -128,6 +134,26 @@ impl PointStore {
             path: self.dir.clone(),
             reason,
         }
+    }
+
+    /// Marks the store as scratch: it is deleted at the end of the run.
+    pub fn mark_scratch(&mut self) {
+        self.scratch = true;
+    }
+
+    pub fn is_scratch(&self) -> bool {
+        self.scratch
+    }
+
+    /// Forces a column of this store to disk, unless the store is scratch.
+    /// For a scratch store it would cost an fdatasync and, worse, the blocks
+    /// it allocates make removing the file slow (ext4: 17-34 ms for the
+    /// normals of 1M points, where an unsynced column unlinks in 0.03 ms).
+    pub fn sync_column(&self, column: &Column) -> Result<(), StoreError> {
+        if self.scratch {
+            return Ok(());
+        }
+        column.sync()
     }
 
     pub fn len(&self) -> u64 {
@@ -171,6 +197,17 @@ impl PointStore {
                 .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
         );
         Ok(())
+    }
+
+    /// Stored coordinates as flat f32 `x, y, z` triples (relative to the
+    /// origin), without widening to f64: for passes that read one axis.
+    pub fn read_coords(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<f32>,
+    ) -> Result<(), StoreError> {
+        self.xyz.read_f32(first, count, out)
     }
 
     /// Input-order index of points `[first, first+count)`.

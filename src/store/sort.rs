@@ -29,12 +29,6 @@ pub fn sort_tiles(
     Ok(dups?.iter().sum())
 }
 
-struct Rec {
-    key: u64,
-    p: [f32; 3],
-    id: u64,
-}
-
 fn sort_tile(
     t: &mut TileEntry,
     xyz: &Column,
@@ -51,29 +45,18 @@ fn sort_tile(
     let (lo, hi) = bounds(&raw);
     t.points_min = lo;
     t.points_max = hi;
-    let mut recs: Vec<Rec> = raw
+    let order = morton_order(&raw, &ids, lo, hi);
+    let point = |i: usize| [raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]];
+    let sorted: Vec<f32> = order.iter().flat_map(|&i| point(i)).collect();
+    let duplicates = sorted
         .chunks_exact(3)
-        .zip(&ids)
-        .map(|(c, &id)| {
-            let p = [c[0], c[1], c[2]];
-            Rec {
-                key: morton(p, lo, hi),
-                p,
-                id,
-            }
-        })
-        .collect();
-    recs.sort_unstable_by(|a, b| {
-        (a.key, a.p.map(f32::to_bits), a.id).cmp(&(b.key, b.p.map(f32::to_bits), b.id))
-    });
-    let duplicates = recs.windows(2).filter(|w| w[0].p == w[1].p).count() as u64;
-    raw.clear();
-    raw.extend(recs.iter().flat_map(|r| r.p));
-    ids.clear();
-    ids.extend(recs.iter().map(|r| r.id));
-    xyz.write_f32(t.start, &raw)?;
-    index.write_u64(t.start, &ids)?;
-    let block_bounds: Vec<f32> = raw
+        .zip(sorted.chunks_exact(3).skip(1))
+        .filter(|(a, b)| a == b)
+        .count() as u64;
+    let sorted_ids: Vec<u64> = order.iter().map(|&i| ids[i]).collect();
+    xyz.write_f32(t.start, &sorted)?;
+    index.write_u64(t.start, &sorted_ids)?;
+    let block_bounds: Vec<f32> = sorted
         .chunks(3 * BLOCK as usize)
         .flat_map(|b| {
             let (l, h) = bounds(b);
@@ -82,6 +65,40 @@ fn sort_tile(
         .collect();
     blocks.write_f32(t.first_block, &block_bounds)?;
     Ok(duplicates)
+}
+
+/// Positions of the points `raw` (flat x, y, z) in the order (Morton key,
+/// coordinate bits, id). Keys and positions are packed in a u128 so the
+/// sort compares plain integers; only runs of equal keys (points in one
+/// 2^-21 cell: duplicates, mostly) are then ordered by their coordinates
+/// and ids, which gives the same total order as sorting by the triple.
+fn morton_order(raw: &[f32], ids: &[u64], lo: [f32; 3], hi: [f32; 3]) -> Vec<usize> {
+    let mut packed: Vec<u128> = raw
+        .chunks_exact(3)
+        .enumerate()
+        .map(|(i, c)| u128::from(morton([c[0], c[1], c[2]], lo, hi)) << 64 | i as u128)
+        .collect();
+    packed.sort_unstable();
+    let mut order: Vec<usize> = packed.iter().map(|&k| k as u64 as usize).collect();
+    let tie = |&i: &usize| {
+        (
+            [raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]].map(f32::to_bits),
+            ids[i],
+        )
+    };
+    let mut s = 0;
+    while s < packed.len() {
+        let key = packed[s] >> 64;
+        let mut e = s + 1;
+        while e < packed.len() && packed[e] >> 64 == key {
+            e += 1;
+        }
+        if e - s > 1 {
+            order[s..e].sort_unstable_by_key(tie);
+        }
+        s = e;
+    }
+    order
 }
 
 fn bounds(raw: &[f32]) -> ([f32; 3], [f32; 3]) {
@@ -132,6 +149,20 @@ mod tests {
         assert_eq!(spread3(0b11), 0b1001);
         assert_eq!(spread3(0b101), 0b1000001);
         assert_eq!(spread3((1 << 21) - 1).count_ones(), 21);
+    }
+
+    #[test]
+    fn order_is_key_then_coordinates_then_id() {
+        let mut rng = crate::synth::Rng::new(9);
+        // Few distinct positions, so many points share a Morton cell.
+        let pick = |rng: &mut crate::synth::Rng| [0; 3].map(|_| rng.below(5) as f32 * 0.25);
+        let pts: Vec<[f32; 3]> = (0..3000).map(|_| pick(&mut rng)).collect();
+        let raw: Vec<f32> = pts.iter().flatten().copied().collect();
+        let ids: Vec<u64> = (0..pts.len() as u64).map(|i| (i * 7919) % 3001).collect();
+        let (lo, hi) = bounds(&raw);
+        let mut want: Vec<usize> = (0..pts.len()).collect();
+        want.sort_by_key(|&i| (morton(pts[i], lo, hi), pts[i].map(f32::to_bits), ids[i]));
+        assert_eq!(morton_order(&raw, &ids, lo, hi), want);
     }
 
     #[test]

@@ -50,7 +50,8 @@ pub fn open_input(
     let mut reader = open_reader(input, policy)?;
     // Own the directory before building, so a failed build is cleaned up too.
     let guard = ScratchGuard(scratch.to_path_buf());
-    let store = build_store(reader.as_mut(), scratch, opts, progress)?;
+    let mut store = build_store(reader.as_mut(), scratch, opts, progress)?;
+    store.mark_scratch();
     std::mem::forget(guard);
     Ok(Workspace {
         store,

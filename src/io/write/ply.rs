@@ -6,8 +6,10 @@
 use super::{check_chunk, open_output, Checked};
 use crate::io::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
+use rayon::prelude::*;
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// Digits of the vertex count: any u64 fits, zero-padded.
@@ -22,7 +24,8 @@ pub(crate) struct PlyWriter {
     /// Byte offset of the count placeholder.
     count_at: u64,
     count: u64,
-    buf: Vec<u8>,
+    /// Encoded parts of the current chunk.
+    bufs: Vec<Vec<u8>>,
 }
 
 /// The header text and the byte offset of its count digits.
@@ -59,14 +62,49 @@ impl PlyWriter {
             atomic,
             count_at,
             count: 0,
-            buf: Vec::new(),
+            bufs: Vec::new(),
         })
     }
 }
 
-fn encode_binary<B: ByteOrder>(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked) {
+/// Points per encoding task: big enough to amortise a task, small enough
+/// that both threads get work on a window.
+const ENCODE_PART: usize = 1 << 16;
+
+/// Encodes the chunk in parts on rayon's threads, each into its own buffer
+/// of `bufs` (kept between chunks); written in order, the parts are the
+/// sequential encoding byte for byte.
+fn encode_parts(bufs: &mut Vec<Vec<u8>>, chunk: &PointChunk, c: &Checked, format: Format) {
+    let parts = chunk.len().div_ceil(ENCODE_PART);
+    bufs.resize_with(parts.max(bufs.len()), Vec::new);
+    bufs.par_iter_mut().enumerate().for_each(|(k, buf)| {
+        buf.clear();
+        let range = k * ENCODE_PART..((k + 1) * ENCODE_PART).min(chunk.len());
+        if range.is_empty() {
+            return;
+        }
+        match format {
+            Format::PlyAscii => encode_text(buf, chunk, c, range),
+            Format::PlyBinaryBe => encode_binary::<BigEndian>(buf, chunk, c, range),
+            _ => encode_binary::<LittleEndian>(buf, chunk, c, range),
+        }
+    });
+}
+
+fn encode_binary<B: ByteOrder>(
+    buf: &mut Vec<u8>,
+    chunk: &PointChunk,
+    c: &Checked,
+    range: Range<usize>,
+) {
     let mut b8 = [0u8; 8];
-    for (i, p) in chunk.xyz.iter().enumerate() {
+    for (i, p) in chunk
+        .xyz
+        .iter()
+        .enumerate()
+        .take(range.end)
+        .skip(range.start)
+    {
         for v in [p.x, p.y, p.z] {
             B::write_f64(&mut b8, v);
             buf.extend_from_slice(&b8);
@@ -85,8 +123,14 @@ fn encode_binary<B: ByteOrder>(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checke
 
 /// One line per point; `{}` prints the shortest text that parses back to
 /// the same f64 (f32 for normals).
-pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked) {
-    for (i, p) in chunk.xyz.iter().enumerate() {
+pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked, range: Range<usize>) {
+    for (i, p) in chunk
+        .xyz
+        .iter()
+        .enumerate()
+        .take(range.end)
+        .skip(range.start)
+    {
         // Writing into a Vec cannot fail.
         let _ = write!(buf, "{} {} {}", p.x, p.y, p.z);
         if let Some(n) = c.normals {
@@ -102,15 +146,12 @@ pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked) {
 impl PointWriter for PlyWriter {
     fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
         let c = check_chunk(&self.path, &self.spec, chunk, flags, self.count)?;
-        self.buf.clear();
-        match self.spec.format {
-            Format::PlyAscii => encode_text(&mut self.buf, chunk, &c),
-            Format::PlyBinaryBe => encode_binary::<BigEndian>(&mut self.buf, chunk, &c),
-            _ => encode_binary::<LittleEndian>(&mut self.buf, chunk, &c),
+        encode_parts(&mut self.bufs, chunk, &c, self.spec.format);
+        for buf in &self.bufs {
+            self.out
+                .write_all(buf)
+                .map_err(|e| IoError::os(&self.path, e))?;
         }
-        self.out
-            .write_all(&self.buf)
-            .map_err(|e| IoError::os(&self.path, e))?;
         self.count += chunk.len() as u64;
         Ok(())
     }

@@ -35,7 +35,7 @@ impl PointWriter for XyzWriter {
     fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
         let c = check_chunk(&self.path, &self.spec, chunk, flags, self.count)?;
         self.buf.clear();
-        encode_text(&mut self.buf, chunk, &c);
+        encode_text(&mut self.buf, chunk, &c, 0..chunk.len());
         self.out
             .write_all(&self.buf)
             .map_err(|e| IoError::os(&self.path, e))?;
