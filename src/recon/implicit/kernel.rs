@@ -10,6 +10,7 @@
 //! about rho + delta), and the band keeps the work proportional to the
 //! surface rather than the volume.
 
+use super::dilate::dilate;
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::sdf::{signed_distance, Corner, Samples};
@@ -152,13 +153,13 @@ impl ImplicitKernel {
         tile: &TilePoints,
         cubes: &[[i64; 3]],
     ) -> Result<Vec<CornerValue>, KernelError> {
-        let mut corners = cubes
+        let cube_keys = cubes
             .iter()
-            .flat_map(|c| CORNERS.map(|o| corner_key([c[0] + o[0], c[1] + o[1], c[2] + o[2]])))
+            .map(|&c| corner_key(c))
             .collect::<Result<Vec<u64>, _>>()
             .map_err(failed)?;
-        corners.par_sort_unstable();
-        corners.dedup();
+        let corners = dilate(&cube_keys, 0..=1).map_err(failed)?;
+        drop(cube_keys);
         let evaluated: Vec<Corner> = corners
             .par_iter()
             .map_init(Vec::new, |nbr, &key| {
@@ -257,7 +258,6 @@ fn band(
     core: &Aabb,
     reach: i64,
 ) -> Result<Vec<[i64; 3]>, KernelError> {
-    let owned = |c: [i64; 3]| owns(lattice, core, c);
     let mut occupied = points
         .iter()
         .map(|p| corner_key(lattice.cell_of(*p)))
@@ -267,20 +267,10 @@ fn band(
     occupied.dedup();
     occupied.par_sort_unstable();
     occupied.dedup();
-    let mut cubes: Vec<u64> = Vec::new();
-    for c in occupied.into_iter().map(corner_of) {
-        for dz in -reach..=reach {
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let n = [c[0] + dx, c[1] + dy, c[2] + dz];
-                    if owned(n) {
-                        cubes.push(corner_key(n).map_err(failed)?);
-                    }
-                }
-            }
-        }
-    }
-    cubes.par_sort_unstable();
-    cubes.dedup();
-    Ok(cubes.into_iter().map(corner_of).collect())
+    let near = dilate(&occupied, -reach..=reach).map_err(failed)?;
+    Ok(near
+        .into_iter()
+        .map(corner_of)
+        .filter(|&c| owns(lattice, core, c))
+        .collect())
 }

@@ -1,0 +1,117 @@
+//! Dilation of sorted sets of lattice corners (keys of [`super::lattice`],
+//! which order like `(x, y, z)` triples): the narrow band of cubes and the
+//! corners of those cubes, built by merging shifted copies one axis at a
+//! time instead of sorting every (cube, offset) pair.
+//!
+//! Why: shifting every key of a sorted set by the same step along one axis
+//! keeps it sorted, so the union of a few shifted copies is a linear merge.
+//! A 3 x 3 x 3 band costs three merges of three copies (9 keys a cube)
+//! where the direct way sorted 27 keys a cube, and the sorts were about a
+//! tenth of a reconstruction's CPU time (perf, 1M-point torus).
+
+use super::lattice::{edge_from_key, edge_key, LatticeError};
+use std::ops::RangeInclusive;
+
+/// The sorted set `{c + d e_axis : c in keys, d in steps}` for a sorted,
+/// duplicate-free `keys`. A shifted corner outside the key range is an
+/// error, never wrapped.
+pub fn dilate_axis(
+    keys: &[u64],
+    axis: usize,
+    steps: RangeInclusive<i64>,
+) -> Result<Vec<u64>, LatticeError> {
+    let copies = steps
+        .map(|d| keys.iter().map(|&k| shifted(k, axis, d)).collect())
+        .collect::<Result<Vec<Vec<u64>>, _>>()?;
+    Ok(merge_sorted(&copies))
+}
+
+/// The sorted set `{c + d : c in keys, d in steps^3}`: [`dilate_axis`] along
+/// z, y, then x.
+pub fn dilate(keys: &[u64], steps: RangeInclusive<i64>) -> Result<Vec<u64>, LatticeError> {
+    let mut set = keys.to_vec();
+    for axis in [2, 1, 0] {
+        set = dilate_axis(&set, axis, steps.clone())?;
+    }
+    Ok(set)
+}
+
+fn shifted(key: u64, axis: usize, d: i64) -> Result<u64, LatticeError> {
+    let (mut c, edge_axis) = edge_from_key(key)?;
+    c[axis] += d;
+    edge_key(c, edge_axis)
+}
+
+/// Union of sorted, duplicate-free vectors, sorted and duplicate-free.
+fn merge_sorted(parts: &[Vec<u64>]) -> Vec<u64> {
+    let mut heads = vec![0usize; parts.len()];
+    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).max().unwrap_or(0) * 2);
+    loop {
+        let next = parts
+            .iter()
+            .zip(&heads)
+            .filter_map(|(p, &h)| p.get(h).copied())
+            .min();
+        let Some(key) = next else {
+            return out;
+        };
+        out.push(key);
+        for (p, h) in parts.iter().zip(heads.iter_mut()) {
+            if p.get(*h) == Some(&key) {
+                *h += 1;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(c: [i64; 3]) -> u64 {
+        edge_key(c, 0).unwrap()
+    }
+
+    /// The direct way: every (corner, offset) pair, sorted and deduplicated.
+    fn brute(cells: &[[i64; 3]], steps: RangeInclusive<i64>) -> Vec<u64> {
+        let mut out = Vec::new();
+        for c in cells {
+            for dz in steps.clone() {
+                for dy in steps.clone() {
+                    for dx in steps.clone() {
+                        out.push(key([c[0] + dx, c[1] + dy, c[2] + dz]));
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    #[test]
+    fn equals_the_sorted_offsets() {
+        // A seeded scatter of cells with clusters, negatives and gaps.
+        let mut state = 12345u64;
+        let mut next = |m: i64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as i64).rem_euclid(m) - m / 2
+        };
+        let cells: Vec<[i64; 3]> = (0..500).map(|_| [next(40), next(12), next(30)]).collect();
+        let mut keys: Vec<u64> = cells.iter().map(|&c| key(c)).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        for steps in [-1..=1, 0..=1, -2..=2, 0..=0] {
+            assert_eq!(dilate(&keys, steps.clone()).unwrap(), brute(&cells, steps));
+        }
+    }
+
+    #[test]
+    fn out_of_range_is_an_error() {
+        let edge = key([0, 0, (1 << 19) - 1]);
+        assert!(dilate(&[edge], 0..=1).is_err());
+        assert!(dilate(&[], -1..=1).unwrap().is_empty());
+    }
+}
