@@ -16,7 +16,7 @@
 //! of a scratch file ([`super::reorder`]) and each window read back from it.
 
 use super::reorder::Reorder;
-use super::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
+use super::{Column, PointStore, StoreError, TileEntry, FLAGS_FILE, NORMAL_FILE};
 use crate::io::{create_writer, PointChunk, WriterSpec};
 use crate::pipeline::Progress;
 use glam::{DVec3, Vec3};
@@ -102,6 +102,24 @@ pub(super) struct Columns {
     pub(super) flags: Option<Column>,
 }
 
+impl Columns {
+    /// Reads tile `t`'s normals and flags, those the output carries.
+    pub(super) fn read(
+        &self,
+        t: &TileEntry,
+        nrm: &mut Vec<f32>,
+        flg: &mut Vec<u8>,
+    ) -> Result<(), StoreError> {
+        if let Some(c) = &self.normals {
+            c.read_f32(t.start, t.count, nrm)?;
+        }
+        if let Some(c) = &self.flags {
+            c.read_u8(t.start, t.count, flg)?;
+        }
+        Ok(())
+    }
+}
+
 /// Output slots for the consecutive input ids from `first`.
 pub(super) struct Slots<'a> {
     pub(super) first: u64,
@@ -173,12 +191,7 @@ fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), 
             continue;
         }
         store.read_coords(t.start, t.count, &mut xyz)?;
-        if let Some(c) = &cols.normals {
-            c.read_f32(t.start, t.count, &mut nrm)?;
-        }
-        if let Some(c) = &cols.flags {
-            c.read_u8(t.start, t.count, &mut flg)?;
-        }
+        cols.read(t, &mut nrm, &mut flg)?;
         for (k, &id) in ids.iter().enumerate() {
             if !range.contains(&id) {
                 continue;

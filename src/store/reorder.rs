@@ -109,12 +109,7 @@ impl Reorder {
         for t in tiles {
             store.read_indices(t.start, t.count, &mut ids)?;
             store.read_coords(t.start, t.count, &mut xyz)?;
-            if let Some(c) = &cols.normals {
-                c.read_f32(t.start, t.count, &mut nrm)?;
-            }
-            if let Some(c) = &cols.flags {
-                c.read_u8(t.start, t.count, &mut flg)?;
-            }
+            cols.read(t, &mut nrm, &mut flg)?;
             for (k, &id) in ids.iter().enumerate() {
                 if id >= self.count {
                     return Err(self.corrupt(format!("input index {id} of {}", self.count)));
