@@ -294,3 +294,29 @@ fn small_quantised_clouds_with_random_cells_match_oracle() {
         }
     }
 }
+
+#[test]
+fn nearest_from_any_hint_is_the_nearest() {
+    for seed in [21u64, 22] {
+        let mut rng = Rng::new(seed);
+        let mut points = clustered(&mut rng, 2000);
+        // Exact ties: copies of points, so the tie keys must decide.
+        for i in 0..50 {
+            points.push(points[i * 7]);
+        }
+        let tie: Vec<u64> = (0..points.len() as u64).rev().collect();
+        // Cells of several sizes: the signed distance sizes its grid to the
+        // lattice, far from the automatic size.
+        for cell in [0.01, 0.05, 0.3] {
+            let grid = GridIndex::with_cell(&points, &tie, cell).expect("grid");
+            let mut got = Vec::new();
+            for _ in 0..300 {
+                let q = rng.vec3(-1.2, 1.2);
+                let h = rng.index(points.len()) as u32;
+                grid.nearest_from(q, (h, points[h as usize]), &mut got);
+                let want = brute_knn(&points, &tie, q, 1, None);
+                assert_eq!(got, want, "seed {seed} cell {cell} query {q:?} hint {h}");
+            }
+        }
+    }
+}

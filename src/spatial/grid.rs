@@ -350,13 +350,27 @@ impl<'a> GridIndex<'a> {
     }
 }
 
-impl KnnIndex for GridIndex<'_> {
-    fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
+impl GridIndex<'_> {
+    /// The nearest point to `q` into `out`, exactly as `knn(q, 1, None,
+    /// out)` gives it, with the search started from `hint`: the original
+    /// index and position of a point that may lie near `q` (the previous
+    /// query's answer, say). A close hint bounds the search from its first
+    /// cell, so fewer points are scanned and inserted; any valid hint gives
+    /// the same answer, because every point is still offered.
+    pub fn nearest_from(&self, q: DVec3, hint: (u32, DVec3), out: &mut Vec<Neighbour>) {
         out.clear();
-        if k == 0 || self.sorted.is_empty() {
+        if self.sorted.is_empty() {
             return;
         }
-        let mut s = Search::new(q, k, exclude, self.tie, self.tolerance(q), out);
+        let mut s = Search::new(q, 1, None, self.tie, self.tolerance(q), out);
+        if (hint.0 as usize) < self.tie.len() {
+            s.offer_all(&[hint.1], &[hint.0]);
+        }
+        self.run(&mut s, q);
+    }
+
+    /// Widens the search block around `q` until `s` is settled.
+    fn run(&self, s: &mut Search<'_>, q: DVec3) {
         let c = self.query_cell(q);
         let budget = self.sorted.len().max(4096);
         let (mut inner, mut r) = (-1, self.cells_to_grid(c).max(1));
@@ -365,19 +379,30 @@ impl KnnIndex for GridIndex<'_> {
             lookups = lookups.saturating_add(self.rows_in_block(c, r));
             if lookups > budget {
                 s.restart();
-                self.scan_points(&mut s, 0, self.sorted.len());
+                self.scan_points(s, 0, self.sorted.len());
                 break;
             }
             if inner < 0 && r == 1 {
-                self.scan_first_block(&mut s, c);
+                self.scan_first_block(s, c);
             } else {
-                self.scan_shell(&mut s, c, inner, r);
+                self.scan_shell(s, c, inner, r);
             }
-            if self.block_covers_grid(c, r) || (s.is_full() && self.settled(&s, c, r)) {
+            if self.block_covers_grid(c, r) || (s.is_full() && self.settled(s, c, r)) {
                 break;
             }
             (inner, r) = (r, r + 1);
         }
+    }
+}
+
+impl KnnIndex for GridIndex<'_> {
+    fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
+        out.clear();
+        if k == 0 || self.sorted.is_empty() {
+            return;
+        }
+        let mut s = Search::new(q, k, exclude, self.tie, self.tolerance(q), out);
+        self.run(&mut s, q);
     }
 
     fn len(&self) -> usize {

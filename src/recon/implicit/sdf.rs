@@ -9,6 +9,7 @@
 //! the evaluation says by how much the margin falls short.
 
 use crate::spatial::brute::dist2;
+use crate::spatial::grid::GridIndex;
 use crate::spatial::{KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use glam::DVec3;
@@ -17,7 +18,7 @@ use glam::DVec3;
 pub struct Samples<'a> {
     pub points: &'a [DVec3],
     pub normals: &'a [DVec3],
-    pub index: &'a dyn KnnIndex,
+    pub index: &'a GridIndex<'a>,
 }
 
 /// The value at a corner, or how far the loaded region falls short.
@@ -92,7 +93,14 @@ fn nearest_planes(
     want: usize,
     nbr: &mut Vec<Neighbour>,
 ) -> Result<Option<([u32; PLANES_TRIED], usize)>, f64> {
-    s.index.knn(p, want, None, nbr);
+    // The previous query's answer (corners come in lattice order, so it is
+    // usually next door) starts a single-nearest search bounded.
+    if want == 1 {
+        let previous = nbr.first().map(|n| n.index);
+        nearest(s, p, previous, nbr);
+    } else {
+        s.index.knn(p, want, None, nbr);
+    }
     let Some(last) = nbr.last() else {
         return Ok(None);
     };
@@ -135,7 +143,7 @@ fn try_plane(
     if dist2(s.points[i as usize], z).sqrt() < limit {
         return Ok(Some(f));
     }
-    let on_data = projection_on_data(s, tile, z, limit, nbr)?;
+    let on_data = projection_on_data(s, tile, z, i, limit, nbr)?;
     Ok(on_data.then_some(f))
 }
 
@@ -145,14 +153,26 @@ fn projection_on_data(
     s: &Samples,
     tile: &TilePoints,
     z: DVec3,
+    sample: u32,
     limit: f64,
     nbr: &mut Vec<Neighbour>,
 ) -> Result<bool, f64> {
-    s.index.knn(z, 1, None, nbr);
+    // `z` is the projection of `sample` onto its own plane: that sample is
+    // close, a good start.
+    nearest(s, z, Some(sample), nbr);
     match nbr.first() {
         Some(m) if m.dist2.sqrt() < limit => Ok(true),
         // Nothing loaded within the limit: true only if nothing unloaded is.
         _ if tile.room(z) >= limit => Ok(false),
         _ => Err(limit - tile.room(z)),
+    }
+}
+
+/// The sample nearest to `q` into `nbr`, the search started from sample
+/// `hint` when given (any hint gives the same answer).
+fn nearest(s: &Samples, q: DVec3, hint: Option<u32>, nbr: &mut Vec<Neighbour>) {
+    match hint.and_then(|h| Some((h, *s.points.get(h as usize)?))) {
+        Some(h) => s.index.nearest_from(q, h, nbr),
+        None => s.index.knn(q, 1, None, nbr),
     }
 }
