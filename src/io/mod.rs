@@ -15,6 +15,7 @@ pub mod obj;
 pub mod open;
 pub mod ply;
 mod policy;
+pub(crate) mod scratch;
 mod source;
 mod text;
 pub mod write;

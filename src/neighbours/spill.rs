@@ -17,42 +17,11 @@
 use super::csr::IdWidth;
 use super::kernel::NeighboursTile;
 use super::NeighboursError;
+use crate::io::scratch::ScratchFile;
 use crate::io::IoError;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::os::unix::fs::FileExt;
-use std::path::{Path, PathBuf};
-
-/// A scratch file removed when dropped.
-struct ScratchFile {
-    path: PathBuf,
-    file: File,
-}
-
-impl ScratchFile {
-    fn create(path: PathBuf) -> Result<Self, IoError> {
-        let file = File::options()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&path)
-            .map_err(|e| IoError::os(&path, e))?;
-        Ok(ScratchFile { path, file })
-    }
-
-    fn read_at(&self, buf: &mut [u8], pos: u64) -> Result<(), IoError> {
-        self.file
-            .read_exact_at(buf, pos)
-            .map_err(|e| IoError::os(&self.path, e))
-    }
-}
-
-impl Drop for ScratchFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
+use std::path::Path;
 
 /// Geometry of the output windows: `[w * window, (w + 1) * window)`.
 #[derive(Clone, Copy, Debug)]

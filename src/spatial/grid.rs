@@ -253,17 +253,10 @@ impl<'a> GridIndex<'a> {
                 if centre_first && (y, z) == (c[1], c[2]) {
                     continue;
                 }
-                let (mut xa, mut xb) = (x0, x1);
-                if s.bound.is_finite() {
-                    let gy = self.gap(1, s.q.y, y, s.tol);
-                    let rest = s.pruning_bound() - gz * gz - gy * gy;
-                    if rest < 0.0 {
-                        continue;
-                    }
-                    let reach = rest.sqrt() + s.tol;
-                    xa = xa.max(self.x_cell(s.q.x - reach));
-                    xb = xb.min(self.x_cell(s.q.x + reach));
-                }
+                let gy = self.gap(1, s.q.y, y, s.tol);
+                let Some((xa, xb)) = self.row_cells(s, gy * gy + gz * gz, (x0, x1)) else {
+                    continue;
+                };
                 if xa > xb {
                     continue;
                 }
@@ -300,21 +293,32 @@ impl<'a> GridIndex<'a> {
         rows.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
         let (x0, x1) = ((c[0] - 1).max(0), (c[0] + 1).min(self.dims[0] - 1));
         for &(g2, y, z) in rows.iter() {
-            let (mut xa, mut xb) = (x0, x1);
-            if s.bound.is_finite() {
-                let rest = s.pruning_bound() - g2;
-                if rest < 0.0 {
-                    // Rows come by increasing gap: the rest are out too.
-                    break;
-                }
-                let reach = rest.sqrt() + s.tol;
-                xa = xa.max(self.x_cell(s.q.x - reach));
-                xb = xb.min(self.x_cell(s.q.x + reach));
-            }
+            // Rows come by increasing gap: once one is out, the rest are.
+            let Some((xa, xb)) = self.row_cells(s, g2, (x0, x1)) else {
+                break;
+            };
             if let Some(row) = self.rows.get(row_key(y, z, self.dims)) {
                 self.scan_cells(s, row, xa, xb);
             }
         }
+    }
+
+    /// The cells of `xs` in a row at squared gap `g2` (y and z) from the
+    /// query that can still hold a candidate, or `None` when the whole row
+    /// lies beyond the k-th candidate.
+    fn row_cells(&self, s: &Search<'_>, g2: f64, (x0, x1): (i64, i64)) -> Option<(i64, i64)> {
+        if !s.bound.is_finite() {
+            return Some((x0, x1));
+        }
+        let rest = s.pruning_bound() - g2;
+        if rest < 0.0 {
+            return None;
+        }
+        let reach = rest.sqrt() + s.tol;
+        Some((
+            x0.max(self.x_cell(s.q.x - reach)),
+            x1.min(self.x_cell(s.q.x + reach)),
+        ))
     }
 
     /// Rows of the grid a block of radius `r` around cell `c` touches: the

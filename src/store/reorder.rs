@@ -13,11 +13,9 @@
 
 use super::export::{Columns, Slots};
 use super::{PointStore, StoreError, TileEntry};
+use crate::io::scratch::ScratchFile;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::fs::File;
-use std::os::unix::fs::FileExt;
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 const SCRATCH_FILE: &str = ".export.buckets";
@@ -26,8 +24,7 @@ const READ_RECORDS: usize = 1 << 16;
 
 /// The scratch file of records sorted into windows, removed on drop.
 pub(super) struct Reorder {
-    file: File,
-    path: PathBuf,
+    scratch: ScratchFile,
     window: u64,
     count: u64,
     layout: Layout,
@@ -46,12 +43,6 @@ impl Layout {
     }
 }
 
-impl Drop for Reorder {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
 impl Reorder {
     /// Writes every point of `store` into the region of its window of
     /// `window` consecutive input ids. Bucket buffers hold about one
@@ -61,17 +52,9 @@ impl Reorder {
         cols: &Columns,
         window: u64,
     ) -> Result<Self, StoreError> {
-        let path = store.dir.join(SCRATCH_FILE);
-        let file = File::options()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&path)
-            .map_err(|e| StoreError::os(&path, e))?;
+        let scratch = ScratchFile::create(store.dir.join(SCRATCH_FILE))?;
         let reorder = Reorder {
-            file,
-            path,
+            scratch,
             window: window.max(1),
             count: store.len(),
             layout: Layout {
@@ -159,9 +142,7 @@ impl Reorder {
         if at + n > end {
             return Err(self.corrupt(format!("window {w} gets more than its points")));
         }
-        self.file
-            .write_all_at(bucket, at * rec as u64)
-            .map_err(|e| StoreError::os(&self.path, e))?;
+        self.scratch.write_at(bucket, at * rec as u64)?;
         bucket.clear();
         Ok(())
     }
@@ -196,9 +177,8 @@ impl Reorder {
         let mut done = 0;
         while done < len {
             let n = (len - done).min(READ_RECORDS as u64) as usize;
-            self.file
-                .read_exact_at(&mut buf[..n * rec], (first + done) * rec as u64)
-                .map_err(|e| StoreError::os(&self.path, e))?;
+            self.scratch
+                .read_at(&mut buf[..n * rec], (first + done) * rec as u64)?;
             for r in buf[..n * rec].chunks_exact(rec) {
                 let id = first + u64::from(u32::from_le_bytes([r[0], r[1], r[2], r[3]]));
                 if !range.contains(&id) {
@@ -219,7 +199,7 @@ impl Reorder {
 
     fn corrupt(&self, reason: String) -> StoreError {
         StoreError::Corrupt {
-            path: self.path.clone(),
+            path: self.scratch.path().to_path_buf(),
             reason,
         }
     }
