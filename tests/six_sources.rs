@@ -29,18 +29,11 @@ struct Run {
     flags: Vec<u8>,
 }
 
-/// Normals of `points` through the whole pipeline, with the spacing (and so
-/// the radius) fixed: the store's own estimate samples tiles, so it would
-/// differ between tilings.
-fn run(
-    points: &[DVec3],
-    tile_points: u64,
-    threads: usize,
-    orientation: Orientation,
-    spacing: f64,
-) -> Run {
+/// Normals of `points` through the whole pipeline, with the default radius
+/// (from the exact mean nearest-neighbour distance, the same for any
+/// tiling).
+fn run(points: &[DVec3], tile_points: u64, threads: usize, orientation: Orientation) -> Run {
     with_store(points, tile_points, threads, |store, _dir| {
-        store.manifest.spacing = Some(spacing);
         let params = NormalParams {
             orientation,
             ..NormalParams::default()
@@ -93,8 +86,7 @@ fn up() -> Orientation {
 
 fn check_outward(shape: &Shape, n: usize, noise: f64, seed: u64, tile_points: u64) {
     let scan = generate(shape, n, noise, seed).expect("generate");
-    let spacing = mean_spacing_hint(shape, n).expect("spacing");
-    let out = run(&scan.points, tile_points, 2, six(), spacing);
+    let out = run(&scan.points, tile_points, 2, six());
     assert_eq!(out.report.degenerate, 0);
     assert_eq!(out.report.unoriented, 0);
     let outward = (0..n)
@@ -127,8 +119,7 @@ fn terrain_ground_and_roofs_face_up_with_one_source() {
     let shape = Shape::terrain();
     let n = 40_000;
     let scan = generate(&shape, n, 0.0, seed).expect("generate");
-    let spacing = mean_spacing_hint(&shape, n).expect("spacing");
-    let out = run(&scan.points, 3_000, 2, up(), spacing);
+    let out = run(&scan.points, 3_000, 2, up());
     let (mut flat, mut undecidable) = (0, 0);
     for i in 0..n {
         let truth = scan.normals[i];
@@ -167,9 +158,8 @@ fn tiled_equals_untiled_bit_for_bit() {
     ];
     for (shape, n, noise, seed, orientation) in cases {
         let scan = generate(&shape, n, noise, seed).expect("generate");
-        let spacing = mean_spacing_hint(&shape, n).expect("spacing");
-        let whole = run(&scan.points, u64::MAX, 2, orientation, spacing);
-        let tiled = run(&scan.points, 600, 2, orientation, spacing);
+        let whole = run(&scan.points, u64::MAX, 2, orientation);
+        let tiled = run(&scan.points, 600, 2, orientation);
         assert_eq!(whole.report.tiles, 1);
         assert!(
             tiled.report.tiles >= 64,
@@ -195,9 +185,8 @@ fn one_thread_equals_two_threads() {
     let seed = 3;
     let shape = Shape::moebius(1.0, 0.4);
     let scan = generate(&shape, 20_000, 0.002, seed).expect("generate");
-    let spacing = mean_spacing_hint(&shape, 20_000).expect("spacing");
-    let one = run(&scan.points, 1_500, 1, six(), spacing);
-    let two = run(&scan.points, 1_500, 2, six(), spacing);
+    let one = run(&scan.points, 1_500, 1, six());
+    let two = run(&scan.points, 1_500, 2, six());
     assert!(one.report.tiles > 8);
     assert!(
         one.normals == two.normals,
@@ -208,8 +197,8 @@ fn one_thread_equals_two_threads() {
 
 /// The store's PCA normals (canonical sign) and stored positions, as the
 /// in-memory function must see them to agree bit for bit.
-fn pca_normals(points: &[DVec3], spacing: f64) -> (Vec<DVec3>, Vec<Option<DVec3>>) {
-    let out = run(points, u64::MAX, 2, Orientation::None, spacing);
+fn pca_normals(points: &[DVec3]) -> (Vec<DVec3>, Vec<Option<DVec3>>) {
+    let out = run(points, u64::MAX, 2, Orientation::None);
     let normals = out
         .normals
         .iter()
@@ -238,12 +227,13 @@ fn in_memory_function_equals_the_store_pass() {
     let shape = Shape::moebius(1.0, 0.4);
     let n = 20_000;
     let scan = generate(&shape, n, 0.002, seed).expect("generate");
-    let spacing = mean_spacing_hint(&shape, n).expect("spacing");
-    let (points, pca) = pca_normals(&scan.points, spacing);
+    let (points, pca) = pca_normals(&scan.points);
+    let tiled = run(&scan.points, 700, 2, six());
+    // The store pass's default radius: 3 mean nearest-neighbour distances.
+    let nn = tiled.report.sampling.mean_nn;
     let ids: Vec<u64> = (0..n as u64).collect();
-    let signs = orient_by_sources(&points, &pca, &ids, &store_params(Sources::Six, spacing))
-        .expect("orient");
-    let tiled = run(&scan.points, 700, 2, six(), spacing);
+    let signs =
+        orient_by_sources(&points, &pca, &ids, &store_params(Sources::Six, nn)).expect("orient");
     for i in 0..n {
         let n0 = pca[i].expect("a normal").as_vec3();
         let want = if signs[i].flip { -n0 } else { n0 };
@@ -314,9 +304,8 @@ fn a_part_no_pair_reaches_faces_out_on_its_own() {
     .expect("generate");
     let points: Vec<DVec3> = a.points.iter().chain(&b.points).copied().collect();
     let truth: Vec<DVec3> = a.normals.iter().chain(&b.normals).copied().collect();
-    let spacing = mean_spacing_hint(&Shape::unit_sphere(), 8_000).expect("spacing");
-    let whole = run(&points, u64::MAX, 2, six(), spacing);
-    let tiled = run(&points, 400, 2, six(), spacing);
+    let whole = run(&points, u64::MAX, 2, six());
+    let tiled = run(&points, 400, 2, six());
     assert_eq!(whole.report.components, 2, "seed {seed}");
     assert!(whole.normals == tiled.normals, "seed {seed}: tiled differs");
     for (i, t) in truth.iter().enumerate() {
@@ -340,7 +329,7 @@ fn points_without_a_normal_stay_unoriented() {
     assert!(signs.iter().all(|s| !s.oriented && !s.flip));
     // Through the store: colinear points are degenerate, zero, not invented.
     points.truncate(200);
-    let out = run(&points, u64::MAX, 1, six(), 0.01);
+    let out = run(&points, u64::MAX, 1, six());
     assert_eq!(out.report.degenerate, 200);
     assert!(out.normals.iter().all(|n| *n == Vec3::ZERO));
     assert!(out.flags.iter().all(|f| f & FLAG_DEGENERATE != 0));

@@ -242,7 +242,13 @@ fn normals_into(
         report.unoriented = stats.unoriented;
         report.components = stats.components;
     }
-    if let Some(sp) = sources::SourceParams::for_normals(params, spacing) {
+    // The exact mean over every point (independent of the tiling), unless
+    // all points are duplicates.
+    let nn = match report.sampling.mean_nn {
+        m if m > 0.0 && m.is_finite() => m,
+        _ => spacing,
+    };
+    if let Some(sp) = sources::SourceParams::for_normals(params, nn) {
         let stats = sources::orient_store(store, &sp, spacing, opts, progress, normals, flags)?;
         report.unoriented = stats.unoriented;
         report.components = stats.components;

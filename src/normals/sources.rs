@@ -15,8 +15,11 @@
 //!   forest of its pairs, one Kruskal pass over the union of the tiles'
 //!   forests finds the same tree (ARCHITECTURE.md, normal orientation), and
 //!   the tiled result equals the in-memory one bit for bit, for any tiling
-//!   and thread count, given the same radius ([`tiled`]; the store's
-//!   spacing estimate, and so the default radius, samples tiles). The issue proposed orienting each tile on
+//!   and thread count, given the same radius ([`tiled`]). The default
+//!   radius comes from the kernel pass's exact mean nearest-neighbour
+//!   distance, not from the store's spacing estimate, which samples tiles and so
+//!   changed with the tiling (and with it the result, measured on a 1M
+//!   dragon: 47 points). The issue proposed orienting each tile on
 //!   its own and voting one sign per tile component through the overlaps;
 //!   built and measured first, that vote carried a tile's local mistake
 //!   (a front across a thin ridge, with the better path outside the tile)
@@ -25,8 +28,8 @@
 //!   such failure.
 //!
 //! Neighbourhood radius: the paper takes r = 2..4 times the mean distance of
-//! a point to its 5-7 nearest neighbours; the store knows the mean
-//! *nearest*-neighbour distance, and r = 3 of those ([`RADIUS_SPACINGS`])
+//! a point to its 5-7 nearest neighbours; the normals pass knows the
+//! *nearest*-neighbour distances, and r = 3 mean ones ([`RADIUS_SPACINGS`])
 //! holds about 10-30 points on a surface, the paper's 10-20 "fit well".
 
 mod best_first;
@@ -53,7 +56,7 @@ use propagate::{propagate, Cloud, Seed};
 
 /// The paper's propagation threshold.
 pub const DEFAULT_TAU: f64 = 0.6;
-/// Default radius in store spacings (mean nearest-neighbour distances).
+/// Default radius in mean nearest-neighbour distances.
 pub const RADIUS_SPACINGS: f64 = 3.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,10 +75,10 @@ pub struct SourceParams {
 
 impl SourceParams {
     /// The parameters the normals parameters ask for, with the default
-    /// radius for a store of mean spacing `spacing`, bridges to the same k
-    /// nearest as the tangent planes and the spanning tree's edge cost;
-    /// `None` for other orientations.
-    pub fn for_normals(params: &NormalParams, spacing: f64) -> Option<Self> {
+    /// radius for a cloud whose mean nearest-neighbour distance is
+    /// `nn`, bridges to the same k nearest as the tangent planes and the
+    /// spanning tree's edge cost; `None` for other orientations.
+    pub fn for_normals(params: &NormalParams, nn: f64) -> Option<Self> {
         let (sources, tau) = match params.orientation {
             Orientation::SixSources { tau } => (Sources::Six, tau),
             Orientation::SingleSource { direction, tau } => (Sources::Single(direction), tau),
@@ -84,7 +87,7 @@ impl SourceParams {
         Some(SourceParams {
             sources,
             tau,
-            hood: Neighbourhood::Radius(RADIUS_SPACINGS * spacing),
+            hood: Neighbourhood::Radius(RADIUS_SPACINGS * nn),
             bridge_k: params.k,
             weight: params.cost,
             order: Order::BestFirst,

@@ -9,6 +9,8 @@ use serde::{Deserialize, Serialize};
 const PER_OCTAVE: f64 = 64.0;
 const OCTAVES: i32 = 24;
 const BINS: usize = (2 * OCTAVES) as usize * PER_OCTAVE as usize;
+/// Fixed-point units per `scale` of the exact sum.
+const SUM_UNIT: f64 = (1u64 << 40) as f64;
 
 /// Histogram of positive values on a log2 scale around `scale`, with 1.1 %
 /// wide bins; zeros and values outside the range are counted apart.
@@ -19,6 +21,10 @@ pub struct LogHistogram {
     zeros: u64,
     above: u64,
     max: f64,
+    /// Sum of the positive values in units of `scale / 2^40`: an integer,
+    /// so tiles merged in any grouping give the same mean to the last bit
+    /// (a float sum would depend on the tiling).
+    sum: u128,
 }
 
 impl LogHistogram {
@@ -33,6 +39,7 @@ impl LogHistogram {
             zeros: 0,
             above: 0,
             max: 0.0,
+            sum: 0,
         }
     }
 
@@ -42,6 +49,8 @@ impl LogHistogram {
             return;
         }
         self.max = self.max.max(v);
+        // Saturating: an absurd outlier must not wrap the sum.
+        self.sum += (v / self.scale * SUM_UNIT).round().min(1e30) as u128;
         let b = ((v / self.scale).log2() + OCTAVES as f64) * PER_OCTAVE;
         if b < 0.0 {
             self.bins[0] += 1;
@@ -57,6 +66,17 @@ impl LogHistogram {
         self.zeros += o.zeros;
         self.above += o.above;
         self.max = self.max.max(o.max);
+        self.sum += o.sum;
+    }
+
+    /// Mean of the positive values (0 when there are none), exact to the
+    /// fixed-point unit.
+    pub fn mean(&self) -> f64 {
+        let positive = self.count() - self.zeros;
+        if positive == 0 {
+            return 0.0;
+        }
+        self.sum as f64 / SUM_UNIT * self.scale / positive as f64
     }
 
     pub fn count(&self) -> u64 {
@@ -113,6 +133,10 @@ pub struct SamplingStats {
     pub rho_outliers: u64,
     /// Median nearest-neighbour distance.
     pub median_nn: f64,
+    /// Mean nearest-neighbour distance, duplicates left out (the store's
+    /// spacing estimate, but over every point: the same for any tiling).
+    #[serde(default)]
+    pub mean_nn: f64,
     /// Noise bound (paper 1's delta) estimated as twice the median RMS
     /// residual of the tangent-plane fits.
     pub noise: f64,
@@ -144,6 +168,7 @@ impl SamplingHistograms {
             rho,
             rho_outliers,
             median_nn: self.nn.quantile(0.5),
+            mean_nn: self.nn.mean(),
             noise: 2.0 * self.residual.quantile(0.5),
         }
     }
@@ -190,5 +215,6 @@ mod tests {
         let mut ba = b.clone();
         ba.merge(&a);
         assert_eq!(ab, ba);
+        assert!((ab.mean() - 100.0).abs() < 1e-9, "{}", ab.mean());
     }
 }
