@@ -15,7 +15,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use glam::DVec3;
 use rayon::prelude::*;
-use scanmesh::normals::forest::{reference_forest, spanning_forest, Edge, LocalEdge};
+use scanmesh::normals::forest::{reference_forest, spanning_forest, Edge};
 use scanmesh::normals::pca::fit_plane;
 use scanmesh::spatial::{GridIndex, KnnIndex, Neighbour};
 use scanmesh::synth::{generate, Shape};
@@ -64,7 +64,7 @@ fn cost(d: DVec3, ni: DVec3, nj: DVec3, dot: f64) -> f64 {
     1.0 - dot.abs() + offset
 }
 
-fn riemannian_graph(points: &[DVec3]) -> Vec<LocalEdge> {
+fn riemannian_graph(points: &[DVec3]) -> Vec<Edge> {
     let hoods = neighbourhoods(points);
     let normals: Vec<Option<DVec3>> = hoods
         .par_iter()
@@ -83,9 +83,7 @@ fn riemannian_graph(points: &[DVec3]) -> Vec<LocalEdge> {
             if let Some(nj) = normals[j] {
                 let dot = ni.dot(nj);
                 let c = cost(points[j] - points[i], ni, nj, dot);
-                let edge = Edge::with_cost(i as u32, j as u32, c, dot);
-                let local = [edge.a, edge.b];
-                edges.push(LocalEdge { edge, local });
+                edges.push(Edge::with_cost(i as u32, j as u32, c, dot));
             }
         }
     }

@@ -21,11 +21,19 @@ use super::unionfind::UnionFind;
 /// A Riemannian-graph edge between two points (input-order ids, `a < b`).
 /// `w` is the cost `1 - |n_a . n_b|` carrying the sign of `n_a . n_b`, so a
 /// negative `w` means "flip one of the two".
+///
+/// The ids order the edges (and so choose the tree); `slots` are where the
+/// global union-find keeps the two ends (their store indices), so Kruskal
+/// walks the union-find in the store's spatial order where input ids jump
+/// at random (10M points: 4.8 s -> see ARCHITECTURE.md). Slots never enter
+/// [`Edge::key`], so the tree does not depend on how the store was tiled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Edge {
     pub w: f64,
     pub a: u32,
     pub b: u32,
+    /// Union-find slots of `a` and `b`, in that order.
+    pub slots: [u32; 2],
 }
 
 impl Edge {
@@ -35,10 +43,21 @@ impl Edge {
     }
 
     /// An edge of any non-negative cost; `dot` only gives the flip sign.
+    /// Slots are the ids (for graphs whose ids are their own slots).
     pub fn with_cost(a: u32, b: u32, cost: f64, dot: f64) -> Self {
+        Edge::between([a, a], [b, b], cost, dot)
+    }
+
+    /// As [`Edge::with_cost`], each end given as `[id, slot]`.
+    pub fn between(x: [u32; 2], y: [u32; 2], cost: f64, dot: f64) -> Self {
         let w = cost.max(0.0).copysign(dot);
-        let (a, b) = if a < b { (a, b) } else { (b, a) };
-        Edge { w, a, b }
+        let (x, y) = if x[0] < y[0] { (x, y) } else { (y, x) };
+        Edge {
+            w,
+            a: x[0],
+            b: y[0],
+            slots: [x[1], y[1]],
+        }
     }
 
     /// Total order used everywhere: cost, then the two ids.
@@ -50,34 +69,29 @@ impl Edge {
         self.w.is_sign_negative()
     }
 
-    pub const BYTES: usize = 16;
+    pub const BYTES: usize = 24;
 
-    pub fn to_bytes(self) -> [u8; 16] {
-        let mut out = [0u8; 16];
+    pub fn to_bytes(self) -> [u8; Self::BYTES] {
+        let mut out = [0u8; Self::BYTES];
         out[..8].copy_from_slice(&self.w.to_le_bytes());
-        out[8..12].copy_from_slice(&self.a.to_le_bytes());
-        out[12..].copy_from_slice(&self.b.to_le_bytes());
+        let words = [self.a, self.b, self.slots[0], self.slots[1]];
+        for (k, v) in words.iter().enumerate() {
+            out[8 + 4 * k..12 + 4 * k].copy_from_slice(&v.to_le_bytes());
+        }
         out
     }
 
-    pub fn from_bytes(b: &[u8; 16]) -> Self {
+    pub fn from_bytes(b: &[u8; Self::BYTES]) -> Self {
+        let word = |k: usize| u32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
         let mut w = [0u8; 8];
         w.copy_from_slice(&b[..8]);
-        let a = u32::from_le_bytes([b[8], b[9], b[10], b[11]]);
-        let bb = u32::from_le_bytes([b[12], b[13], b[14], b[15]]);
         Edge {
             w: f64::from_le_bytes(w),
-            a,
-            b: bb,
+            a: word(8),
+            b: word(12),
+            slots: [word(16), word(20)],
         }
     }
-}
-
-/// An edge with its endpoints' dense local numbers (`0..n` in a tile).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LocalEdge {
-    pub edge: Edge,
-    pub local: [u32; 2],
 }
 
 /// Minimum spanning forest of `edges` over `n` local vertices, in
@@ -86,8 +100,10 @@ pub struct LocalEdge {
 /// doc); a pair given twice with one key and both signs keeps the sign that
 /// sorts first by the `w` bits (a tie the old sort left to chance).
 ///
-/// Every `local` must be below `n`.
-pub fn spanning_forest(edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
+/// The edges' slots are the ends' dense local numbers (`0..n` in a tile),
+/// every one below `n`; the forest's edges keep them, for the caller to
+/// turn into store indices.
+pub fn spanning_forest(edges: Vec<Edge>, n: usize) -> Vec<Edge> {
     forest_sorting_below(edges, n, SORT_DIRECTLY)
 }
 
@@ -95,19 +111,18 @@ pub fn spanning_forest(edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
 /// key, drop repeats of a pair, Kruskal. Kept as the oracle of the tests
 /// and the baseline of `benches/forest.rs`, not for the kernel.
 #[doc(hidden)]
-pub fn reference_forest(mut edges: Vec<LocalEdge>, n: usize) -> Vec<Edge> {
-    edges.sort_unstable_by_key(|e| e.edge.key());
-    edges.dedup_by_key(|e| (e.edge.a, e.edge.b));
+pub fn reference_forest(mut edges: Vec<Edge>, n: usize) -> Vec<Edge> {
+    edges.sort_unstable_by_key(|e| e.key());
+    edges.dedup_by_key(|e| (e.a, e.b));
     let mut uf = UnionFind::new(n);
     edges
         .into_iter()
-        .filter(|e| uf.union(e.local[0], e.local[1]))
-        .map(|e| e.edge)
+        .filter(|e| uf.union(e.slots[0], e.slots[1]))
         .collect()
 }
 
 /// [`spanning_forest`] with parts of at most `base` edges sorted directly.
-fn forest_sorting_below(mut edges: Vec<LocalEdge>, n: usize, base: usize) -> Vec<Edge> {
+fn forest_sorting_below(mut edges: Vec<Edge>, n: usize, base: usize) -> Vec<Edge> {
     let mut uf = UnionFind::new(n);
     let mut out = Vec::with_capacity(edges.len().min(n.saturating_sub(1)));
     let depth = 2 * (usize::BITS - edges.len().leading_zeros());
@@ -124,9 +139,9 @@ const PIVOT_SAMPLE: usize = 63;
 
 /// [`Edge::key`] then the sign of `w`, packed so that one integer compare
 /// orders edges: `|w|` bits use 63 bits (the sign bit of `|w|` is 0).
-fn sort_key(e: &LocalEdge) -> u128 {
-    let (w, a, b) = e.edge.key();
-    let sign = e.edge.w.is_sign_negative() as u128;
+fn sort_key(e: &Edge) -> u128 {
+    let (w, a, b) = e.key();
+    let sign = e.w.is_sign_negative() as u128;
     (w as u128) << 65 | (a as u128) << 33 | (b as u128) << 1 | sign
 }
 
@@ -143,12 +158,7 @@ impl Parts {
     /// Kruskal on `edges` with the forest so far in `uf`: the light part
     /// (keys up to a sampled median) first, then what of the heavy part still
     /// joins two components.
-    fn filter_kruskal(
-        mut self,
-        mut edges: &mut [LocalEdge],
-        uf: &mut UnionFind,
-        out: &mut Vec<Edge>,
-    ) {
+    fn filter_kruskal(mut self, mut edges: &mut [Edge], uf: &mut UnionFind, out: &mut Vec<Edge>) {
         loop {
             if edges.len() <= self.base || self.depth == 0 {
                 return sorted_kruskal(edges, uf, out);
@@ -167,19 +177,19 @@ impl Parts {
     }
 }
 
-fn sorted_kruskal(edges: &mut [LocalEdge], uf: &mut UnionFind, out: &mut Vec<Edge>) {
+fn sorted_kruskal(edges: &mut [Edge], uf: &mut UnionFind, out: &mut Vec<Edge>) {
     edges.sort_unstable_by_key(sort_key);
     // A repeated pair is rejected by `union` once its first copy is in.
     out.extend(
         edges
             .iter()
-            .filter(|e| uf.union(e.local[0], e.local[1]))
-            .map(|e| e.edge),
+            .filter(|e| uf.union(e.slots[0], e.slots[1]))
+            .copied(),
     );
 }
 
 /// Median key of a deterministic, evenly spaced sample (`edges` not empty).
-fn pivot_key(edges: &[LocalEdge]) -> u128 {
+fn pivot_key(edges: &[Edge]) -> u128 {
     let count = PIVOT_SAMPLE.min(edges.len());
     let step = edges.len() / count;
     let mut sample: Vec<u128> = (0..count)
@@ -189,7 +199,7 @@ fn pivot_key(edges: &[LocalEdge]) -> u128 {
 }
 
 /// Moves the edges with keys `<= pivot` to the front; returns their count.
-fn partition(edges: &mut [LocalEdge], pivot: u128) -> usize {
+fn partition(edges: &mut [Edge], pivot: u128) -> usize {
     let (mut i, mut j) = (0, edges.len());
     loop {
         while i < j && sort_key(&edges[i]) <= pivot {
@@ -209,11 +219,11 @@ fn partition(edges: &mut [LocalEdge], pivot: u128) -> usize {
 
 /// Keeps (in order, at the front) the edges whose ends are not yet joined;
 /// returns their count. The others would close a cycle of lighter edges.
-fn retain_joining(edges: &mut [LocalEdge], uf: &mut UnionFind) -> usize {
+fn retain_joining(edges: &mut [Edge], uf: &mut UnionFind) -> usize {
     let mut kept = 0;
     for k in 0..edges.len() {
         let e = edges[k];
-        if !uf.connected(e.local[0], e.local[1]) {
+        if !uf.connected(e.slots[0], e.slots[1]) {
             edges[kept] = e;
             kept += 1;
         }
@@ -230,7 +240,7 @@ mod tests {
     /// local numbers; costs from `levels` distinct values (many ties), every
     /// `repeat`-th edge given twice (reversed, as from its other end), and
     /// only the first `n - gap` vertices used (the rest isolated).
-    fn random_edges(seed: u64, n: usize, m: usize, levels: u64, repeat: usize) -> Vec<LocalEdge> {
+    fn random_edges(seed: u64, n: usize, m: usize, levels: u64, repeat: usize) -> Vec<Edge> {
         let mut rng = crate::synth::Rng::new(seed);
         let ids: Vec<u32> = (0..n as u32).map(|i| i * 3 + (i % 2) * 7).collect();
         let used = (n - n / 10).max(1) as u64;
@@ -244,24 +254,16 @@ mod tests {
             // The sign is the pair's, as in the kernels (a pair given with
             // one key and both signs is the tie the oracle leaves to chance).
             let dot = if (i ^ j) % 3 == 0 { -0.5 } else { 0.5 };
-            let edge = Edge::with_cost(ids[i as usize], ids[j as usize], cost, dot);
-            let local = if ids[i as usize] < ids[j as usize] {
-                [i, j]
-            } else {
-                [j, i]
-            };
-            edges.push(LocalEdge { edge, local });
+            let (x, y) = ([ids[i as usize], i], [ids[j as usize], j]);
+            edges.push(Edge::between(x, y, cost, dot));
             if repeat > 0 && k % repeat == 0 {
-                edges.push(LocalEdge {
-                    edge: Edge::with_cost(ids[j as usize], ids[i as usize], cost, dot),
-                    local,
-                });
+                edges.push(Edge::between(y, x, cost, dot));
             }
         }
         edges
     }
 
-    fn same_as_oracle(edges: Vec<LocalEdge>, n: usize, what: &str) {
+    fn same_as_oracle(edges: Vec<Edge>, n: usize, what: &str) {
         let want = reference_forest(edges.clone(), n);
         let got = spanning_forest(edges, n);
         assert_eq!(got.len(), want.len(), "{what}: forest size");
@@ -288,32 +290,20 @@ mod tests {
     fn degenerate_inputs_match_sorted_kruskal() {
         assert!(spanning_forest(Vec::new(), 0).is_empty());
         assert!(spanning_forest(Vec::new(), 5).is_empty());
-        let self_loop = LocalEdge {
-            edge: Edge::new(4, 4, 0.9),
-            local: [0, 0],
-        };
+        let self_loop = Edge::between([4, 0], [4, 0], 0.1, 0.9);
         assert!(spanning_forest(vec![self_loop; 3], 1).is_empty());
         // One pair, many copies: one forest edge.
-        let e = LocalEdge {
-            edge: Edge::new(2, 9, -0.3),
-            local: [0, 1],
-        };
+        let e = Edge::between([2, 0], [9, 1], 0.7, -0.3);
         same_as_oracle(vec![e; 10_000], 2, "one pair repeated");
     }
 
     #[test]
     fn a_pair_with_both_signs_keeps_the_positive_one_in_any_order() {
-        let plus = LocalEdge {
-            edge: Edge::new(1, 5, 0.25),
-            local: [0, 1],
-        };
-        let minus = LocalEdge {
-            edge: Edge::new(1, 5, -0.25),
-            local: [0, 1],
-        };
+        let plus = Edge::between([1, 0], [5, 1], 0.75, 0.25);
+        let minus = Edge::between([1, 0], [5, 1], 0.75, -0.25);
         for input in [vec![plus, minus], vec![minus, plus]] {
             let got = spanning_forest(input, 2);
-            assert_eq!(got, vec![plus.edge]);
+            assert_eq!(got, vec![plus]);
         }
     }
 
@@ -346,6 +336,10 @@ mod tests {
         assert!(e.flips());
         assert!((e.w.abs() - 0.1).abs() < 1e-12);
         assert_eq!(Edge::from_bytes(&e.to_bytes()), e);
+        // Slots follow their ids when the ends swap.
+        let s = Edge::between([9, 40], [2, 11], 0.5, 1.0);
+        assert_eq!((s.a, s.b, s.slots), (2, 9, [11, 40]));
+        assert_eq!(Edge::from_bytes(&s.to_bytes()), s);
         assert!(Edge::new(1, 2, -1.0).flips());
         assert!(!Edge::new(1, 2, 1.0).flips());
     }
@@ -360,10 +354,7 @@ mod tests {
             (3, 0, 0.95),
             (0, 2, 0.5),
         ]
-        .map(|(a, b, d)| LocalEdge {
-            edge: Edge::new(a, b, d),
-            local: [a, b],
-        })
+        .map(|(a, b, d)| Edge::new(a, b, d))
         .to_vec();
         let edges = spanning_forest(edges, 4);
         assert_eq!(edges.len(), 3);

@@ -11,7 +11,7 @@
 //! run time that every neighbourhood it used lies inside the loaded region and
 //! asks for a wider margin otherwise.
 
-use super::forest::{spanning_forest, Edge, LocalEdge};
+use super::forest::{spanning_forest, Edge};
 use super::hood::{HoodIndex, Hoods};
 use super::pca::fit_plane;
 use super::stats::SamplingHistograms;
@@ -225,7 +225,16 @@ fn tile_forest(
     for i in 0..tile.n_core {
         edges.extend(point_edges(tile, core, normals, cost, i));
     }
-    spanning_forest(edges, tile.points.len())
+    store_slots(tile, spanning_forest(edges, tile.points.len()))
+}
+
+/// A tile forest's slots (local numbers) turned into store indices, the
+/// global union-find's slots.
+pub(crate) fn store_slots(tile: &TilePoints, mut forest: Vec<Edge>) -> Vec<Edge> {
+    for e in &mut forest {
+        e.slots = e.slots.map(|l| tile.store_index(l as usize) as u32);
+    }
+    forest
 }
 
 /// The Riemannian-graph edges from core point `i` to its neighbours.
@@ -235,7 +244,7 @@ fn point_edges<'a>(
     normals: &'a [Option<DVec3>],
     cost: EdgeCost,
     i: usize,
-) -> impl Iterator<Item = LocalEdge> + 'a {
+) -> impl Iterator<Item = Edge> + 'a {
     let ni = normals[i];
     core.get(i).iter().filter_map(move |&j| {
         let (ni, j) = (ni?, j as usize);
@@ -246,13 +255,8 @@ fn point_edges<'a>(
         let nj = normals[j]?;
         let dot = ni.dot(nj);
         let c = edge_cost(cost, tile.points[j] - tile.points[i], ni, nj, dot);
-        let edge = Edge::with_cost(tile.ids[i] as u32, tile.ids[j] as u32, c, dot);
-        // Local numbers in the same (id) order as the edge's ends.
-        let local = if tile.ids[i] < tile.ids[j] {
-            [i as u32, j as u32]
-        } else {
-            [j as u32, i as u32]
-        };
-        Some(LocalEdge { edge, local })
+        // Slots are local numbers until the forest is found.
+        let end = |k: usize| [tile.ids[k] as u32, k as u32];
+        Some(Edge::between(end(i), end(j), c, dot))
     })
 }

@@ -13,11 +13,14 @@
 //!    point, until the points left are fewer than 1/1000. Finding the nearest
 //!    point across components needs a global search the tiles do not give.
 //!
-//! After step 1 the union-find is flattened into dense component labels
-//! ([`Components`]), so steps 2 and 3 are array lookups that run over the
-//! tiles in parallel; per-component facts live in a `Vec` by label. Every
-//! per-component fact is order-free (a count, and a maximum under a total
-//! order), so the thread count cannot change a result.
+//! The union-find is indexed by store index, not input id (edges carry both,
+//! see [`super::forest::Edge`]): the store is in spatial order, so its
+//! accesses stay local. After step 1 it is flattened into dense component
+//! labels ([`Components`]), so steps 2 and 3 are sequential array reads over
+//! the tiles, in parallel; per-component facts live in a `Vec` by label.
+//! Every per-component fact is order-free (a count, and a maximum under a
+//! total order over input ids), so neither the thread count nor the tiling
+//! (which moves store indices, labels and roots) can change a result.
 
 use super::components::Components;
 use super::runs::EdgeRuns;
@@ -73,7 +76,7 @@ pub fn orient_by_forest(
     let comps = uf.into_components();
     let facts = components(store, &comps, normals, flags, progress)?;
     progress.end();
-    let oriented = island_rule(&facts, &comps);
+    let oriented = island_rule(&facts);
     let unoriented = apply(store, &comps, &oriented, normals, flags, progress)?;
     Ok(OrientStats {
         components: facts.iter().filter(|c| c.size > 0).count(),
@@ -128,7 +131,7 @@ fn tile_components(
         if flg[i] & FLAG_DEGENERATE != 0 {
             continue;
         }
-        let (label, parity) = comps.get(id as u32);
+        let (label, parity) = comps.get((t.start + i as u64) as u32);
         let slot = match last {
             Some((l, s)) if l == label => s,
             _ => *slot_of.entry(label).or_insert_with(|| {
@@ -148,7 +151,7 @@ fn tile_components(
 }
 
 /// Sign of each component to orient (by label), by the island rule.
-fn island_rule(facts: &[Component], comps: &Components) -> Vec<Option<bool>> {
+fn island_rule(facts: &[Component]) -> Vec<Option<bool>> {
     let total: u64 = facts.iter().map(|c| u64::from(c.size)).sum();
     let mut order: Vec<u32> = (0..facts.len() as u32)
         .filter(|&l| facts[l as usize].size > 0)
@@ -164,11 +167,8 @@ fn island_rule(facts: &[Component], comps: &Components) -> Vec<Option<bool>> {
             .unwrap_or(std::cmp::Ordering::Equal)
     });
     order.sort_by_key(|&l| {
-        (
-            Some(l) != first,
-            Reverse(facts[l as usize].size),
-            comps.root(l),
-        )
+        let c = &facts[l as usize];
+        (Some(l) != first, Reverse(c.size), c.top_id)
     });
     let mut oriented = vec![None; facts.len()];
     let mut left = total;
@@ -198,7 +198,7 @@ fn apply(
         .tiles()
         .par_iter()
         .map(|t| {
-            let n = apply_tile(t, store, comps, oriented, normals, flags);
+            let n = apply_tile(t, comps, oriented, normals, flags);
             progress.advance(t.count);
             n
         })
@@ -209,22 +209,20 @@ fn apply(
 
 fn apply_tile(
     t: &TileEntry,
-    store: &PointStore,
     comps: &Components,
     oriented: &[Option<bool>],
     normals: &Column,
     flags: &Column,
 ) -> Result<u64, NormalsError> {
-    let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
-    store.read_indices(t.start, t.count, &mut ids)?;
+    let (mut nrm, mut flg) = (Vec::new(), Vec::new());
     normals.read_f32(t.start, t.count, &mut nrm)?;
     flags.read_u8(t.start, t.count, &mut flg)?;
     let mut unoriented = 0;
-    for (i, &id) in ids.iter().enumerate() {
+    for i in 0..flg.len() {
         if flg[i] & FLAG_DEGENERATE != 0 {
             continue;
         }
-        let (label, parity) = comps.get(id as u32);
+        let (label, parity) = comps.get((t.start + i as u64) as u32);
         match oriented[label as usize] {
             Some(sign) if parity ^ sign => nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v),
             Some(_) => {}

@@ -23,7 +23,7 @@ const HANDOFF: usize = 8 * UNION_BATCH;
 /// Read buffers of the k-way merge, shared among the runs.
 const MERGE_BUFFER: usize = 16 << 20;
 
-/// An edge's ends and flip parity, as the union-find takes them.
+/// An edge's slots and flip parity, as the union-find takes them.
 type Pair = (u32, u32, bool);
 
 /// Sorted runs of edges in one scratch file, removed on drop.
@@ -67,7 +67,7 @@ impl EdgeRuns {
         self.written
     }
 
-    /// Kruskal over all runs: joins every edge's ends in `uf` with its flip
+    /// Kruskal over all runs: joins every edge's slots in `uf` with its flip
     /// parity, in global key order, reporting progress as stage `stage`.
     /// With two or more threads the merge (reading, decoding, the heap) runs
     /// on a second thread, handing over batches in order, while this one
@@ -84,7 +84,7 @@ impl EdgeRuns {
         } else {
             let mut batch = Vec::with_capacity(UNION_BATCH);
             let merged = self.merge(MERGE_BUFFER, |e| {
-                batch.push((e.a, e.b, e.flips()));
+                batch.push((e.slots[0], e.slots[1], e.flips()));
                 if batch.len() == UNION_BATCH {
                     uf.union_batch(&batch);
                     batch.clear();
@@ -109,7 +109,7 @@ impl EdgeRuns {
             let merger = s.spawn(move || {
                 let mut batch = Vec::with_capacity(HANDOFF);
                 let merged = self.merge(MERGE_BUFFER, |e| {
-                    batch.push((e.a, e.b, e.flips()));
+                    batch.push((e.slots[0], e.slots[1], e.flips()));
                     if batch.len() == HANDOFF {
                         let next = empty_rx.try_recv().unwrap_or_default();
                         // The receiver lives until this thread is joined.
@@ -191,7 +191,7 @@ impl RunCursor {
                 .map_err(|e| IoError::os(path, e))?;
             self.buf.clear();
             self.buf.extend(bytes.chunks_exact(Edge::BYTES).map(|c| {
-                let mut a = [0u8; 16];
+                let mut a = [0u8; Edge::BYTES];
                 a.copy_from_slice(c);
                 Edge::from_bytes(&a)
             }));

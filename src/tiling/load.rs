@@ -17,6 +17,10 @@ pub struct TilePoints {
     pub ids: Vec<u64>,
     /// Store index of the first core point; core point `i` is `store_first + i`.
     pub store_first: u64,
+    /// Store index of each margin point (point `n_core + m` is
+    /// `margin_store[m]`): global passes key per-point state by store index,
+    /// which follows space where input ids do not.
+    pub margin_store: Vec<u64>,
     pub n_core: usize,
     /// Core box; faces on the outside of the store grid lie at infinity, so
     /// the cores partition all of space.
@@ -37,6 +41,14 @@ impl TilePoints {
         let lo = p - self.loaded.min;
         let hi = self.loaded.max - p;
         lo.min(hi).min_element()
+    }
+
+    /// Store index of loaded point `i`.
+    pub fn store_index(&self, i: usize) -> u64 {
+        match i.checked_sub(self.n_core) {
+            None => self.store_first + i as u64,
+            Some(m) => self.margin_store[m],
+        }
     }
 
     pub fn core_points(&self) -> &[DVec3] {
@@ -102,6 +114,7 @@ pub fn load_tile(
         points: Vec::new(),
         ids: Vec::new(),
         store_first: entry.start,
+        margin_store: Vec::new(),
         n_core: entry.count as usize,
         core,
         loaded,
@@ -149,8 +162,9 @@ struct Scratch {
     flg: Vec<u8>,
 }
 
-/// Appends points `[first, first+count)` (those inside `region`, or all when
-/// `None`) with their ids and, if asked, attributes.
+/// Appends points `[first, first+count)` with their ids and, if asked,
+/// attributes: all of them (the core, `region` is `None`), or the margin
+/// points inside `region`, whose store indices are kept too.
 fn append_range(
     store: &PointStore,
     first: u64,
@@ -169,6 +183,9 @@ fn append_range(
     for (k, p) in s.pts.iter().enumerate() {
         if region.is_some_and(|r| !r.contains(*p)) {
             continue;
+        }
+        if region.is_some() {
+            tp.margin_store.push(first + k as u64);
         }
         tp.points.push(*p);
         tp.ids.push(s.ids[k]);

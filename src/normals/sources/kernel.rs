@@ -9,7 +9,8 @@
 
 use super::pairs::{End, PairRule};
 use super::{Neighbourhood, SourceParams};
-use crate::normals::forest::{spanning_forest, Edge, LocalEdge};
+use crate::normals::forest::{spanning_forest, Edge};
+use crate::normals::kernel::store_slots;
 use crate::normals::FLAG_DEGENERATE;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::{build_index, KnnBackend, Neighbour};
@@ -88,7 +89,7 @@ impl TileKernel for SourcesKernel {
                 needed: needed.max(tile.margin * 2.0),
             });
         }
-        Ok(spanning_forest(edges, tile.points.len()))
+        Ok(store_slots(tile, spanning_forest(edges, tile.points.len())))
     }
 }
 
@@ -108,11 +109,13 @@ impl SourcesKernel {
         rule: &PairRule,
         i: usize,
         found: &[Neighbour],
-        edges: &mut Vec<LocalEdge>,
+        edges: &mut Vec<Edge>,
     ) {
         let end = |k: usize| {
             normals[k].map(|n| End {
                 id: tile.ids[k] as u32,
+                // A local number until the forest is found.
+                slot: k as u32,
                 p: tile.points[k],
                 n,
             })
@@ -121,15 +124,7 @@ impl SourcesKernel {
         for nb in found {
             let j = nb.index as usize;
             let Some(b) = end(j) else { continue };
-            let local = if a.id <= b.id {
-                [i as u32, j as u32]
-            } else {
-                [j as u32, i as u32]
-            };
-            edges.push(LocalEdge {
-                edge: rule.edge(a, b),
-                local,
-            });
+            edges.push(rule.edge(a, b));
         }
     }
 }

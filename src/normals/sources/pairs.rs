@@ -15,10 +15,12 @@ use crate::normals::forest::Edge;
 use crate::normals::EdgeCost;
 use glam::DVec3;
 
-/// One end of a pair: input id, position, unit normal.
+/// One end of a pair: input id, union-find slot (see
+/// [`crate::normals::forest::Edge`]), position, unit normal.
 #[derive(Clone, Copy, Debug)]
 pub struct End {
     pub id: u32,
+    pub slot: u32,
     pub p: DVec3,
     pub n: DVec3,
 }
@@ -59,7 +61,7 @@ impl PairRule {
         } else {
             2.0 + d2.sqrt()
         };
-        Edge::with_cost(x.id, y.id, cost, dot)
+        Edge::between([x.id, x.slot], [y.id, y.slot], cost, dot)
     }
 
     /// The paper's `w = |n_x . n_y|`, or with [`EdgeCost::TangentOffset`]
@@ -90,6 +92,7 @@ mod tests {
     fn end(id: u32, p: [f64; 3], n: [f64; 3]) -> End {
         End {
             id,
+            slot: id,
             p: DVec3::from_array(p),
             n: DVec3::from_array(n).normalize(),
         }

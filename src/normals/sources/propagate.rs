@@ -133,6 +133,8 @@ impl<'c, 'a> State<'c, 'a> {
         let end = |k: usize| {
             self.normal(k).map(|n| End {
                 id: self.c.ids[k],
+                // In memory there is no union-find: the slot is unused.
+                slot: k as u32,
                 p: self.c.points[k],
                 n,
             })

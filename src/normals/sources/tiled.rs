@@ -17,7 +17,7 @@
 //!
 //! Memory: the union-find holds 5 bytes and a bit per point, as the
 //! spanning-tree pass does; the forests (about one edge per point) stay on
-//! disk.
+//! disk. Like that pass, the union-find is indexed by store index.
 
 use super::kernel::SourcesKernel;
 use super::propagate::faces_away;
@@ -97,7 +97,7 @@ pub fn orient_store(
     let root = store.len() as u32;
     let mut uf = ParityUnionFind::new(store.len() as usize + 1);
     for &(e, flip) in &sources {
-        uf.union(e.id as u32, root, flip);
+        uf.union(e.index as u32, root, flip);
     }
     runs.union_all(&mut uf, "orient: six sources, forest", progress)?;
     let roots = component_roots(
@@ -123,10 +123,10 @@ fn global_sources(
 ) -> Result<Vec<(Extreme, bool)>, NormalsError> {
     let mut ex = Extremes::new(&params.sources);
     let mut found: HashMap<u64, DVec3> = HashMap::new();
-    for_each_tile(store, normals, flags, |_, pts, ids, nrm, _| {
+    for_each_tile(store, normals, flags, |start, pts, ids, nrm, _| {
         for (k, p) in pts.iter().enumerate() {
             if let Some(n) = nrm[k] {
-                ex.offer(*p, ids[k], 0);
+                ex.offer(*p, ids[k], start + k as u64);
                 found.insert(ids[k], n);
             }
         }
@@ -154,11 +154,11 @@ fn component_roots(
 ) -> Result<HashMap<u32, bool>, NormalsError> {
     // Per root: (extent along dir, id, flip) of the best point so far.
     let mut best: HashMap<u32, (f64, u64, bool)> = HashMap::new();
-    for_each_tile(store, normals, flags, |_, pts, ids, nrm, _| {
+    for_each_tile(store, normals, flags, |start, pts, ids, nrm, _| {
         let reached = uf.find(root).0;
         for (k, p) in pts.iter().enumerate() {
             let Some(n) = nrm[k] else { continue };
-            let (r, parity) = uf.find(ids[k] as u32);
+            let (r, parity) = uf.find((start + k as u64) as u32);
             if r == reached {
                 continue;
             }
@@ -187,17 +187,15 @@ fn write_oriented(
     progress.begin("orient: write", store.len());
     let mut unoriented = 0;
     let (mut nrm, mut flg) = (Vec::new(), Vec::new());
-    let mut ids = Vec::new();
     for t in store.tiles() {
-        store.read_indices(t.start, t.count, &mut ids)?;
         normals.read_f32(t.start, t.count, &mut nrm)?;
         flags.read_u8(t.start, t.count, &mut flg)?;
         let (reached, root_parity) = uf.find(root);
-        for (k, &id) in ids.iter().enumerate() {
+        for k in 0..flg.len() {
             if flg[k] & FLAG_DEGENERATE != 0 {
                 continue;
             }
-            let (r, parity) = uf.find(id as u32);
+            let (r, parity) = uf.find((t.start + k as u64) as u32);
             let flip = if r == reached {
                 Some(parity ^ root_parity)
             } else {
