@@ -2,28 +2,17 @@
 //! on a noisy 1M-point torus: marching cubes from stored normals, untiled
 //! and tiled, and the whole job (normals + orientation + marching cubes).
 
+mod common;
+
+use common::torus_store;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
-use scanmesh::io::memory::MemoryReader;
 use scanmesh::mesh::MeshFormat;
 use scanmesh::normals::compute_normals;
 use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
-use scanmesh::store::{build_store, BuildOptions, PointStore, TileTarget};
-use scanmesh::synth::{generate, Shape};
+use scanmesh::store::PointStore;
 use std::hint::black_box;
 use std::path::Path;
-
-const N: usize = 1_000_000;
-
-fn store(dir: &Path, tile_points: u64) -> PointStore {
-    let scan = generate(&Shape::torus(1.0, 0.3), N, 0.0002, 1).expect("generate");
-    let mut reader = MemoryReader::new("torus", scan.points, None);
-    let opts = BuildOptions {
-        tiles: TileTarget::Points(tile_points),
-        ..BuildOptions::default()
-    };
-    build_store(&mut reader, dir, &opts, &NoProgress).expect("store")
-}
 
 fn mesh(store: &mut PointStore, out: &Path) {
     let params = ImplicitParams::default();
@@ -45,8 +34,8 @@ fn bench(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("mesh.ply");
     let params = ImplicitParams::default();
-    let mut whole = store(&dir.path().join("whole"), u64::MAX);
-    let mut tiled = store(&dir.path().join("tiled"), 150_000);
+    let mut whole = torus_store(&dir.path().join("whole"), u64::MAX);
+    let mut tiled = torus_store(&dir.path().join("tiled"), 150_000);
     for s in [&mut whole, &mut tiled] {
         compute_normals(s, &params.normals, RunOptions::new(2), &NoProgress).expect("normals");
     }
@@ -62,7 +51,7 @@ fn bench(c: &mut Criterion) {
         b.iter_batched(
             || {
                 let fresh = tempfile::tempdir().expect("tmp");
-                let s = store(fresh.path(), u64::MAX);
+                let s = torus_store(fresh.path(), u64::MAX);
                 (fresh, s)
             },
             |(_fresh, mut s)| mesh(&mut s, &out),

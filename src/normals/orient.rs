@@ -198,7 +198,10 @@ fn apply(
         .tiles()
         .par_iter()
         .map(|t| {
-            let n = apply_tile(t, comps, oriented, normals, flags);
+            let n = rewrite_signs(t, normals, flags, |i| {
+                let (label, parity) = comps.get(i as u32);
+                oriented[label as usize].map(|sign| parity ^ sign)
+            });
             progress.advance(t.count);
             n
         })
@@ -207,12 +210,15 @@ fn apply(
     Ok(counts.iter().sum())
 }
 
-fn apply_tile(
+/// Rewrites tile `t`'s normals and flags in the store: `flip(store index)`
+/// says whether a non-degenerate point's normal flips (`None`: flag it
+/// unoriented). Returns the number flagged. Shared by every orientation
+/// mode's final pass.
+pub(super) fn rewrite_signs(
     t: &TileEntry,
-    comps: &Components,
-    oriented: &[Option<bool>],
     normals: &Column,
     flags: &Column,
+    mut flip: impl FnMut(u64) -> Option<bool>,
 ) -> Result<u64, NormalsError> {
     let (mut nrm, mut flg) = (Vec::new(), Vec::new());
     normals.read_f32(t.start, t.count, &mut nrm)?;
@@ -222,10 +228,9 @@ fn apply_tile(
         if flg[i] & FLAG_DEGENERATE != 0 {
             continue;
         }
-        let (label, parity) = comps.get((t.start + i as u64) as u32);
-        match oriented[label as usize] {
-            Some(sign) if parity ^ sign => nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v),
-            Some(_) => {}
+        match flip(t.start + i as u64) {
+            Some(true) => nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v),
+            Some(false) => {}
             None => {
                 flg[i] |= FLAG_UNORIENTED;
                 unoriented += 1;

@@ -12,7 +12,7 @@
 //!    along the first source direction, which faces that way
 //!    ([`super::propagate`]); then the oriented normals are written into
 //!    the store column. Every point with a normal ends up oriented, so
-//!    [`FLAG_UNORIENTED`] marks none here (degenerate points keep their
+//!    [`FLAG_UNORIENTED`](crate::normals::FLAG_UNORIENTED) marks none here (degenerate points keep their
 //!    [`FLAG_DEGENERATE`] and zero normal).
 //!
 //! Memory: the union-find holds 5 bytes and a bit per point, as the
@@ -22,9 +22,10 @@
 use super::kernel::SourcesKernel;
 use super::propagate::faces_away;
 use super::{Extreme, Extremes, Neighbourhood, Order, SourceParams, SourcesError};
+use crate::normals::orient::rewrite_signs;
 use crate::normals::runs::EdgeRuns;
 use crate::normals::unionfind::ParityUnionFind;
-use crate::normals::{initial_margin, NormalsError, FLAG_DEGENERATE, FLAG_UNORIENTED};
+use crate::normals::{initial_margin, NormalsError, FLAG_DEGENERATE};
 use crate::pipeline::{run_tiles, Progress, RunOptions};
 use crate::store::{Column, PointStore};
 use glam::DVec3;
@@ -186,32 +187,16 @@ fn write_oriented(
 ) -> Result<u64, NormalsError> {
     progress.begin("orient: write", store.len());
     let mut unoriented = 0;
-    let (mut nrm, mut flg) = (Vec::new(), Vec::new());
     for t in store.tiles() {
-        normals.read_f32(t.start, t.count, &mut nrm)?;
-        flags.read_u8(t.start, t.count, &mut flg)?;
         let (reached, root_parity) = uf.find(root);
-        for k in 0..flg.len() {
-            if flg[k] & FLAG_DEGENERATE != 0 {
-                continue;
-            }
-            let (r, parity) = uf.find((t.start + k as u64) as u32);
-            let flip = if r == reached {
+        unoriented += rewrite_signs(t, normals, flags, |i| {
+            let (r, parity) = uf.find(i as u32);
+            if r == reached {
                 Some(parity ^ root_parity)
             } else {
                 roots.get(&r).map(|s| parity ^ s)
-            };
-            match flip {
-                Some(true) => nrm[3 * k..3 * k + 3].iter_mut().for_each(|v| *v = -*v),
-                Some(false) => {}
-                None => {
-                    flg[k] |= FLAG_UNORIENTED;
-                    unoriented += 1;
-                }
             }
-        }
-        normals.write_f32(t.start, &nrm)?;
-        flags.write_bytes(t.start, &flg)?;
+        })?;
         progress.advance(t.count);
     }
     progress.end();
