@@ -133,9 +133,20 @@ fn terrain_has_one_outer_boundary_and_nothing_beyond_the_data() {
 
 #[test]
 fn tiled_mesh_equals_untiled_mesh() {
+    tiled_equals_untiled(false);
+}
+
+/// `--closed` averages many planes a corner, reaching farther than the
+/// open mode's nearest plane: the margins must still hold.
+#[test]
+fn tiled_closed_mesh_equals_untiled_mesh() {
+    tiled_equals_untiled(true);
+}
+
+fn tiled_equals_untiled(closed: bool) {
     let scan = generate(&Shape::torus(1.0, 0.3), 40_000, 0.001, 12).expect("generate");
-    let whole = reconstruct(&scan.points, u64::MAX, 2, false);
-    let tiled = reconstruct(&scan.points, 500, 2, false);
+    let whole = reconstruct(&scan.points, u64::MAX, 2, closed);
+    let tiled = reconstruct(&scan.points, 500, 2, closed);
     assert!(
         tiled.report.run.tiles >= 64,
         "{} tiles",

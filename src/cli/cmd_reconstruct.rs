@@ -27,6 +27,8 @@ pub struct ReconstructArgs {
     #[arg(long)]
     noise: Option<f64>,
     /// The surface is closed: no open boundaries (paper 1 section 4.1).
+    /// Each corner averages the planes of its 64 nearest samples, so a few
+    /// mis-oriented normals rarely open holes (about 1.6x the time).
     #[arg(long)]
     closed: bool,
     /// Neighbours per point for the normals (per query when topological).

@@ -41,6 +41,14 @@ pub enum Corner {
 /// so open boundaries still appear.
 pub const PLANES_TRIED: usize = 8;
 
+/// Planes averaged at each corner of a closed surface (see
+/// [`averaged_planes`]).
+pub const CLOSED_PLANES: usize = 64;
+
+/// Width of the averaging weight, as a share of the distance to the
+/// farthest of the [`CLOSED_PLANES`] samples.
+const CLOSED_WIDTH: f64 = 0.8;
+
 /// Evaluates `f` at `p`; `limit` is `rho + delta` (infinite for `--closed`).
 ///
 /// The nearest sample's plane is tried first, from a single-nearest query;
@@ -55,14 +63,14 @@ pub fn signed_distance(
     limit: f64,
     nbr: &mut Vec<Neighbour>,
 ) -> Corner {
+    if limit.is_infinite() {
+        return averaged_planes(s, tile, p, nbr);
+    }
     let nearest = match nearest_planes(s, tile, p, 1, nbr) {
         Ok(Some((c, _))) => c[0],
         Ok(None) => return Corner::Value(None),
         Err(short) => return Corner::Short(short),
     };
-    if limit.is_infinite() {
-        return Corner::Value(Some(plane_value(s, nearest, p)));
-    }
     match try_plane(s, tile, p, nearest, limit, nbr) {
         Ok(Some(f)) => return Corner::Value(Some(f)),
         Ok(None) => {}
@@ -81,6 +89,49 @@ pub fn signed_distance(
         }
     }
     Corner::Value(None)
+}
+
+/// `f` for a closed surface: the plane values of the [`CLOSED_PLANES`]
+/// nearest samples, averaged with Gaussian weights `exp(-d^2 / h^2)`, `h` =
+/// [`CLOSED_WIDTH`] x the farthest one's distance.
+///
+/// Deviation from paper 1 sections 2.5 and 4.1, which take the nearest
+/// sample's plane alone: with every corner defined, one mis-oriented sample
+/// (at thin parts, where orientation is ill-posed: 0.6 % of the dragon's)
+/// gives the wrong sign to its whole Voronoi cell, which reaches out of the
+/// narrow band, so the surface leaks through the band's edge (a hole) or
+/// bulges out with it. Many planes outvote it, and the width grows with the
+/// distance to the data, so corners far from it average over a wide patch
+/// while corners near it keep a local fit (the implicit MLS surface of
+/// Kolluri 2005, with an adaptive width). 1M dragon samples, `--closed`:
+/// 29 components and 34 boundary loops with the nearest plane, 2 and 1
+/// with 64 averaged planes; mean distance to the dragon 0.122 / 0.152
+/// spacings (mesh to reference / back) became 0.094 / 0.105.
+/// The sum runs in (distance, id) order, so it is the same in every tiling.
+fn averaged_planes(s: &Samples, tile: &TilePoints, p: DVec3, nbr: &mut Vec<Neighbour>) -> Corner {
+    s.index.knn(p, CLOSED_PLANES, None, nbr);
+    let Some(farthest) = nbr.last() else {
+        return Corner::Value(None);
+    };
+    // Fewer loaded than asked: complete only if nothing lies beyond.
+    let reach = if nbr.len() == CLOSED_PLANES {
+        farthest.dist2.sqrt()
+    } else {
+        f64::INFINITY
+    };
+    let room = tile.room(p);
+    if reach > room {
+        return Corner::Short(reach - room);
+    }
+    let h2 = CLOSED_WIDTH * CLOSED_WIDTH * farthest.dist2;
+    let (mut weights, mut sum) = (0.0, 0.0);
+    for m in nbr.iter() {
+        // All samples at `p` itself (h = 0): their plane values are 0.
+        let w = if h2 > 0.0 { (-m.dist2 / h2).exp() } else { 1.0 };
+        weights += w;
+        sum += w * plane_value(s, m.index, p);
+    }
+    Corner::Value(Some(sum / weights))
 }
 
 /// The `want` (at most [`PLANES_TRIED`]) nearest samples of `p` (indices
@@ -174,5 +225,86 @@ fn nearest(s: &Samples, q: DVec3, hint: Option<u32>, nbr: &mut Vec<Neighbour>) {
     match hint.and_then(|h| Some((h, *s.points.get(h as usize)?))) {
         Some(h) => s.index.nearest_from(q, h, nbr),
         None => s.index.knn(q, 1, None, nbr),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Aabb;
+
+    /// Samples on the plane z = 0 at integer x, y in [-10, 10], normals +z
+    /// except those listed in `flipped`, all loaded.
+    fn plane_samples(flipped: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<u64>, TilePoints) {
+        let points: Vec<DVec3> = (-10..=10)
+            .flat_map(|y| (-10..=10).map(move |x| DVec3::new(x as f64, y as f64, 0.0)))
+            .collect();
+        let normals = points
+            .iter()
+            .map(|p| {
+                if flipped.contains(p) {
+                    -DVec3::Z
+                } else {
+                    DVec3::Z
+                }
+            })
+            .collect();
+        let ids = (0..points.len() as u64).collect();
+        let big = DVec3::splat(1e6);
+        let tile = TilePoints {
+            tile: 0,
+            points: Vec::new(),
+            ids: Vec::new(),
+            store_first: 0,
+            margin_store: Vec::new(),
+            n_core: 0,
+            core: Aabb::new(-big, big),
+            loaded: Aabb::new(-big, big),
+            margin: 1e6,
+            normals: Vec::new(),
+            flags: Vec::new(),
+        };
+        (points, normals, ids, tile)
+    }
+
+    fn value(
+        points: &[DVec3],
+        normals: &[DVec3],
+        ids: &[u64],
+        tile: &TilePoints,
+        p: DVec3,
+        limit: f64,
+    ) -> f64 {
+        let index = GridIndex::with_cell(points, ids, 1.5).expect("index");
+        let s = Samples {
+            points,
+            normals,
+            index: &index,
+        };
+        match signed_distance(&s, tile, p, limit, &mut Vec::new()) {
+            Corner::Value(Some(f)) => f,
+            other => panic!("{other:?} at {p}"),
+        }
+    }
+
+    #[test]
+    fn averaged_planes_reproduce_a_plane() {
+        let (points, normals, ids, tile) = plane_samples(&[]);
+        for p in [DVec3::new(0.3, 0.2, 0.7), DVec3::new(-2.5, 4.0, -1.25)] {
+            let f = value(&points, &normals, &ids, &tile, p, f64::INFINITY);
+            assert!((f - p.z).abs() < 1e-12, "{f} at {p}");
+        }
+    }
+
+    #[test]
+    fn one_flipped_sample_flips_the_nearest_plane_but_not_the_average() {
+        let bad = DVec3::ZERO;
+        let (points, normals, ids, tile) = plane_samples(&[bad]);
+        let p = DVec3::new(0.1, -0.1, 0.5);
+        // Paper 1's value, nearest plane only (a finite limit the
+        // projection meets): the wrong sign above the flipped sample.
+        assert!(value(&points, &normals, &ids, &tile, p, 10.0) < 0.0);
+        let f = value(&points, &normals, &ids, &tile, p, f64::INFINITY);
+        assert!(f > 0.3, "averaged value {f}");
     }
 }
