@@ -113,15 +113,8 @@ fn averaged_planes(s: &Samples, tile: &TilePoints, p: DVec3, nbr: &mut Vec<Neigh
     let Some(farthest) = nbr.last() else {
         return Corner::Value(None);
     };
-    // Fewer loaded than asked: complete only if nothing lies beyond.
-    let reach = if nbr.len() == CLOSED_PLANES {
-        farthest.dist2.sqrt()
-    } else {
-        f64::INFINITY
-    };
-    let room = tile.room(p);
-    if reach > room {
-        return Corner::Short(reach - room);
+    if let Err(short) = complete(tile, p, nbr, CLOSED_PLANES) {
+        return Corner::Short(short);
     }
     let h2 = CLOSED_WIDTH * CLOSED_WIDTH * farthest.dist2;
     let (mut weights, mut sum) = (0.0, 0.0);
@@ -152,25 +145,32 @@ fn nearest_planes(
     } else {
         s.index.knn(p, want, None, nbr);
     }
-    let Some(last) = nbr.last() else {
+    if nbr.is_empty() {
         return Ok(None);
-    };
-    // Fewer than `want` loaded: complete only if nothing lies beyond.
-    let reach = if nbr.len() == want {
-        last.dist2.sqrt()
-    } else {
-        f64::INFINITY
-    };
-    let room = tile.room(p);
-    if reach > room {
-        return Err(reach - room);
     }
+    complete(tile, p, nbr, want)?;
     // `nbr` is reused by the projection queries: copy the candidates out.
     let mut candidates = [0u32; PLANES_TRIED];
     for (c, m) in candidates.iter_mut().zip(nbr.iter()) {
         *c = m.index;
     }
     Ok(Some((candidates, nbr.len().min(PLANES_TRIED))))
+}
+
+/// Whether `nbr`, the `want` nearest loaded samples of `p`, are the `want`
+/// nearest of all; `Err` with the shortfall of the loaded region if not.
+/// Fewer than `want` loaded are complete only if nothing lies beyond.
+fn complete(tile: &TilePoints, p: DVec3, nbr: &[Neighbour], want: usize) -> Result<(), f64> {
+    let reach = match nbr.last() {
+        Some(last) if nbr.len() == want => last.dist2.sqrt(),
+        _ => f64::INFINITY,
+    };
+    let room = tile.room(p);
+    if reach > room {
+        Err(reach - room)
+    } else {
+        Ok(())
+    }
 }
 
 fn plane_value(s: &Samples, i: u32, p: DVec3) -> f64 {
