@@ -2,7 +2,9 @@
 //! lattice corner `p`, the nearest sample `x_i` with oriented normal `n_i`
 //! gives `f(p) = (p - x_i) . n_i`, defined only where the projection
 //! `z = p - f(p) n_i` lies within `rho + delta` of the samples; otherwise
-//! undefined, which is how open boundaries appear.
+//! undefined, which is how open boundaries appear. For a closed surface
+//! (`--closed`, paper 1 section 4.1) every corner is defined, and `f`
+//! averages the planes of many nearest samples ([`averaged_planes`]).
 //!
 //! Evaluated on one tile's loaded samples, the value is exact (ties by id) as
 //! long as every distance it relied on fits in the loaded region; otherwise
