@@ -47,11 +47,8 @@ fn cloud() -> PointChunk {
 
 fn write(path: &Path, format: Format, points: &PointChunk) {
     let spec = WriterSpec {
-        format,
         with_normals: true,
-        with_flags: false,
-        bounds: None,
-        las_transform: None,
+        ..WriterSpec::new(format)
     };
     let mut w = create_writer(path, &spec).expect("create");
     w.write_chunk(points, None).expect("write");

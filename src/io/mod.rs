@@ -143,6 +143,20 @@ pub struct WriterSpec {
     pub las_transform: Option<LasTransform>,
 }
 
+impl WriterSpec {
+    /// Positions only, in `format`; set the other fields with struct update
+    /// syntax.
+    pub fn new(format: Format) -> Self {
+        WriterSpec {
+            format,
+            with_normals: false,
+            with_flags: false,
+            bounds: None,
+            las_transform: None,
+        }
+    }
+}
+
 /// A streaming sink of points. Output goes to a temporary name and appears
 /// under its final name only in [`PointWriter::finish`].
 pub trait PointWriter: Send {

@@ -243,11 +243,9 @@ mod tests {
         }
         let origin = store.origin();
         let spec = WriterSpec {
-            format: Format::PlyBinaryLe,
             with_normals: true,
             with_flags: true,
-            bounds: None,
-            las_transform: None,
+            ..WriterSpec::new(Format::PlyBinaryLe)
         };
         let mut first: Option<Vec<u8>> = None;
         for (threads, window) in [(1, 5003), (2, 1), (3, 777), (2, 5003), (4, 64)] {

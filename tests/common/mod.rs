@@ -60,11 +60,9 @@ pub fn normals_of(
             compute_normals(store, params, RunOptions::new(threads), &NoProgress).expect("normals");
         let out = dir.join("out.ply");
         let spec = WriterSpec {
-            format: Format::PlyBinaryLe,
             with_normals: true,
             with_flags: true,
-            bounds: None,
-            las_transform: None,
+            ..WriterSpec::new(Format::PlyBinaryLe)
         };
         export_points(store, &out, &spec, 7777, &NoProgress).expect("export");
         let (normals, flags) = read_normals(&out);

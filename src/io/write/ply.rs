@@ -98,13 +98,7 @@ fn encode_binary<B: ByteOrder>(
     range: Range<usize>,
 ) {
     let mut b8 = [0u8; 8];
-    for (i, p) in chunk
-        .xyz
-        .iter()
-        .enumerate()
-        .take(range.end)
-        .skip(range.start)
-    {
+    for (i, p) in range.clone().zip(&chunk.xyz[range]) {
         for v in [p.x, p.y, p.z] {
             B::write_f64(&mut b8, v);
             buf.extend_from_slice(&b8);
@@ -124,13 +118,7 @@ fn encode_binary<B: ByteOrder>(
 /// One line per point; `{}` prints the shortest text that parses back to
 /// the same f64 (f32 for normals).
 pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked, range: Range<usize>) {
-    for (i, p) in chunk
-        .xyz
-        .iter()
-        .enumerate()
-        .take(range.end)
-        .skip(range.start)
-    {
+    for (i, p) in range.clone().zip(&chunk.xyz[range]) {
         // Writing into a Vec cannot fail.
         let _ = write!(buf, "{} {} {}", p.x, p.y, p.z);
         if let Some(n) = c.normals {
