@@ -157,6 +157,11 @@ fn bad_options_are_errors() {
         let o = scanmesh(&["normals", &input, "-o", out, bad[0], bad[1]]);
         assert!(!o.status.success(), "{bad:?} accepted");
     }
+    for share in ["--min-piece=1.5", "--min-piece=-0.1", "--min-piece=NaN"] {
+        let o = scanmesh(&["reconstruct", &input, "-o", out, share]);
+        assert_fails_naming(&o, "--min-piece");
+        assert!(!dir.path().join("o.ply").exists());
+    }
 }
 
 #[test]

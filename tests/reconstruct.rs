@@ -22,15 +22,24 @@ struct Recon {
 }
 
 fn reconstruct(points: &[DVec3], tile_points: u64, threads: usize, closed: bool) -> Recon {
+    let params = ImplicitParams {
+        closed,
+        ..ImplicitParams::default()
+    };
+    reconstruct_with(points, tile_points, threads, &params)
+}
+
+fn reconstruct_with(
+    points: &[DVec3],
+    tile_points: u64,
+    threads: usize,
+    params: &ImplicitParams,
+) -> Recon {
     with_store(points, tile_points, threads, |store, dir| {
         let out = dir.join("mesh.ply");
-        let params = ImplicitParams {
-            closed,
-            ..ImplicitParams::default()
-        };
         let report = reconstruct_implicit(
             store,
-            &params,
+            params,
             &out,
             MeshFormat::PlyBinary,
             RunOptions::new(threads),
@@ -91,6 +100,34 @@ fn closed_torus_is_watertight_with_euler_zero() {
         "vertex {worst} off the torus, cell {}",
         r.report.cell
     );
+}
+
+#[test]
+fn closed_scan_drops_a_stray_cluster_but_keeps_it_when_asked() {
+    let mut points = generate(&Shape::torus(1.0, 0.3), 60_000, 0.0, 4)
+        .expect("generate")
+        .points;
+    let stray = generate(&Shape::sphere(DVec3::new(3.0, 0.0, 0.0), 0.06), 300, 0.0, 5);
+    points.extend(stray.expect("generate").points);
+    let closed = |min_piece| ImplicitParams {
+        closed: true,
+        min_piece,
+        ..ImplicitParams::default()
+    };
+    let kept = reconstruct_with(&points, u64::MAX, 2, &closed(Some(0.0)));
+    assert!(kept.quality.components >= 2, "{}", kept.quality);
+    let r = reconstruct_with(&points, 20_000, 2, &closed(None));
+    let q = &r.quality;
+    assert!(q.watertight && q.components == 1, "{q}");
+    assert_eq!(
+        (q.euler_characteristic, q.unreferenced_vertices),
+        (0, 0),
+        "{q}"
+    );
+    let dropped = kept.quality.triangles - q.triangles;
+    assert!(r.report.pieces.pieces_dropped >= 1);
+    assert_eq!(r.report.pieces.triangles_dropped, dropped);
+    assert!(r.mesh.vertices.iter().all(|v| v.x < 2.0));
 }
 
 #[test]

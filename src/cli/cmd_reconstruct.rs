@@ -4,6 +4,7 @@
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::mesh::MeshFormat;
+use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
@@ -28,9 +29,16 @@ pub struct ReconstructArgs {
     noise: Option<f64>,
     /// The surface is closed: no open boundaries (paper 1 section 4.1).
     /// Each corner averages the planes of its 64 nearest samples, so a few
-    /// mis-oriented normals rarely open holes (about 1.6x the time).
+    /// mis-oriented normals rarely open holes (about 1.6x the time); the
+    /// holes left where the surface runs out of the band around the data
+    /// (next to parts thinner than a cell) are closed with least-area
+    /// patches, and pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
+    /// Drop connected pieces with fewer triangles than this share of the
+    /// largest piece's (default 0.01 with --closed, else 0: keep all).
+    #[arg(long, value_name = "SHARE")]
+    min_piece: Option<f64>,
     /// Neighbours per point for the normals (per query when topological).
     #[arg(long, default_value_t = 12)]
     k: usize,
@@ -71,10 +79,15 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
     }
+    // Checked again by the library; here before any input is read.
+    if let Some(share) = a.min_piece.filter(|s| !(0.0..=1.0).contains(s)) {
+        bail!("--min-piece {share} must be a share between 0 and 1");
+    }
     let mut params = ImplicitParams {
         cell: a.cell,
         noise: a.noise,
         closed: a.closed,
+        min_piece: a.min_piece,
         ..ImplicitParams::default()
     };
     params.normals.k = a.k;
@@ -103,7 +116,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {
     println!(
-        "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles, {:.2} s, peak {} -> {}",
+        "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles{}, {:.2} s, peak {} -> {}",
         points,
         tiles,
         r.rho,
@@ -113,8 +126,36 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
         r.cubes,
         r.vertices,
         r.triangles,
+        changes_summary(r),
         secs,
         super::peak(),
         out.display()
     );
+}
+
+/// " (N holes closed, M left open; P small pieces dropped)", the parts
+/// that apply.
+fn changes_summary(r: &ImplicitReport) -> String {
+    let (h, p) = (r.holes, r.pieces);
+    let mut parts = Vec::new();
+    if h.filled > 0 {
+        parts.push(format!("{} holes closed", h.filled));
+    }
+    if h.left_open > 0 {
+        parts.push(format!(
+            "{} holes left open (longer than {MAX_FILLED_LOOP} edges, pinched, or unpatchable)",
+            h.left_open
+        ));
+    }
+    if p.pieces_dropped > 0 {
+        parts.push(format!(
+            "{} small pieces dropped ({} triangles)",
+            p.pieces_dropped, p.triangles_dropped
+        ));
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join(", "))
+    }
 }

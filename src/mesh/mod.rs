@@ -11,6 +11,7 @@
 
 pub mod distance;
 pub mod error;
+pub mod pieces;
 pub mod quality;
 pub mod shapes;
 pub mod write;
@@ -26,6 +27,7 @@ pub use distance::{
     compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
 };
 pub use error::MeshError;
+pub use pieces::{PieceFilter, PieceReport};
 pub use quality::{quality, ComponentQuality, QualityReport};
 pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions};
 

@@ -75,6 +75,16 @@ impl<S: Slot> DisjointSets<S> {
     pub fn is_root(&self, x: usize) -> bool {
         self.parent[x].to_usize() == x
     }
+
+    /// Adds singleton sets up to `n` members in all.
+    pub fn grow(&mut self, n: usize) {
+        let len = self.parent.len();
+        self.parent.extend((len..n).map(S::from_usize));
+    }
+
+    pub fn len(&self) -> usize {
+        self.parent.len()
+    }
 }
 
 /// Disjoint sets that also carry a parity bit per member relative to its

@@ -6,33 +6,54 @@
 //! size, not the mesh's). Output indices are given in first-appearance
 //! order, so the mesh is the same for a given tiling and thread count.
 
+use super::holes::{BoundaryEdges, HoleReport, StitchedTriangle};
 use super::kernel::owns;
 use super::lattice::{edge_from_key, Lattice};
 use super::polygonize::CubeVertex;
 use crate::geom::Aabb;
-use crate::mesh::{MeshError, MeshWriter};
+use crate::mesh::{MeshError, PieceFilter, PieceReport};
 use glam::DVec3;
 use std::collections::HashMap;
 
+/// What the stitcher wrote, and what it did to holes and small pieces.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StitchReport {
+    pub vertices: u64,
+    pub triangles: u64,
+    pub holes: HoleReport,
+    pub pieces: PieceReport,
+}
+
 pub struct Stitcher {
-    writer: MeshWriter,
+    writer: PieceFilter,
     /// Offset from lattice (store-relative) coordinates to output ones.
     origin: DVec3,
     shared: HashMap<u64, u32>,
     private: HashMap<u64, u32>,
+    /// Boundary edges, gathered when holes are to be closed.
+    holes: Option<BoundaryEdges>,
     pub vertices: u64,
     pub triangles: u64,
 }
 
 impl Stitcher {
-    pub fn new(writer: MeshWriter, origin: DVec3) -> Self {
+    pub fn new(writer: PieceFilter, origin: DVec3) -> Self {
         Stitcher {
             writer,
             origin,
             shared: HashMap::new(),
             private: HashMap::new(),
+            holes: None,
             vertices: 0,
             triangles: 0,
+        }
+    }
+
+    /// Closes the mesh's small holes at the end ([`super::holes`]).
+    pub fn closing_holes(self) -> Self {
+        Stitcher {
+            holes: Some(BoundaryEdges::default()),
+            ..self
         }
     }
 
@@ -46,11 +67,13 @@ impl Stitcher {
         self.private.clear();
         let mut new_vertices = Vec::new();
         let mut faces = Vec::with_capacity(tris.len());
+        let mut stitched = Vec::new();
         for t in tris {
             let mut face = [0u32; 3];
-            for (slot, v) in face.iter_mut().zip(t) {
-                let on_seam = touches_other_tiles(lattice, core, v.key);
-                let map = if on_seam {
+            let mut seam = [false; 3];
+            for ((slot, v), on_seam) in face.iter_mut().zip(t).zip(&mut seam) {
+                *on_seam = touches_other_tiles(lattice, core, v.key);
+                let map = if *on_seam {
                     &mut self.shared
                 } else {
                     &mut self.private
@@ -61,7 +84,16 @@ impl Stitcher {
                     next
                 });
             }
+            if self.holes.is_some() {
+                stitched.push(StitchedTriangle {
+                    vertices: [0, 1, 2].map(|i| (face[i], self.origin + t[i].pos)),
+                    on_seam: seam,
+                });
+            }
             faces.push(face);
+        }
+        if let Some(holes) = &mut self.holes {
+            holes.add_tile(&stitched);
         }
         self.writer.add_vertices(&new_vertices)?;
         self.writer.add_triangles(&faces)?;
@@ -70,8 +102,16 @@ impl Stitcher {
         Ok(())
     }
 
-    pub fn finish(self) -> Result<(u64, u64), MeshError> {
-        self.writer.finish()
+    /// Closes the holes (if asked) and completes the file.
+    pub fn finish(mut self) -> Result<StitchReport, MeshError> {
+        let mut report = StitchReport::default();
+        if let Some(holes) = self.holes.take() {
+            let patches;
+            (patches, report.holes) = holes.fill();
+            self.writer.add_triangles(&patches)?;
+        }
+        (report.vertices, report.triangles, report.pieces) = self.writer.finish()?;
+        Ok(report)
     }
 }
 

@@ -1,0 +1,319 @@
+//! Dropping a mesh's small connected pieces while it streams out: a
+//! [`MeshWriter`] behind a filter that keeps every vertex and triangle in
+//! raw scratch files, joins the vertices of each triangle in disjoint sets,
+//! and at the end replays only the pieces with at least a given share of
+//! the largest piece's triangles, with vertices renumbered.
+//!
+//! Why: a closed scan (`reconstruct --closed`) should come out as the
+//! object, but a few lattice cubes around a stray cluster of samples (VRIP
+//! debris inside the dragon, noise) close into pieces of their own.
+//! MeshLab's "remove isolated pieces" is the usual after-the-fact tool; here
+//! it costs 4 bytes per vertex while streaming (the sets) and a replay of the
+//! scratch files at the end. With a share of 0 the filter passes everything
+//! straight through and keeps nothing.
+
+use super::union_find::DisjointSets;
+use super::{MeshError, MeshWriter};
+use crate::io::IoError;
+use glam::DVec3;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
+
+/// Items replayed into the writer at a time.
+const BATCH: usize = 1 << 16;
+
+/// What the filter dropped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PieceReport {
+    pub pieces_dropped: u64,
+    pub triangles_dropped: u64,
+}
+
+pub struct PieceFilter {
+    out: MeshWriter,
+    spool: Option<Spool>,
+}
+
+/// The raw mesh so far, and which vertices are joined.
+struct Spool {
+    min_share: f64,
+    vertices: BufWriter<File>,
+    faces: BufWriter<File>,
+    vertex_count: u64,
+    sets: DisjointSets<u32>,
+}
+
+impl PieceFilter {
+    /// Keeps the pieces with at least `min_share` (0..=1) of the largest
+    /// piece's triangles; 0 keeps everything and spools nothing.
+    pub fn new(out: MeshWriter, min_share: f64) -> Result<Self, MeshError> {
+        if min_share <= 0.0 {
+            return Ok(PieceFilter { out, spool: None });
+        }
+        let dir = match out.path().parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => std::path::PathBuf::from("."),
+        };
+        let scratch = || {
+            tempfile::tempfile_in(&dir)
+                .map(|f| BufWriter::with_capacity(1 << 20, f))
+                .map_err(|e| MeshError::Io(IoError::os(out.path(), e)))
+        };
+        let spool = Spool {
+            min_share,
+            vertices: scratch()?,
+            faces: scratch()?,
+            vertex_count: 0,
+            sets: DisjointSets::new(0),
+        };
+        Ok(PieceFilter {
+            spool: Some(spool),
+            out,
+        })
+    }
+
+    fn os(&self, e: std::io::Error) -> MeshError {
+        MeshError::Io(IoError::os(self.out.path(), e))
+    }
+
+    /// As [`MeshWriter::add_vertices`]; the checks happen on replay.
+    pub fn add_vertices(&mut self, vertices: &[DVec3]) -> Result<u32, MeshError> {
+        let Some(spool) = &mut self.spool else {
+            return self.out.add_vertices(vertices);
+        };
+        let first = spool.vertex_count;
+        let count = first + vertices.len() as u64;
+        // u32::MAX itself marks a dropped vertex on replay.
+        if count >= u32::MAX as u64 {
+            return Err(MeshError::TooManyVertices {
+                path: self.out.path().to_path_buf(),
+                count,
+                limit: u32::MAX as u64 - 1,
+            });
+        }
+        let written = spool.add_vertices(vertices);
+        written.map_err(|e| self.os(e))?;
+        Ok(first as u32)
+    }
+
+    /// As [`MeshWriter::add_triangles`].
+    pub fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> Result<(), MeshError> {
+        let Some(spool) = &mut self.spool else {
+            return self.out.add_triangles(triangles);
+        };
+        let written = spool.add_triangles(triangles);
+        written.map_err(|e| self.os(e))
+    }
+
+    /// Replays the kept pieces and completes the file; returns the vertex
+    /// and triangle counts written and what was dropped.
+    pub fn finish(self) -> Result<(u64, u64, PieceReport), MeshError> {
+        let PieceFilter { mut out, spool } = self;
+        let Some(spool) = spool else {
+            let (v, t) = out.finish()?;
+            return Ok((v, t, PieceReport::default()));
+        };
+        let report = spool.replay(&mut out)?;
+        let (v, t) = out.finish()?;
+        Ok((v, t, report))
+    }
+}
+
+impl Spool {
+    fn add_vertices(&mut self, vertices: &[DVec3]) -> std::io::Result<()> {
+        for p in vertices {
+            for c in p.to_array() {
+                self.vertices.write_all(&c.to_le_bytes())?;
+            }
+        }
+        self.vertex_count += vertices.len() as u64;
+        self.sets.grow(self.vertex_count as usize);
+        Ok(())
+    }
+
+    fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> std::io::Result<()> {
+        for t in triangles {
+            for i in t {
+                self.faces.write_all(&i.to_le_bytes())?;
+            }
+            // An index past the vertices (a caller's bug) gets a set of its
+            // own here and an out-of-range number on replay, where the
+            // writer names it.
+            self.sets
+                .grow(t.iter().max().map_or(0, |&m| m as usize + 1));
+            self.sets.union(t[0] as usize, t[1] as usize);
+            self.sets.union(t[0] as usize, t[2] as usize);
+        }
+        Ok(())
+    }
+
+    /// Writes the kept vertices and triangles into `out`.
+    fn replay(mut self, out: &mut MeshWriter) -> Result<PieceReport, MeshError> {
+        let path = out.path().to_path_buf();
+        let os = |e| MeshError::Io(IoError::os(&path, e));
+        let mut faces = rewind(self.faces).map_err(os)?;
+        // Triangles per piece, at the piece's root (its smallest vertex).
+        let mut count = vec![0u32; self.sets.len()];
+        for_each_record::<12>(&mut faces, |r| {
+            let a = u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize;
+            let root = self.sets.find(a);
+            count[root] = count[root].saturating_add(1);
+        })
+        .map_err(os)?;
+        let largest = count.iter().copied().max().unwrap_or(0);
+        let least = (self.min_share * largest as f64).ceil() as u32;
+        let mut report = PieceReport::default();
+        // A root comes before its members, so `count` can turn into the new
+        // numbering as it goes: at a root its own count is still there; at
+        // a member the root's new number is (u32::MAX: dropped).
+        let mut next = 0u32;
+        for v in 0..count.len() {
+            let root = self.sets.find(v);
+            let kept = if root == v {
+                let keep = count[v] >= least;
+                if !keep && count[v] > 0 {
+                    report.pieces_dropped += 1;
+                    report.triangles_dropped += count[v] as u64;
+                }
+                keep
+            } else {
+                count[root] != u32::MAX
+            };
+            count[v] = match kept {
+                false => u32::MAX,
+                true if v as u64 >= self.vertex_count => u32::MAX - 1,
+                true => {
+                    next += 1;
+                    next - 1
+                }
+            };
+        }
+        let renumbered = count;
+        let mut vertices = rewind(self.vertices).map_err(os)?;
+        let mut batch = Vec::with_capacity(BATCH);
+        let mut result = Ok(0);
+        let mut v = 0usize;
+        for_each_record::<24>(&mut vertices, |r| {
+            if renumbered[v] != u32::MAX {
+                let c = |i: usize| f64::from_le_bytes(r[i..i + 8].try_into().unwrap_or([0; 8]));
+                batch.push(DVec3::new(c(0), c(8), c(16)));
+            }
+            v += 1;
+            if batch.len() == BATCH && result.is_ok() {
+                result = out.add_vertices(&batch);
+                batch.clear();
+            }
+        })
+        .map_err(os)?;
+        result.and_then(|_| out.add_vertices(&batch))?;
+        faces.seek(SeekFrom::Start(0)).map_err(os)?;
+        let mut kept = Vec::with_capacity(BATCH);
+        let mut result = Ok(());
+        for_each_record::<12>(&mut faces, |r| {
+            let i = |k: usize| u32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]);
+            let t = [i(0), i(4), i(8)].map(|x| renumbered[x as usize]);
+            if t[0] != u32::MAX {
+                kept.push(t);
+            }
+            if kept.len() == BATCH && result.is_ok() {
+                result = out.add_triangles(&kept);
+                kept.clear();
+            }
+        })
+        .map_err(os)?;
+        result.and_then(|()| out.add_triangles(&kept))?;
+        Ok(report)
+    }
+}
+
+fn rewind(w: BufWriter<File>) -> std::io::Result<BufReader<File>> {
+    let mut f = w.into_inner().map_err(|e| e.into_error())?;
+    f.seek(SeekFrom::Start(0))?;
+    Ok(BufReader::with_capacity(1 << 20, f))
+}
+
+fn for_each_record<const N: usize>(
+    r: &mut BufReader<File>,
+    mut f: impl FnMut(&[u8; N]),
+) -> std::io::Result<()> {
+    let mut record = [0u8; N];
+    loop {
+        match r.read_exact(&mut record) {
+            Ok(()) => f(&record),
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(()),
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::read_mesh_any;
+    use crate::mesh::quality::quality;
+    use crate::mesh::shapes::icosphere;
+    use crate::mesh::{write_mesh, Mesh, MeshFormat};
+
+    /// A big sphere (1280 triangles), a small far one (20) written between its halves (so the
+    /// kept vertices need renumbering), in batches as a stitcher would.
+    fn write_two_spheres(path: &std::path::Path, min_share: f64) -> PieceReport {
+        let big = icosphere(3);
+        let small = icosphere(0);
+        let writer = MeshWriter::create(path, MeshFormat::PlyBinary).unwrap();
+        let mut filter = PieceFilter::new(writer, min_share).unwrap();
+        let (half, rest) = big.triangles.split_at(big.triangles.len() / 2);
+        filter.add_vertices(&big.vertices).unwrap();
+        filter.add_triangles(half).unwrap();
+        let far = small.vertices.iter().map(|p| *p * 0.1 + DVec3::splat(5.0));
+        let first = filter.add_vertices(&far.collect::<Vec<_>>()).unwrap();
+        let shifted: Vec<[u32; 3]> = small
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| i + first))
+            .collect();
+        filter.add_triangles(&shifted).unwrap();
+        filter.add_triangles(rest).unwrap();
+        filter.finish().unwrap().2
+    }
+
+    #[test]
+    fn a_small_piece_is_dropped_and_the_rest_renumbered() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.ply");
+        let report = write_two_spheres(&path, 0.05);
+        let small = icosphere(0).triangles.len() as u64;
+        assert_eq!(
+            report,
+            PieceReport {
+                pieces_dropped: 1,
+                triangles_dropped: small
+            }
+        );
+        let (vertices, triangles) = read_mesh_any(&path).unwrap();
+        let big = icosphere(3);
+        assert_eq!(vertices, big.vertices);
+        assert_eq!(triangles, big.triangles);
+        let q = quality(&Mesh::new(vertices, triangles));
+        assert!(q.watertight && q.components == 1 && q.unreferenced_vertices == 0);
+    }
+
+    #[test]
+    fn a_share_of_zero_passes_everything_through() {
+        let dir = tempfile::tempdir().unwrap();
+        let (kept, direct) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+        assert_eq!(write_two_spheres(&kept, 0.0), PieceReport::default());
+        let (vertices, triangles) = read_mesh_any(&kept).unwrap();
+        write_mesh(
+            &direct,
+            &Mesh::new(vertices, triangles),
+            MeshFormat::PlyBinary,
+        )
+        .unwrap();
+        assert_eq!(
+            std::fs::read(&kept).unwrap(),
+            std::fs::read(&direct).unwrap()
+        );
+        // And a share of 1 keeps only the largest piece.
+        assert_eq!(write_two_spheres(&kept, 1.0).pieces_dropped, 1);
+    }
+}
