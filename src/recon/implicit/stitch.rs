@@ -5,6 +5,8 @@
 //! again by a neighbour, so its index stays in a map (about the seam's
 //! size, not the mesh's). Output indices are given in first-appearance
 //! order, so the mesh is the same for a given tiling and thread count.
+//! Asked to close holes, it also hands every tile's triangles to
+//! [`super::holes`], and patches the loops at the end.
 
 use super::holes::{BoundaryEdges, HoleReport, StitchedTriangle};
 use super::kernel::owns;
