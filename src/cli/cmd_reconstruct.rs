@@ -79,10 +79,6 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
     }
-    // Checked again by the library; here before any input is read.
-    if let Some(share) = a.min_piece.filter(|s| !(0.0..=1.0).contains(s)) {
-        bail!("--min-piece {share} must be a share between 0 and 1");
-    }
     let mut params = ImplicitParams {
         cell: a.cell,
         noise: a.noise,
@@ -90,6 +86,8 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         min_piece: a.min_piece,
         ..ImplicitParams::default()
     };
+    // Checked again by the library; here before any input is read.
+    params.min_piece_share()?;
     params.normals.k = a.k;
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);

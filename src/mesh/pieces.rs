@@ -13,6 +13,7 @@
 //! straight through and keeps nothing.
 
 use super::union_find::DisjointSets;
+use super::write::scratch_beside;
 use super::{MeshError, MeshWriter};
 use crate::io::IoError;
 use glam::DVec3;
@@ -50,12 +51,8 @@ impl PieceFilter {
         if min_share <= 0.0 {
             return Ok(PieceFilter { out, spool: None });
         }
-        let dir = match out.path().parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => std::path::PathBuf::from("."),
-        };
         let scratch = || {
-            tempfile::tempfile_in(&dir)
+            scratch_beside(out.path())
                 .map(|f| BufWriter::with_capacity(1 << 20, f))
                 .map_err(|e| MeshError::Io(IoError::os(out.path(), e)))
         };

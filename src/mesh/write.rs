@@ -73,11 +73,7 @@ impl MeshWriter {
     ) -> Result<Self, MeshError> {
         let mut out = AtomicFile::create(path)?;
         let os = |e| MeshError::Io(IoError::os(path, e));
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let scratch = tempfile::tempfile_in(&dir).map_err(os)?;
+        let scratch = scratch_beside(path).map_err(os)?;
         let mut vertex_sink = BufWriter::with_capacity(BUFFER, out.file().try_clone().map_err(os)?);
         let counts_at = write_header(&mut vertex_sink, format, options).map_err(os)?;
         Ok(MeshWriter {
@@ -247,6 +243,16 @@ impl MeshWriter {
             }
         }
     }
+}
+
+/// An unnamed scratch file in the directory of `path` (same file system,
+/// removed by the OS when closed or on a crash).
+pub(crate) fn scratch_beside(path: &Path) -> std::io::Result<File> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    tempfile::tempfile_in(&dir)
 }
 
 /// Writes the header; for PLY returns where the two counts sit.

@@ -30,6 +30,20 @@ pub struct ImplicitParams {
     pub min_piece: Option<f64>,
 }
 
+impl ImplicitParams {
+    /// The `min_piece` share to use (its default filled in), or why it is
+    /// unusable.
+    pub fn min_piece_share(&self) -> Result<f64, ReconError> {
+        let default = if self.closed { CLOSED_MIN_PIECE } else { 0.0 };
+        let share = self.min_piece.unwrap_or(default);
+        if (0.0..=1.0).contains(&share) {
+            Ok(share)
+        } else {
+            Err(ReconError::BadShare(share))
+        }
+    }
+}
+
 /// Default share of the largest piece below which `--closed` drops a piece:
 /// a closed scan is of objects, and a piece with a hundredth of the main
 /// one's triangles is a stray cluster closed on itself (the 10M dragon's
@@ -80,11 +94,7 @@ pub fn reconstruct_implicit(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<ImplicitReport, ReconError> {
-    let default_piece = if params.closed { CLOSED_MIN_PIECE } else { 0.0 };
-    let min_piece = params.min_piece.unwrap_or(default_piece);
-    if !(0.0..=1.0).contains(&min_piece) {
-        return Err(ReconError::BadShare(min_piece));
-    }
+    let min_piece = params.min_piece_share()?;
     let mut report = ImplicitReport::default();
     if !store.has_column(NORMAL_FILE) || store.manifest.sampling.is_none() {
         report.normals = Some(compute_normals(store, &params.normals, opts, progress)?);
