@@ -60,8 +60,7 @@ pub fn build_options(s: &super::Settings, params: &NormalParams) -> BuildOptions
         None => TileTarget::Budget {
             budget: s.budget(),
             bytes_per_point: params.bytes_per_point(),
-            // Orientation's union-find: 4 + 1 bytes and a parity bit per point.
-            reserved_per_point: 6,
+            reserved_per_point: scanmesh::normals::orient::BYTES_PER_POINT,
         },
     };
     BuildOptions {

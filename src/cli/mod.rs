@@ -132,7 +132,7 @@ impl Settings {
     }
 
     pub fn run_options(&self) -> RunOptions {
-        RunOptions::new(self.threads)
+        RunOptions::new(self.threads).within(self.budget())
     }
 
     /// The store to work on: `input` itself when it is one, else a scratch

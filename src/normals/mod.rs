@@ -8,11 +8,13 @@
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
 pub mod components;
+pub mod contract;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
 pub mod hood;
 pub mod kernel;
+pub mod labels;
 pub mod orient;
 pub mod pca;
 pub mod runs;
@@ -238,7 +240,11 @@ fn normals_into(
     report.sampling = sampling.stats();
     report.forest_edges = runs.edges();
     if params.orientation == Orientation::SpanningTree {
-        let stats = orient::orient_by_forest(store, runs, normals, flags, progress)?;
+        let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
+            orient::orient_by_forest(store, runs, normals, flags, progress)?
+        } else {
+            orient::orient_external(store, runs, normals, flags, progress)?
+        };
         report.unoriented = stats.unoriented;
         report.components = stats.components;
     }

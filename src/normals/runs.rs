@@ -67,6 +67,28 @@ impl EdgeRuns {
         self.written
     }
 
+    /// Number of runs pushed (one per tile, in tile order).
+    pub fn run_count(&self) -> usize {
+        self.runs.len()
+    }
+
+    /// Position in the file (in edges) of run `r`'s first edge: runs lie
+    /// one after another, so `run_start(r) + i` numbers every edge.
+    pub fn run_start(&self, r: usize) -> u64 {
+        self.runs[r].0
+    }
+
+    /// Makes every pushed run readable by [`Self::read_run`].
+    pub fn flush(&mut self) -> Result<(), IoError> {
+        self.out.flush().map_err(|e| IoError::os(&self.path, e))
+    }
+
+    /// The edges of run `r` (after [`Self::flush`]).
+    pub fn read_run(&self, r: usize) -> Result<Vec<Edge>, IoError> {
+        let (start, len) = self.runs[r];
+        read_edges(self.out.get_ref(), start, len as usize, &self.path)
+    }
+
     /// Kruskal over all runs: joins every edge's slots in `uf` with its flip
     /// parity, in global key order, reporting progress as stage `stage`.
     /// With two or more threads the merge (reading, decoding, the heap) runs
@@ -132,7 +154,17 @@ impl EdgeRuns {
     }
     /// Calls `f` on every edge of every run in global [`Edge::key`] order.
     /// `buffer_bytes` is shared among the runs' read buffers.
-    pub fn merge(mut self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
+    pub fn merge(self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
+        self.merge_numbered(buffer_bytes, |_, e| f(e))
+    }
+
+    /// As [`Self::merge`], each edge with its position in the file (see
+    /// [`Self::run_start`]).
+    pub fn merge_numbered(
+        mut self,
+        buffer_bytes: usize,
+        mut f: impl FnMut(u64, Edge),
+    ) -> Result<(), IoError> {
         self.out.flush().map_err(|e| IoError::os(&self.path, e))?;
         let file = self.out.get_ref();
         let per_run = (buffer_bytes / Edge::BYTES / self.runs.len().max(1)).max(64);
@@ -155,8 +187,9 @@ impl EdgeRuns {
         while let Some(Reverse((_, r))) = heap.pop() {
             let c = &mut cursors[r];
             let e = c.buf[c.pos];
+            let at = c.next - (c.buf.len() - c.pos) as u64;
             c.pos += 1;
-            f(e);
+            f(at, e);
             if let Some(e) = c.peek(file, per_run, &self.path)? {
                 heap.push(Reverse((e.key(), r)));
             }
@@ -186,20 +219,27 @@ impl RunCursor {
             if n == 0 {
                 return Ok(None);
             }
-            let mut bytes = vec![0u8; n * Edge::BYTES];
-            file.read_exact_at(&mut bytes, self.next * Edge::BYTES as u64)
-                .map_err(|e| IoError::os(path, e))?;
-            self.buf.clear();
-            self.buf.extend(bytes.chunks_exact(Edge::BYTES).map(|c| {
-                let mut a = [0u8; Edge::BYTES];
-                a.copy_from_slice(c);
-                Edge::from_bytes(&a)
-            }));
+            self.buf = read_edges(file, self.next, n, path)?;
             self.pos = 0;
             self.next += n as u64;
         }
         Ok(Some(self.buf[self.pos]))
     }
+}
+
+/// `n` edges from position `start` (in edges) of `file`.
+fn read_edges(file: &File, start: u64, n: usize, path: &Path) -> Result<Vec<Edge>, IoError> {
+    let mut bytes = vec![0u8; n * Edge::BYTES];
+    file.read_exact_at(&mut bytes, start * Edge::BYTES as u64)
+        .map_err(|e| IoError::os(path, e))?;
+    Ok(bytes
+        .chunks_exact(Edge::BYTES)
+        .map(|c| {
+            let mut a = [0u8; Edge::BYTES];
+            a.copy_from_slice(c);
+            Edge::from_bytes(&a)
+        })
+        .collect())
 }
 
 #[cfg(test)]

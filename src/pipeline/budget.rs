@@ -18,6 +18,14 @@ impl MemoryBudget {
         }
     }
 
+    /// Whether per-point state of `bytes_per_point` bytes for `points`
+    /// points may stay in memory through a global pass: at most half of
+    /// what is left beside the fixed costs. Beyond that, global passes take
+    /// their external path, whose memory does not grow with the points.
+    pub fn holds(&self, points: u64, bytes_per_point: u64) -> bool {
+        points.saturating_mul(bytes_per_point) <= self.bytes.saturating_sub(BASE_BYTES) / 2
+    }
+
     /// Largest tile (core points) such that `threads + 1` tiles in flight, each
     /// with `margin_factor` times its core points loaded at
     /// `bytes_per_point`, fit beside `reserved` bytes and the base cost.

@@ -41,7 +41,8 @@ pub enum TileTarget {
     Points(u64),
     /// As large as the memory budget allows for a kernel needing
     /// `bytes_per_point` per loaded point, after `reserved_per_point` bytes
-    /// per stored point kept for global passes (e.g. orientation).
+    /// per stored point kept for global passes (e.g. orientation) when
+    /// [`MemoryBudget::holds`] them.
     Budget {
         budget: MemoryBudget,
         bytes_per_point: u64,
@@ -57,7 +58,16 @@ impl TileTarget {
                 budget,
                 bytes_per_point,
                 reserved_per_point,
-            } => budget.tile_points(bytes_per_point, 1.5, reserved_per_point * count),
+            } => {
+                // State a global pass keeps in memory only when it fits;
+                // otherwise that pass goes external and needs no share.
+                let reserved = if budget.holds(count, reserved_per_point) {
+                    reserved_per_point * count
+                } else {
+                    0
+                };
+                budget.tile_points(bytes_per_point, 1.5, reserved)
+            }
         }
     }
 }
