@@ -53,8 +53,8 @@ pub struct ForestLabels {
     pub nodes: u64,
     /// Super-edges over all tiles.
     pub super_edges: u64,
-    /// The dense node number of each extra node, in the order given.
-    extra_labels: Vec<(u64, bool)>,
+    /// Label and parity of the virtual root, when extra nodes were given.
+    root: Option<(u64, bool)>,
 }
 
 impl ForestLabels {
@@ -85,20 +85,17 @@ impl ForestLabels {
             .collect();
         let root = nodes as u32 - 1;
         let (comps, accepted) = kruskal(supers, nodes, root, extra, &boundary, progress)?;
-        let extra_labels = extra
-            .iter()
-            .map(|&(s, _)| {
-                let (l, p) = comps.get(rank(&boundary, s));
-                (store.len() + u64::from(l), p)
-            })
-            .collect();
+        let root = (!extra.is_empty()).then(|| {
+            let (l, p) = comps.get(root);
+            (store.len() + u64::from(l), p)
+        });
         let labels = ForestLabels {
             column: Column::create(&dir.join(LABELS_FILE), 8, store.len())?,
             points: store.len(),
             node_components: comps.count(),
             nodes,
             super_edges,
-            extra_labels,
+            root,
         };
         progress.begin("orient: resolve", tiles.len() as u64);
         let solved = Solved {
@@ -124,10 +121,10 @@ impl ForestLabels {
         label.checked_sub(self.points).map(|l| l as usize)
     }
 
-    /// Label and parity of the virtual root's component, if extra nodes
-    /// were given: the `i`-th extra node's label with its parity to the root.
-    pub fn extra(&self, i: usize) -> Option<(u64, bool)> {
-        self.extra_labels.get(i).copied()
+    /// Label and parity of the virtual root the extra nodes were joined
+    /// to (`None` without extra nodes).
+    pub fn root(&self) -> Option<(u64, bool)> {
+        self.root
     }
 
     fn resolve_all(
