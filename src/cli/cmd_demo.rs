@@ -41,7 +41,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let params = ImplicitParams::default();
     let dir = scratch_store_dir(&a.output);
     let mut reader = MemoryReader::new("embedded dragon sample", scan.points.clone(), None);
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
+    let opts = super::cmd_tile::build_options(&s, params.normals.cost());
     let result = (|| -> Result<()> {
         let mut store = build_store(&mut reader, &dir, &opts, progress.as_ref())?;
         let r = reconstruct_implicit(

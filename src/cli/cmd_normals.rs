@@ -166,7 +166,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let spec = output_spec(&a.output, a.ascii)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params);
+    let opts = super::cmd_tile::build_options(&s, params.cost());
     let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
     let report = compute_normals(&mut ws.store, &params, s.run_options(), progress.as_ref())?;
     let window = (s.mem / 8 / 48).max(1 << 16);

@@ -92,7 +92,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
+    let opts = super::cmd_tile::build_options(&s, params.normals.cost());
     let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
     let r = reconstruct_implicit(
         &mut ws.store,

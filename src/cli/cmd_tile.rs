@@ -4,7 +4,8 @@ use anyhow::{bail, Result};
 use clap::Args;
 use scanmesh::io::open_reader;
 use scanmesh::normals::NormalParams;
-use scanmesh::store::{build_store, spacing::ensure_spacing, BuildOptions};
+use scanmesh::pipeline::KernelCost;
+use scanmesh::store::{build_store, spacing::ensure_spacing, BuildOptions, TileTarget};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -28,7 +29,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut reader = open_reader(&a.input, s.policy)?;
-    let opts = build_options(&s, &NormalParams::default());
+    let opts = build_options(&s, NormalParams::default().cost());
     let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress.as_ref()) {
         Ok(st) => st,
         Err(e) => {
@@ -52,19 +53,13 @@ pub fn run(a: TileArgs) -> Result<()> {
     Ok(())
 }
 
-/// Tile sizes for a kernel: forced by --tile-points, else from the budget.
-pub fn build_options(s: &super::Settings, params: &NormalParams) -> BuildOptions {
-    use scanmesh::store::TileTarget;
-    let tiles = match s.tile_points {
-        Some(n) => TileTarget::Points(n),
-        None => TileTarget::Budget {
-            budget: s.budget(),
-            bytes_per_point: params.bytes_per_point(),
-            reserved_per_point: scanmesh::normals::orient::BYTES_PER_POINT,
+/// Tile sizes for a kernel: forced by --tile-points, else from the plan.
+pub fn build_options(s: &super::Settings, cost: KernelCost) -> BuildOptions {
+    match s.tile_points {
+        Some(n) => BuildOptions {
+            tiles: TileTarget::Points(n),
+            ..BuildOptions::within(s.budget(), cost)
         },
-    };
-    BuildOptions {
-        tiles,
-        scatter_buffer: (s.mem / 8).min(64 << 20) as usize,
+        None => BuildOptions::within(s.budget(), cost),
     }
 }

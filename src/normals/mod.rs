@@ -22,7 +22,7 @@ pub mod sources;
 pub mod stats;
 pub mod unionfind;
 
-use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
 use crate::store::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
@@ -30,6 +30,10 @@ use glam::DVec3;
 use kernel::{NormalsKernel, NormalsTile};
 use runs::EdgeRuns;
 use stats::{SamplingHistograms, SamplingStats};
+
+/// Bytes per point of an input-order output window of positions, normals
+/// and flags (the record and its share of the reorder buffers).
+pub const EXPORT_BYTES_PER_POINT: u64 = 48;
 
 /// The neighbourhood was too small or degenerate (colinear, coincident) for
 /// a tangent plane: the normal is zero, never made up.
@@ -129,6 +133,22 @@ impl NormalParams {
         match self.neighbourhood {
             NormalHood::Knn => 120 + 20 * k,
             NormalHood::Topological { .. } => 160 + 20 * 2 * k,
+        }
+    }
+
+    /// What a normals run costs, for the memory plan: the kernel's bytes per
+    /// loaded point, the orientation's union-find (or its contracted
+    /// boundaries when that does not fit), and the output's records.
+    pub fn cost(&self) -> KernelCost {
+        let global = !matches!(
+            self.orientation,
+            Orientation::None | Orientation::Viewpoint(_)
+        );
+        KernelCost {
+            bytes_per_point: self.bytes_per_point(),
+            global_per_point: if global { orient::BYTES_PER_POINT } else { 0 },
+            contracts_boundaries: global,
+            window_bytes_per_point: EXPORT_BYTES_PER_POINT,
         }
     }
 

@@ -15,8 +15,8 @@ use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOC
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
 use crate::geom::Aabb;
 use crate::io::{PointChunk, PointReader, DEFAULT_CHUNK};
-use crate::pipeline::{MemoryBudget, Progress};
-use crate::tiling::{plan_tiles, TilePlan};
+use crate::pipeline::{BudgetError, KernelCost, MemoryBudget, MemoryPlan, Progress};
+use crate::tiling::{plan_tiles, CellCount, TilePlan};
 use glam::DVec3;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -32,6 +32,9 @@ pub struct BuildOptions {
     pub tiles: TileTarget,
     /// Bytes of per-tile write buffers during the scatter pass, in total.
     pub scatter_buffer: usize,
+    /// Most occupied histogram cells held at once (36 bytes each at the
+    /// peak); a finer grid is coarsened until its histogram fits.
+    pub histogram_cells: usize,
 }
 
 /// How large tiles may be.
@@ -39,35 +42,34 @@ pub struct BuildOptions {
 pub enum TileTarget {
     /// At most this many core points per tile.
     Points(u64),
-    /// As large as the memory budget allows for a kernel needing
-    /// `bytes_per_point` per loaded point, after `reserved_per_point` bytes
-    /// per stored point kept for global passes (e.g. orientation) when
-    /// [`MemoryBudget::holds`] them.
+    /// As large as the memory plan for the kernel allows ([`MemoryPlan`]).
     Budget {
         budget: MemoryBudget,
-        bytes_per_point: u64,
-        reserved_per_point: u64,
+        cost: KernelCost,
     },
 }
 
 impl TileTarget {
-    pub fn points(&self, count: u64) -> u64 {
+    /// Core points per tile for a store of `count` points, or why the
+    /// budget fits no plan.
+    pub fn points(&self, count: u64) -> Result<u64, BudgetError> {
         match *self {
-            TileTarget::Points(n) => n.max(1),
-            TileTarget::Budget {
-                budget,
-                bytes_per_point,
-                reserved_per_point,
-            } => {
-                // State a global pass keeps in memory only when it fits;
-                // otherwise that pass goes external and needs no share.
-                let reserved = if budget.holds(count, reserved_per_point) {
-                    reserved_per_point * count
-                } else {
-                    0
-                };
-                budget.tile_points(bytes_per_point, 1.5, reserved)
+            TileTarget::Points(n) => Ok(n.max(1)),
+            TileTarget::Budget { budget, cost } => {
+                Ok(MemoryPlan::new(budget, count, &cost)?.tile_points)
             }
+        }
+    }
+}
+
+impl BuildOptions {
+    /// Tiles, histogram and scatter buffers sized by `budget` for a kernel
+    /// costing `cost`.
+    pub fn within(budget: MemoryBudget, cost: KernelCost) -> Self {
+        BuildOptions {
+            tiles: TileTarget::Budget { budget, cost },
+            scatter_buffer: crate::pipeline::plan::scatter_buffer(budget),
+            histogram_cells: crate::pipeline::plan::histogram_cells(budget),
         }
     }
 }
@@ -77,6 +79,7 @@ impl Default for BuildOptions {
         BuildOptions {
             tiles: TileTarget::Points(1 << 20),
             scatter_buffer: 32 << 20,
+            histogram_cells: 1 << 23,
         }
     }
 }
@@ -112,9 +115,11 @@ fn build_with_spill(
             path: reader.info().path.clone(),
         });
     }
-    let grid = grid_for(&bounds, count);
-    let cells = histogram(spill_path, &grid, count, progress)?;
-    let plan = plan_tiles(cells, grid.dims, opts.tiles.points(count));
+    // Checked once the count is known, before the input is read again.
+    let target = opts.tiles.points(count)?;
+    let fine = grid_for(&bounds, count);
+    let (cells, grid) = histogram(spill_path, &fine, count, opts.histogram_cells, progress)?;
+    let plan = plan_tiles(cells, grid.dims, target);
     let origin = bounds.center();
     let mut tiles = tile_entries(&plan);
     scatter(
@@ -236,13 +241,16 @@ fn for_each_spilled(
     Ok(())
 }
 
+/// Points per occupied cell of `grid`, or of a coarser grid if more than
+/// `cap` cells are occupied; returns the cells and the grid they are of.
 fn histogram(
     path: &Path,
     grid: &GridSpec,
     count: u64,
+    cap: usize,
     progress: &dyn Progress,
-) -> Result<Vec<([u32; 3], u64)>, StoreError> {
-    let mut cells = CellCounts::new(grid.dims);
+) -> Result<(Vec<CellCount>, GridSpec), StoreError> {
+    let mut cells = CellCounts::new(grid.dims, cap);
     progress.begin("histogram", count);
     for_each_spilled(path, count, |_, pts| {
         for p in pts {
@@ -251,9 +259,16 @@ fn histogram(
         progress.advance(pts.len() as u64);
         Ok(())
     })?;
-    let cells = cells.into_cells();
+    let (cells, level) = cells.into_cells();
     progress.end();
-    Ok(cells)
+    // Cells 2^level times as wide: `cell_of` on the coarse grid gives the
+    // fine cell shifted right by `level` (the power of two scales exactly).
+    let coarse = GridSpec {
+        min: grid.min,
+        cell: grid.cell * f64::from(1u32 << level),
+        dims: grid.dims.map(|d| d.div_ceil(1 << level)),
+    };
+    Ok((cells, coarse))
 }
 
 fn tile_entries(plan: &TilePlan) -> Vec<TileEntry> {
