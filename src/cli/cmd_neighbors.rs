@@ -79,22 +79,17 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let mut ws = s.open_input(
-        &a.input,
-        &a.output,
-        &super::cmd_tile::build_options(&s, params.cost()),
-        progress.as_ref(),
-    )?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let out = OutputOptions {
         format: a.format(),
-        window_points: (s.mem / 8 / params.window_bytes_per_point()).max(1 << 12),
+        window_points: run.plan.window_points,
     };
     let report = compute_neighbours(
-        &mut ws.store,
+        &mut run.ws.store,
         &params,
         &a.output,
         &out,
-        s.run_options(),
+        run.opts,
         progress.as_ref(),
     )
     .with_context(|| format!("writing {}", a.output.display()))?;

@@ -4,8 +4,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use scanmesh::io::open_reader;
 use scanmesh::normals::NormalParams;
-use scanmesh::pipeline::KernelCost;
-use scanmesh::store::{build_store, spacing::ensure_spacing, BuildOptions, TileTarget};
+use scanmesh::store::{build_store, spacing::ensure_spacing};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -29,7 +28,9 @@ pub fn run(a: TileArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut reader = open_reader(&a.input, s.policy)?;
-    let opts = build_options(&s, NormalParams::default().cost());
+    let cost = NormalParams::default().cost();
+    s.check_floor(&cost)?;
+    let opts = s.build_options(cost);
     let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress.as_ref()) {
         Ok(st) => st,
         Err(e) => {
@@ -51,15 +52,4 @@ pub fn run(a: TileArgs) -> Result<()> {
         a.output.display()
     );
     Ok(())
-}
-
-/// Tile sizes for a kernel: forced by --tile-points, else from the plan.
-pub fn build_options(s: &super::Settings, cost: KernelCost) -> BuildOptions {
-    match s.tile_points {
-        Some(n) => BuildOptions {
-            tiles: TileTarget::Points(n),
-            ..BuildOptions::within(s.budget(), cost)
-        },
-        None => BuildOptions::within(s.budget(), cost),
-    }
 }

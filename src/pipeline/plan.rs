@@ -18,7 +18,7 @@
 //!   [`BYTES_PER_NODE`] each;
 //! - export: a window of `window_points` input-order records.
 
-use super::MemoryBudget;
+use super::{MemoryBudget, RunOptions};
 
 /// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O
 /// buffers (the read chunk, the merge buffers of the edge runs).
@@ -58,10 +58,10 @@ pub struct KernelCost {
 #[non_exhaustive]
 pub enum BudgetError {
     #[error(
-        "--mem {budget} is too small for {points} points: this run needs at least {needed} \
-         ({reason})",
+        "--mem {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
         budget = crate::units::human_bytes(*.budget),
-        needed = crate::units::human_bytes(*.needed)
+        needed = crate::units::human_bytes(*.needed),
+        for_points = if *.points > 0 { format!(" for {} points", .points) } else { String::new() }
     )]
     TooSmall {
         budget: u64,
@@ -160,6 +160,34 @@ impl MemoryPlan {
         lo << 20
     }
 
+    /// Run options for a store whose largest tile holds `largest` core
+    /// points: all workers when `threads + 1` such tiles fit the plan,
+    /// else fewer tiles in flight (a store built under a larger budget),
+    /// down to one; none fitting is an error naming the budget needed.
+    pub fn run_options(&self, cost: &KernelCost, largest: u64) -> Result<RunOptions, BudgetError> {
+        let opts = RunOptions::new(self.budget.threads).within(self.budget);
+        let reserved = if self.global_in_memory {
+            self.points * cost.global_per_point
+        } else {
+            0
+        };
+        let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
+        let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
+        let fit = (free / per_tile.max(1)) as usize;
+        if fit == 0 {
+            return Err(BudgetError::TooSmall {
+                budget: self.budget.bytes,
+                points: self.points,
+                needed: (BASE_BYTES + reserved + per_tile).div_ceil(1 << 20) << 20,
+                reason: "the store's largest tile (rebuild it with `scanmesh tile --mem`)",
+            });
+        }
+        Ok(RunOptions {
+            in_flight: opts.in_flight.min(fit),
+            ..opts
+        })
+    }
+
     /// Estimated peak of each stage beside the fixed costs, for `info --plan`.
     pub fn stages(&self, cost: &KernelCost) -> Vec<(&'static str, u64)> {
         let tiles = (self.budget.threads as u64 + 1) as f64
@@ -229,6 +257,19 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn oversized_tiles_run_fewer_at_a_time() {
+        let budget = MemoryBudget::new(256 << 20, 2);
+        let plan = MemoryPlan::new(budget, 100_000_000, &normals()).unwrap();
+        let ok = plan.run_options(&normals(), plan.tile_points).unwrap();
+        assert_eq!(ok.in_flight, 3);
+        let one = plan
+            .run_options(&normals(), plan.tile_points * 5 / 2)
+            .unwrap();
+        assert_eq!(one.in_flight, 1);
+        assert!(plan.run_options(&normals(), plan.tile_points * 4).is_err());
     }
 
     #[test]
