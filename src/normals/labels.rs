@@ -8,7 +8,8 @@
 //!
 //! Passes, each over the tile forests on disk:
 //! 1. boundary: the store indices each tile's forest reaches outside the
-//!    tile's core, sorted and deduplicated (`B`, 4 bytes each);
+//!    tile's core (logged by [`EdgeRuns::push_tile_run`] as the forests
+//!    arrived), sorted and deduplicated (`B`, 4 bytes each);
 //! 2. contract every tile, writing its super-edges (ends numbered densely:
 //!    boundary vertices by rank in `B`, branch points after them) as runs;
 //! 3. Kruskal over the merged super-edges with a parity union-find over the
@@ -70,9 +71,8 @@ impl ForestLabels {
     ) -> Result<Self, NormalsError> {
         runs.flush()?;
         let tiles = store.tiles();
-        progress.begin("orient: boundary", tiles.len() as u64);
-        let boundary = boundary_vertices(tiles, runs, extra, progress)?;
-        progress.end();
+        let sources: Vec<u32> = extra.iter().map(|e| e.0).collect();
+        let boundary = runs.outside_slots(&sources)?;
         let dir = store.dir.as_path();
         let mut supers = EdgeRuns::create(&dir.join(SUPERS_FILE))?;
         progress.begin("orient: contract", tiles.len() as u64);
@@ -193,38 +193,6 @@ fn bit(bits: &[u64], i: u64) -> bool {
 
 fn rank(boundary: &[u32], s: u32) -> u32 {
     boundary.binary_search(&s).unwrap_or_default() as u32
-}
-
-/// Pass 1: every store index a tile forest reaches outside its tile's core
-/// (so it lies in two forests), plus the extra nodes; sorted, unique.
-fn boundary_vertices(
-    tiles: &[TileEntry],
-    runs: &EdgeRuns,
-    extra: &[(u32, bool)],
-    progress: &dyn Progress,
-) -> Result<Vec<u32>, NormalsError> {
-    let mut all: Vec<u32> = extra.iter().map(|e| e.0).collect();
-    for (t, tile) in tiles.iter().enumerate() {
-        let range = core_range(tile);
-        let forest = runs.read_run(t)?;
-        all.extend(
-            forest
-                .iter()
-                .flat_map(|e| e.slots)
-                .filter(|s| !range.contains(s)),
-        );
-        // Each vertex is met about twice per tile it borders: compacting
-        // now and then keeps the list near its final size.
-        if all.capacity() > 1 << 20 && all.len() > all.capacity() / 2 {
-            all.sort_unstable();
-            all.dedup();
-        }
-        progress.advance(1);
-    }
-    all.sort_unstable();
-    all.dedup();
-    all.shrink_to_fit();
-    Ok(all)
 }
 
 fn core_range(t: &TileEntry) -> Range<u32> {

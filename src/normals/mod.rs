@@ -253,7 +253,8 @@ fn normals_into(
             .iter()
             .filter(|f| **f & FLAG_DEGENERATE != 0)
             .count() as u64;
-        runs.push_run(&out.forest)?;
+        let tile = &store.tiles()[t];
+        runs.push_tile_run(&out.forest, tile.start..tile.start + tile.count)?;
         sampling.merge(&out.sampling);
         Ok(())
     })?;

@@ -11,7 +11,8 @@ use crossbeam::channel;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
+use std::ops::Range;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
@@ -26,12 +27,16 @@ const MERGE_BUFFER: usize = 16 << 20;
 /// An edge's slots and flip parity, as the union-find takes them.
 type Pair = (u32, u32, bool);
 
-/// Sorted runs of edges in one scratch file, removed on drop.
+/// Sorted runs of edges in one scratch file, removed on drop. Runs pushed
+/// with [`EdgeRuns::push_tile_run`] also log the slots their edges reach
+/// outside their tile's core (a second scratch file): the boundary the
+/// external orientation needs, gathered while the forests are at hand.
 pub struct EdgeRuns {
     path: PathBuf,
     out: BufWriter<File>,
     runs: Vec<(u64, u64)>,
     written: u64,
+    outside: Option<(PathBuf, BufWriter<File>)>,
 }
 
 impl EdgeRuns {
@@ -48,7 +53,69 @@ impl EdgeRuns {
             out: BufWriter::with_capacity(1 << 20, file),
             runs: Vec::new(),
             written: 0,
+            outside: None,
         })
+    }
+
+    /// Appends one tile's run (as [`Self::push_run`]) and logs every slot
+    /// of it outside `core`, the tile's store range.
+    pub fn push_tile_run(&mut self, edges: &[Edge], core: Range<u64>) -> Result<(), IoError> {
+        self.push_run(edges)?;
+        if self.outside.is_none() {
+            let path = self.path.with_extension("outside");
+            let file = File::create(&path).map_err(|e| IoError::os(&path, e))?;
+            self.outside = Some((path, BufWriter::with_capacity(1 << 20, file)));
+        }
+        if let Some((path, log)) = &mut self.outside {
+            for s in edges.iter().flat_map(|e| e.slots) {
+                if !core.contains(&u64::from(s)) {
+                    log.write_all(&s.to_le_bytes())
+                        .map_err(|e| IoError::os(&*path, e))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The slots logged by [`Self::push_tile_run`] (and `extra`), sorted,
+    /// each once. The log is read in chunks and compacted as it goes, so
+    /// memory stays near the result's size.
+    pub fn outside_slots(&mut self, extra: &[u32]) -> Result<Vec<u32>, IoError> {
+        let mut all = extra.to_vec();
+        let Some((path, log)) = self.outside.take() else {
+            all.sort_unstable();
+            all.dedup();
+            return Ok(all);
+        };
+        let file = log
+            .into_inner()
+            .map_err(|e| IoError::os(&path, e.into_error()))?;
+        drop(file);
+        let mut input = std::io::BufReader::with_capacity(
+            1 << 20,
+            File::open(&path).map_err(|e| IoError::os(&path, e))?,
+        );
+        let mut chunk = vec![0u8; 1 << 22];
+        loop {
+            let n = read_full(&mut input, &mut chunk).map_err(|e| IoError::os(&path, e))?;
+            all.extend(
+                chunk[..n - n % 4]
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            );
+            // A vertex is met once per tile it borders: compacting keeps
+            // the list near its final size.
+            if n < chunk.len() || all.len() > all.capacity() / 2 {
+                all.sort_unstable();
+                all.dedup();
+            }
+            if n < chunk.len() {
+                break;
+            }
+        }
+        let _ = std::fs::remove_file(&path);
+        all.shrink_to_fit();
+        Ok(all)
     }
 
     /// Appends one run; `edges` must be sorted by [`Edge::key`].
@@ -201,7 +268,24 @@ impl EdgeRuns {
 impl Drop for EdgeRuns {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        if let Some((path, _)) = &self.outside {
+            let _ = std::fs::remove_file(path);
+        }
     }
+}
+
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 struct RunCursor {

@@ -90,8 +90,10 @@ pub fn orient_store(
         margin: tile_margin(params, spacing),
     };
     let mut runs = EdgeRuns::create(&store.dir.join(FOREST_FILE))?;
-    run_tiles(store, &kernel, opts, progress, |_, forest| {
-        runs.push_run(&forest).map_err(Into::into)
+    run_tiles(store, &kernel, opts, progress, |t, forest| {
+        let tile = &store.tiles()[t];
+        let core = tile.start..tile.start + tile.count;
+        runs.push_tile_run(&forest, core).map_err(Into::into)
     })?;
     let mut stats = SourceStats {
         sources: sources.len(),
