@@ -41,7 +41,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let params = ImplicitParams::default();
     let dir = scratch_store_dir(&a.output);
     let mut reader = MemoryReader::new("embedded dragon sample", scan.points.clone(), None);
-    let cost = params.normals.cost();
+    let cost = params.cost();
     s.check_floor(&cost)?;
     let opts = s.build_options(cost);
     let result = (|| -> Result<()> {

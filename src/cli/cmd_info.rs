@@ -8,6 +8,7 @@ use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
 use scanmesh::pipeline::plan::{MARGIN_FACTOR, MIN_TILE_POINTS};
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan};
+use scanmesh::recon::implicit::reconstruct::ImplicitParams;
 use scanmesh::store::{is_store, PointStore};
 use scanmesh::units::human_bytes;
 use serde_json::json;
@@ -37,6 +38,9 @@ pub struct InfoArgs {
     /// Worker threads to plan for (with --plan; default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Plan `reconstruct --closed` (with --plan --command reconstruct).
+    #[arg(long)]
+    closed: bool,
 }
 
 /// Commands `info --plan` can plan.
@@ -128,7 +132,12 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         }
     };
     let cost: KernelCost = match a.command {
-        Planned::Normals | Planned::Reconstruct => NormalParams::default().cost(),
+        Planned::Normals => NormalParams::default().cost(),
+        Planned::Reconstruct => ImplicitParams {
+            closed: a.closed,
+            ..ImplicitParams::default()
+        }
+        .cost(),
         Planned::Neighbors => NeighbourParams::default().cost(),
     };
     let budget = MemoryBudget::new(mem, threads);
@@ -156,6 +165,12 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         format!("external (about {} contracted boundary nodes)", plan.nodes)
     };
     println!("  global pass: {global}");
+    if cost.resident_per_point > 0.0 {
+        println!(
+            "  small-piece filter: about {} beside the marching-cubes tiles",
+            human_bytes((points as f64 * cost.resident_per_point) as u64)
+        );
+    }
     for (stage, bytes) in plan.stages(&cost) {
         println!("  {stage:>14}: {}", human_bytes(bytes));
     }

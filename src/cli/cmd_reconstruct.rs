@@ -92,12 +92,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let mut run = s.open_input(
-        &a.input,
-        &a.output,
-        params.normals.cost(),
-        progress.as_ref(),
-    )?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let r = reconstruct_implicit(
         &mut run.ws.store,
         &params,

@@ -122,6 +122,7 @@ impl NeighbourParams {
             bytes_per_point: self.bytes_per_point(),
             global_per_point: 0,
             contracts_boundaries: false,
+            resident_per_point: 0.0,
             window_bytes_per_point: self.window_bytes_per_point(),
         }
     }

@@ -148,6 +148,7 @@ impl NormalParams {
             bytes_per_point: self.bytes_per_point(),
             global_per_point: if global { orient::BYTES_PER_POINT } else { 0 },
             contracts_boundaries: global,
+            resident_per_point: 0.0,
             window_bytes_per_point: EXPORT_BYTES_PER_POINT,
         }
     }

@@ -49,6 +49,11 @@ pub struct KernelCost {
     /// Whether the external global pass contracts tile boundaries (its
     /// nodes then count, see the module doc).
     pub contracts_boundaries: bool,
+    /// Bytes per point of state that must stay in memory beside the tiles
+    /// of a later pass, with no external path (the small-piece filter's
+    /// sets beside the marching-cubes tiles); never at once with the
+    /// global pass's state.
+    pub resident_per_point: f64,
     /// Bytes per point of an output window (0: no input-order output).
     pub window_bytes_per_point: u64,
 }
@@ -80,6 +85,8 @@ pub struct MemoryPlan {
     pub tile_points: u64,
     /// Whether the global pass keeps its per-point state in memory.
     pub global_in_memory: bool,
+    /// Bytes kept beside the tiles for state that grows with the points.
+    pub reserved: u64,
     pub histogram_cells: usize,
     pub scatter_buffer: usize,
     pub window_points: u64,
@@ -90,24 +97,32 @@ pub struct MemoryPlan {
 impl MemoryPlan {
     /// The plan for `points` points under `budget`, or why none fits.
     pub fn new(budget: MemoryBudget, points: u64, cost: &KernelCost) -> Result<Self, BudgetError> {
-        let free = budget.bytes.saturating_sub(BASE_BYTES);
-        let too_small = |reason| BudgetError::TooSmall {
+        Self::assess(budget, points, cost).map_err(|reason| BudgetError::TooSmall {
             budget: budget.bytes,
             points,
             needed: Self::minimum_budget(budget.threads, points, cost),
             reason,
-        };
+        })
+    }
+
+    fn assess(budget: MemoryBudget, points: u64, cost: &KernelCost) -> Result<Self, &'static str> {
+        let free = budget.bytes.saturating_sub(BASE_BYTES);
         let global_in_memory = budget.holds(points, cost.global_per_point);
-        let reserved = if global_in_memory {
+        let resident = (points as f64 * cost.resident_per_point) as u64;
+        if resident > free / 2 {
+            return Err("the per-vertex sets of the small-piece filter");
+        }
+        // The global pass follows the kernel pass that resident state
+        // belongs to (or precedes it): they never hold memory at once.
+        let global = if global_in_memory {
             points * cost.global_per_point
         } else {
             0
         };
+        let reserved = resident.max(global);
         let tile_points = budget.tile_points(cost.bytes_per_point, MARGIN_FACTOR, reserved);
         if free == 0 || tile_points < MIN_TILE_POINTS {
-            return Err(too_small(
-                "tiles of at least 8192 points beside the fixed costs",
-            ));
+            return Err("tiles of at least 8192 points beside the fixed costs");
         }
         let nodes = if global_in_memory || !cost.contracts_boundaries {
             0
@@ -115,13 +130,14 @@ impl MemoryPlan {
             external_nodes(points, tile_points)
         };
         if nodes * BYTES_PER_NODE > free {
-            return Err(too_small("the orientation's contracted tile boundaries"));
+            return Err("the orientation's contracted tile boundaries");
         }
         Ok(MemoryPlan {
             budget,
             points,
             tile_points,
             global_in_memory,
+            reserved,
             histogram_cells: histogram_cells(budget),
             scatter_buffer: scatter_buffer(budget),
             window_points: (free / 4 / cost.window_bytes_per_point.max(1)).max(1 << 12),
@@ -131,24 +147,9 @@ impl MemoryPlan {
 
     /// The smallest budget (to 1 MiB) for which [`MemoryPlan::new`] succeeds.
     pub fn minimum_budget(threads: usize, points: u64, cost: &KernelCost) -> u64 {
-        let fits = |mib: u64| {
-            let b = MemoryBudget::new(mib << 20, threads);
-            let free = b.bytes.saturating_sub(BASE_BYTES);
-            let global = b.holds(points, cost.global_per_point);
-            let reserved = if global {
-                points * cost.global_per_point
-            } else {
-                0
-            };
-            let tile = b.tile_points(cost.bytes_per_point, MARGIN_FACTOR, reserved);
-            let nodes = if global || !cost.contracts_boundaries {
-                0
-            } else {
-                external_nodes(points, tile)
-            };
-            free > 0 && tile >= MIN_TILE_POINTS && nodes * BYTES_PER_NODE <= free
-        };
-        let (mut lo, mut hi) = (BASE_BYTES >> 20, 1u64 << 20);
+        let fits =
+            |mib: u64| Self::assess(MemoryBudget::new(mib << 20, threads), points, cost).is_ok();
+        let (mut lo, mut hi) = (BASE_BYTES >> 20, 1u64 << 24);
         while lo < hi {
             let mid = (lo + hi) / 2;
             if fits(mid) {
@@ -166,11 +167,7 @@ impl MemoryPlan {
     /// down to one; none fitting is an error naming the budget needed.
     pub fn run_options(&self, cost: &KernelCost, largest: u64) -> Result<RunOptions, BudgetError> {
         let opts = RunOptions::new(self.budget.threads).within(self.budget);
-        let reserved = if self.global_in_memory {
-            self.points * cost.global_per_point
-        } else {
-            0
-        };
+        let reserved = self.reserved;
         let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
         let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
         let fit = (free / per_tile.max(1)) as usize;
@@ -195,7 +192,7 @@ impl MemoryPlan {
             * MARGIN_FACTOR
             * cost.bytes_per_point as f64;
         let global = if self.global_in_memory {
-            self.points * cost.global_per_point
+            self.reserved
         } else {
             self.nodes * BYTES_PER_NODE
         };
@@ -238,6 +235,7 @@ mod tests {
             bytes_per_point: 360,
             global_per_point: 6,
             contracts_boundaries: true,
+            resident_per_point: 0.0,
             window_bytes_per_point: 48,
         }
     }
