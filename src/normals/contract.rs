@@ -1,5 +1,5 @@
 //! A tile's spanning forest contracted to its boundary, for the orientation
-//! pass whose per-point state does not fit in memory ([`super::external`]).
+//! pass whose per-point state does not fit in memory ([`super::labels`]).
 //!
 //! The global tree of paper 1 section 2.4 is the minimum spanning forest M
 //! of the union of the tile forests (see [`super::forest`]). Which edges of
@@ -23,35 +23,26 @@
 //!    algorithms (cut and cycle properties), so the result is exact: the
 //!    same tree, hence the same flips, as Kruskal over every point.
 //!
-//! [`contract`] computes steps 1 and 2 for one tile; [`Contraction::resolve`]
-//! takes the global verdict on the tile's super-edges and the global labels
-//! of its nodes and gives every core point its component label and parity.
+//! [`contract`] computes steps 1 and 2 for one tile. [`resolve`] then
+//! needs only the super-edges the global pass rejected: F without their
+//! heaviest edges is the tile's part of M, and every tree of it that meets
+//! other tiles holds a boundary vertex (a branch point's first super-edge
+//! in key order is always taken, and its chains end at boundary vertices),
+//! whose global label and parity it takes.
 
 use super::forest::Edge;
 use super::unionfind::ParityUnionFind;
 
-/// A tile's forest, contracted. Local vertex ids: core point `i` is `i`
-/// (store index `start + i`), the forest's vertices outside the core follow,
-/// in store order.
+/// A tile's forest with local vertex ids: core point `i` is `i` (store
+/// index `start + i`); the forest's vertices outside the core follow, in
+/// store order.
 #[derive(Debug)]
-pub struct Contraction {
+pub struct LocalForest {
     start: u32,
     count: u32,
     /// Store indices of the forest's vertices outside the core, sorted.
     foreign: Vec<u32>,
-    /// The forest's edges as given, with local ends.
     edges: Vec<LocalEdge>,
-    /// What happens to each edge, by position in `edges`.
-    role: Vec<Role>,
-    /// Local ids of the nodes, ascending.
-    nodes: Vec<u32>,
-    /// Which nodes are branch points (not boundary vertices), by position
-    /// in `nodes`.
-    branch: Vec<bool>,
-    /// The super-edges, sorted by [`Edge::key`]; `slots` hold local node ids.
-    supers: Vec<Edge>,
-    /// Position in `edges` of each super-edge's heaviest edge.
-    heaviest: Vec<u32>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -60,64 +51,176 @@ struct LocalEdge {
     flips: bool,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
-    /// In the global tree whatever the other tiles hold.
-    Certain,
-    /// The heaviest edge of a chain: in the tree iff its super-edge is.
-    Heaviest,
-}
-
-/// How [`contract`] tells the boundary: the sorted store indices of the
-/// core points that other tiles' forests touch.
-pub struct Boundary<'a> {
-    pub core: &'a [u32],
-}
-
-/// Contracts the forest `forest` (slots are store indices) of the tile whose
-/// core is store range `start..start + count`.
-pub fn contract(forest: &[Edge], start: u32, count: u32, boundary: Boundary) -> Contraction {
-    let mut foreign: Vec<u32> = forest
-        .iter()
-        .flat_map(|e| e.slots)
-        .filter(|&s| s.wrapping_sub(start) >= count)
-        .collect();
-    foreign.sort_unstable();
-    foreign.dedup();
-    let local = |s: u32| match s.wrapping_sub(start) {
-        l if l < count => l,
-        _ => count + foreign.binary_search(&s).unwrap_or_default() as u32,
-    };
-    let edges: Vec<LocalEdge> = forest
-        .iter()
-        .map(|e| LocalEdge {
-            ends: e.slots.map(local),
-            flips: e.flips(),
-        })
-        .collect();
-    let n = count as usize + foreign.len();
-    let mut is_boundary = vec![false; n];
-    is_boundary[count as usize..].fill(true);
-    for &s in boundary.core {
-        if let Some(l) = s.checked_sub(start).filter(|&l| l < count) {
-            is_boundary[l as usize] = true;
+impl LocalForest {
+    /// The forest `forest` (slots are store indices) of the tile whose core
+    /// is store range `start..start + count`.
+    pub fn new(forest: &[Edge], start: u32, count: u32) -> Self {
+        let mut foreign: Vec<u32> = forest
+            .iter()
+            .flat_map(|e| e.slots)
+            .filter(|&s| s.wrapping_sub(start) >= count)
+            .collect();
+        foreign.sort_unstable();
+        foreign.dedup();
+        let local = |s: u32| match s.wrapping_sub(start) {
+            l if l < count => l,
+            _ => count + foreign.binary_search(&s).unwrap_or_default() as u32,
+        };
+        let edges = forest
+            .iter()
+            .map(|e| LocalEdge {
+                ends: e.slots.map(local),
+                flips: e.flips(),
+            })
+            .collect();
+        LocalForest {
+            start,
+            count,
+            foreign,
+            edges,
         }
     }
-    let graph = Adjacency::new(n, &edges);
+
+    fn vertices(&self) -> usize {
+        self.count as usize + self.foreign.len()
+    }
+
+    /// Store index of local vertex `v`.
+    pub fn store_index(&self, v: u32) -> u32 {
+        match v.checked_sub(self.count) {
+            None => self.start + v,
+            Some(f) => self.foreign[f as usize],
+        }
+    }
+
+    /// Which local vertices are boundary vertices: every one outside the
+    /// core, and the core points in `core` (sorted store indices).
+    fn boundary(&self, core: &[u32]) -> Vec<bool> {
+        let mut is_boundary = vec![false; self.vertices()];
+        is_boundary[self.count as usize..].fill(true);
+        for &s in core {
+            if let Some(l) = s.checked_sub(self.start).filter(|&l| l < self.count) {
+                is_boundary[l as usize] = true;
+            }
+        }
+        is_boundary
+    }
+}
+
+/// A tile forest's nodes and super-edges.
+#[derive(Debug)]
+pub struct Contraction {
+    /// Local ids of the nodes, ascending.
+    nodes: Vec<u32>,
+    /// Which nodes are branch points (not boundary vertices), by position
+    /// in `nodes`.
+    branch: Vec<bool>,
+    /// Store index of each node, by position in `nodes`.
+    stores: Vec<u32>,
+    /// The super-edges, sorted by [`Edge::key`]; `slots` hold local node
+    /// ids, `a`, `b` and `|w|` are the heaviest chain edge's.
+    supers: Vec<Edge>,
+}
+
+impl Contraction {
+    /// The super-edges, sorted by [`Edge::key`] (see the field).
+    pub fn supers(&self) -> &[Edge] {
+        &self.supers
+    }
+
+    /// The nodes in ascending local id: each one's store index and whether
+    /// it is a branch point (which only this tile sees) rather than a
+    /// boundary vertex.
+    pub fn nodes(&self) -> impl Iterator<Item = (u32, bool)> + '_ {
+        self.stores.iter().copied().zip(self.branch.iter().copied())
+    }
+
+    /// Position of node `v` (a local id) in [`Self::nodes`].
+    pub fn node_position(&self, v: u32) -> usize {
+        self.nodes.binary_search(&v).unwrap_or_default()
+    }
+}
+
+/// Contracts `local`, the forest `forest`, given the core points other
+/// tiles' forests touch (`boundary_core`, sorted store indices).
+pub fn contract(forest: &[Edge], local: &LocalForest, boundary_core: &[u32]) -> Contraction {
+    let is_boundary = local.boundary(boundary_core);
+    let graph = Adjacency::new(local.vertices(), &local.edges);
+    let alive = graph.prune(&is_boundary);
     let mut c = Contraction {
-        start,
-        count,
-        foreign,
-        role: vec![Role::Certain; edges.len()],
-        edges,
         nodes: Vec::new(),
         branch: Vec::new(),
+        stores: Vec::new(),
         supers: Vec::new(),
-        heaviest: Vec::new(),
     };
-    let alive = graph.prune(&c.edges, &is_boundary);
-    c.find_chains(forest, &graph, &alive, &is_boundary);
+    let live = |v: u32| graph.of(v).iter().filter(|l| alive[l.1 as usize]).count();
+    // Every boundary vertex is a node, even one whose edges were all
+    // pruned: it is where the certain edges of its tree meet other tiles.
+    let mut is_node = vec![false; is_boundary.len()];
+    for v in 0..is_boundary.len() as u32 {
+        if is_boundary[v as usize] || live(v) >= 3 {
+            is_node[v as usize] = true;
+            c.nodes.push(v);
+            c.branch.push(!is_boundary[v as usize]);
+            c.stores.push(local.store_index(v));
+        }
+    }
+    let chain = Chain {
+        forest,
+        edges: &local.edges,
+        graph: &graph,
+        alive: &alive,
+        is_node: &is_node,
+    };
+    let mut walked = vec![false; forest.len()];
+    for &from in &c.nodes {
+        for &(next, e) in graph.of(from) {
+            if alive[e as usize] && !walked[e as usize] {
+                c.supers.push(chain.walk(from, next, e, &mut walked));
+            }
+        }
+    }
+    c.supers.sort_unstable_by_key(Edge::key);
     c
+}
+
+/// Every core point's component label and parity (bit 63): the tile's part
+/// of the global tree is its forest without the heaviest edges of the
+/// rejected super-edges (`rejected`: their `(a, b)` ids, sorted); a tree of
+/// it holding a boundary vertex takes that vertex's global label and parity
+/// (`frame(store index)`); any other lies in this tile alone and is
+/// labelled by the store index of its union-find root here, a core point.
+pub fn resolve(
+    forest: &[Edge],
+    local: &LocalForest,
+    rejected: &[(u32, u32)],
+    boundary_core: &[u32],
+    frame: impl Fn(u32) -> (u64, bool),
+) -> Vec<u64> {
+    let n = local.vertices();
+    let mut uf = ParityUnionFind::new(n);
+    for (e, l) in forest.iter().zip(&local.edges) {
+        if rejected.binary_search(&(e.a, e.b)).is_err() {
+            uf.union(l.ends[0], l.ends[1], l.flips);
+        }
+    }
+    let is_boundary = local.boundary(boundary_core);
+    let mut root_frame: Vec<Option<(u64, bool)>> = vec![None; n];
+    for v in (0..n as u32).filter(|&v| is_boundary[v as usize]) {
+        let (root, p) = uf.find(v);
+        if root_frame[root as usize].is_none() {
+            let (label, parity) = frame(local.store_index(v));
+            root_frame[root as usize] = Some((label, parity ^ p));
+        }
+    }
+    (0..local.count)
+        .map(|i| {
+            let (root, p) = uf.find(i);
+            let (label, parity) = root_frame[root as usize]
+                .map_or((u64::from(local.start + root), p), |(l, q)| (l, p ^ q));
+            label | u64::from(parity) << 63
+        })
+        .collect()
 }
 
 /// Forest adjacency in compressed rows: `(neighbour, edge)` per incidence.
@@ -155,10 +258,10 @@ impl Adjacency {
 
     /// Step 1: strips non-boundary leaves until none is left; returns which
     /// edges survive (the pruned ones are certain).
-    fn prune(&self, edges: &[LocalEdge], is_boundary: &[bool]) -> Vec<bool> {
+    fn prune(&self, is_boundary: &[bool]) -> Vec<bool> {
         let n = is_boundary.len();
         let mut degree: Vec<u32> = (0..n as u32).map(|v| self.of(v).len() as u32).collect();
-        let mut alive = vec![true; edges.len()];
+        let mut alive = vec![true; self.links.len() / 2];
         let mut leaves: Vec<u32> = (0..n as u32)
             .filter(|&v| degree[v as usize] == 1 && !is_boundary[v as usize])
             .collect();
@@ -177,118 +280,10 @@ impl Adjacency {
     }
 }
 
-impl Contraction {
-    /// Step 2: nodes and the chains between them, as super-edges. Every
-    /// boundary vertex is a node, even one whose edges were all pruned: it
-    /// is where the certain edges of its tree meet the other tiles.
-    fn find_chains(
-        &mut self,
-        forest: &[Edge],
-        graph: &Adjacency,
-        alive: &[bool],
-        is_boundary: &[bool],
-    ) {
-        let n = is_boundary.len() as u32;
-        let live = |v: u32| graph.of(v).iter().filter(|l| alive[l.1 as usize]).count();
-        let mut is_node = vec![false; n as usize];
-        for v in 0..n {
-            if is_boundary[v as usize] || live(v) >= 3 {
-                is_node[v as usize] = true;
-                self.nodes.push(v);
-                self.branch.push(!is_boundary[v as usize]);
-            }
-        }
-        let mut walked = vec![false; self.edges.len()];
-        let mut supers = Vec::new();
-        for k in 0..self.nodes.len() {
-            let from = self.nodes[k];
-            for &(next, e) in graph.of(from) {
-                if alive[e as usize] && !walked[e as usize] {
-                    let chain = Chain {
-                        forest,
-                        graph,
-                        alive,
-                        is_node: &is_node,
-                    };
-                    supers.push(chain.walk(&self.edges, from, next, e, &mut walked));
-                }
-            }
-        }
-        supers.sort_unstable_by_key(|(s, _)| s.key());
-        for &(_, h) in &supers {
-            self.role[h as usize] = Role::Heaviest;
-        }
-        (self.supers, self.heaviest) = supers.into_iter().unzip();
-    }
-
-    /// The super-edges, sorted by [`Edge::key`]; `slots` hold local node
-    /// ids (see [`Self::store_index`]).
-    pub fn supers(&self) -> &[Edge] {
-        &self.supers
-    }
-
-    /// Local ids of the nodes, ascending, each with whether it is a branch
-    /// point (which only this tile sees) rather than a boundary vertex.
-    pub fn nodes(&self) -> impl Iterator<Item = (u32, bool)> + '_ {
-        self.nodes.iter().copied().zip(self.branch.iter().copied())
-    }
-
-    /// Position of node `v` (a local id) in [`Self::nodes`].
-    pub fn node_position(&self, v: u32) -> usize {
-        self.nodes.binary_search(&v).unwrap_or_default()
-    }
-
-    /// Store index of local vertex `v`.
-    pub fn store_index(&self, v: u32) -> u32 {
-        match v.checked_sub(self.count) {
-            None => self.start + v,
-            Some(f) => self.foreign[f as usize],
-        }
-    }
-
-    /// Every core point's component label and parity (bit 63), given
-    /// whether each super-edge (by position in [`Self::supers`]) is in the
-    /// global tree and each node's global label and parity (`node(k)` for
-    /// the `k`-th node of [`Self::nodes`]). A component no node reaches
-    /// lies in this tile alone; its label is the store index of its
-    /// union-find root here, a core point.
-    pub fn resolve(
-        &self,
-        accepted: impl Fn(usize) -> bool,
-        node: impl Fn(usize) -> (u64, bool),
-    ) -> Vec<u64> {
-        let n = self.count as usize + self.foreign.len();
-        let mut in_tree: Vec<bool> = self.role.iter().map(|r| *r == Role::Certain).collect();
-        for (k, &h) in self.heaviest.iter().enumerate() {
-            in_tree[h as usize] = accepted(k);
-        }
-        let mut uf = ParityUnionFind::new(n);
-        for (e, _) in self.edges.iter().zip(&in_tree).filter(|(_, t)| **t) {
-            uf.union(e.ends[0], e.ends[1], e.flips);
-        }
-        // Each tree reached by a node takes the node's global frame.
-        let mut frame: Vec<Option<(u64, bool)>> = vec![None; n];
-        for (k, &v) in self.nodes.iter().enumerate() {
-            let (root, p) = uf.find(v);
-            if frame[root as usize].is_none() {
-                let (label, parity) = node(k);
-                frame[root as usize] = Some((label, parity ^ p));
-            }
-        }
-        (0..self.count)
-            .map(|i| {
-                let (root, p) = uf.find(i);
-                let (label, parity) = frame[root as usize]
-                    .map_or((u64::from(self.start + root), p), |(l, q)| (l, p ^ q));
-                label | u64::from(parity) << 63
-            })
-            .collect()
-    }
-}
-
 /// The live forest a chain walk follows.
 struct Chain<'a> {
     forest: &'a [Edge],
+    edges: &'a [LocalEdge],
     graph: &'a Adjacency,
     alive: &'a [bool],
     is_node: &'a [bool],
@@ -297,20 +292,13 @@ struct Chain<'a> {
 impl Chain<'_> {
     /// Follows the chain leaving node `from` by edge `e` (to `next`) up to
     /// the node at its other end; returns its super-edge (local node ids as
-    /// slots) and the position of its heaviest edge.
-    fn walk(
-        &self,
-        edges: &[LocalEdge],
-        from: u32,
-        mut next: u32,
-        mut e: u32,
-        walked: &mut [bool],
-    ) -> (Edge, u32) {
+    /// slots, the heaviest edge's ids and cost, the chain's flips).
+    fn walk(&self, from: u32, mut next: u32, mut e: u32, walked: &mut [bool]) -> Edge {
         let mut heaviest = e;
         let mut flips = false;
         loop {
             walked[e as usize] = true;
-            flips ^= edges[e as usize].flips;
+            flips ^= self.edges[e as usize].flips;
             if self.forest[e as usize].key() > self.forest[heaviest as usize].key() {
                 heaviest = e;
             }
@@ -318,24 +306,18 @@ impl Chain<'_> {
                 break;
             }
             // A chain vertex has exactly two live edges: take the other.
-            let other = self
-                .graph
-                .of(next)
-                .iter()
-                .find(|&&(_, e2)| self.alive[e2 as usize] && e2 != e);
-            let Some(&(after, e2)) = other else { break };
+            let live = |&&(_, e2): &&(u32, u32)| self.alive[e2 as usize] && e2 != e;
+            let Some(&(after, e2)) = self.graph.of(next).iter().find(live) else {
+                break;
+            };
             (next, e) = (after, e2);
         }
         let h = self.forest[heaviest as usize];
-        let w = if flips { -h.w.abs() } else { h.w.abs() };
-        (
-            Edge {
-                w,
-                a: h.a,
-                b: h.b,
-                slots: [from, next],
-            },
-            heaviest,
-        )
+        Edge {
+            w: if flips { -h.w.abs() } else { h.w.abs() },
+            a: h.a,
+            b: h.b,
+            slots: [from, next],
+        }
     }
 }

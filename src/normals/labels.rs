@@ -14,14 +14,16 @@
 //!    boundary vertices by rank in `B`, branch points after them) as runs;
 //! 3. Kruskal over the merged super-edges with a parity union-find over the
 //!    nodes, marking the super-edges it takes;
-//! 4. contract every tile again (the same result) and resolve its points.
+//! 4. resolve every tile's points: its forest without the heaviest edges
+//!    of its rejected super-edges, each tree taking the label and parity
+//!    of a boundary vertex it holds ([`resolve`]).
 //!
 //! A label at or above the point count is `count + ` a node component's
 //! dense number (it may span tiles); below, a store index of the one tile
 //! that holds the whole component.
 
 use super::components::Components;
-use super::contract::{contract, Boundary, Contraction};
+use super::contract::{contract, resolve, Contraction, LocalForest};
 use super::forest::Edge;
 use super::runs::EdgeRuns;
 use super::unionfind::ParityUnionFind;
@@ -80,11 +82,8 @@ impl ForestLabels {
         progress.end();
         let nodes = boundary.len() as u64 + branches.last().copied().unwrap_or(0) + 1;
         let super_edges = supers.edges();
-        let starts: Vec<u64> = (0..supers.run_count())
-            .map(|r| supers.run_start(r))
-            .collect();
         let root = nodes as u32 - 1;
-        let (comps, accepted) = kruskal(supers, nodes, root, extra, &boundary, progress)?;
+        let (comps, accepted) = kruskal(&mut supers, nodes, root, extra, &boundary, progress)?;
         let root = (!extra.is_empty()).then(|| {
             let (l, p) = comps.get(root);
             (store.len() + u64::from(l), p)
@@ -100,8 +99,7 @@ impl ForestLabels {
         progress.begin("orient: resolve", tiles.len() as u64);
         let solved = Solved {
             boundary: &boundary,
-            branches: &branches,
-            starts: &starts,
+            supers: &supers,
             accepted: &accepted,
             comps: &comps,
             points: store.len(),
@@ -134,20 +132,25 @@ impl ForestLabels {
         solved: &Solved,
         progress: &dyn Progress,
     ) -> Result<(), NormalsError> {
-        for_tile_batches(tiles, runs, solved.boundary, progress, |t, c| {
-            let base = solved.starts[t];
-            let dense = dense_nodes(c, solved.boundary, solved.branches[t]);
-            let labels = c.resolve(
-                |k| bit(solved.accepted, base + k as u64),
-                |k| {
-                    let (l, p) = solved.comps.get(dense[k]);
+        for_tile_batches(
+            tiles,
+            runs,
+            progress,
+            |t, forest, local| {
+                let core = boundary_core(solved.boundary, &tiles[t]);
+                let rejected = solved.rejected(t)?;
+                let labels = resolve(forest, local, &rejected, core, |s| {
+                    let (l, p) = solved.comps.get(rank(solved.boundary, s));
                     (solved.points + u64::from(l), p)
-                },
-            );
-            let bytes: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
-            self.column.write_bytes(tiles[t].start, &bytes)?;
-            Ok(())
-        })
+                });
+                let bytes: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+                Ok(bytes)
+            },
+            |t, bytes| {
+                self.column.write_bytes(tiles[t].start, &bytes)?;
+                Ok(())
+            },
+        )
     }
 }
 
@@ -160,14 +163,27 @@ impl Drop for ForestLabels {
 /// What passes 2 and 3 found, for pass 4.
 struct Solved<'a> {
     boundary: &'a [u32],
-    /// First branch node number of each tile (relative to `boundary.len()`).
-    branches: &'a [u64],
-    /// First super-edge number of each tile.
-    starts: &'a [u64],
-    /// Super-edges Kruskal took, one bit each by number.
+    /// The super-edge runs, one per tile.
+    supers: &'a EdgeRuns,
+    /// Super-edges Kruskal took, one bit each by position.
     accepted: &'a [u64],
     comps: &'a Components,
     points: u64,
+}
+
+impl Solved<'_> {
+    /// The `(a, b)` ids of the heaviest edges of tile `t`'s rejected
+    /// super-edges, sorted.
+    fn rejected(&self, t: usize) -> Result<Vec<(u32, u32)>, NormalsError> {
+        let base = self.supers.run_start(t);
+        let run = self.supers.read_run(t)?;
+        let mut ids: Vec<(u32, u32)> = (0..run.len())
+            .filter(|&k| !bit(self.accepted, base + k as u64))
+            .map(|k| (run[k].a, run[k].b))
+            .collect();
+        ids.sort_unstable();
+        Ok(ids)
+    }
 }
 
 /// Dense numbers of `c`'s nodes, in the order of [`Contraction::nodes`]:
@@ -176,12 +192,12 @@ struct Solved<'a> {
 fn dense_nodes(c: &Contraction, boundary: &[u32], first_branch: u64) -> Vec<u32> {
     let mut next = boundary.len() as u64 + first_branch;
     c.nodes()
-        .map(|(v, is_branch)| {
+        .map(|(store, is_branch)| {
             if is_branch {
                 next += 1;
                 (next - 1) as u32
             } else {
-                rank(boundary, c.store_index(v))
+                rank(boundary, store)
             }
         })
         .collect()
@@ -199,37 +215,36 @@ fn core_range(t: &TileEntry) -> Range<u32> {
     t.start as u32..(t.start + t.count) as u32
 }
 
-/// Contracts the tiles in batches (in parallel within one) and hands each
-/// contraction to `f` in tile order.
-fn for_tile_batches(
+/// The boundary vertices in tile `t`'s core (a slice of the sorted `B`).
+fn boundary_core<'a>(boundary: &'a [u32], t: &TileEntry) -> &'a [u32] {
+    let range = core_range(t);
+    let lo = boundary.partition_point(|&s| s < range.start);
+    let hi = boundary.partition_point(|&s| s < range.end);
+    &boundary[lo..hi]
+}
+
+/// Runs `work` on the tiles' forests in batches (in parallel within one)
+/// and hands each result to `done` in tile order.
+fn for_tile_batches<R: Send>(
     tiles: &[TileEntry],
     runs: &EdgeRuns,
-    boundary: &[u32],
     progress: &dyn Progress,
-    mut f: impl FnMut(usize, &Contraction) -> Result<(), NormalsError>,
+    work: impl Fn(usize, &[Edge], &LocalForest) -> Result<R, NormalsError> + Sync,
+    mut done: impl FnMut(usize, R) -> Result<(), NormalsError>,
 ) -> Result<(), NormalsError> {
     let ids: Vec<usize> = (0..tiles.len()).collect();
     for batch in ids.chunks(TILES_AT_ONCE) {
-        let done: Vec<Contraction> = batch
+        let results: Vec<R> = batch
             .par_iter()
             .map(|&t| {
                 let forest = runs.read_run(t)?;
                 let range = core_range(&tiles[t]);
-                let lo = boundary.partition_point(|&s| s < range.start);
-                let hi = boundary.partition_point(|&s| s < range.end);
-                let core = Boundary {
-                    core: &boundary[lo..hi],
-                };
-                Ok(contract(
-                    &forest,
-                    range.start,
-                    range.end - range.start,
-                    core,
-                ))
+                let local = LocalForest::new(&forest, range.start, range.end - range.start);
+                work(t, &forest, &local)
             })
             .collect::<Result<_, NormalsError>>()?;
-        for (&t, c) in batch.iter().zip(&done) {
-            f(t, c)?;
+        for (&t, r) in batch.iter().zip(results) {
+            done(t, r)?;
             progress.advance(1);
         }
     }
@@ -246,9 +261,12 @@ fn write_supers(
     progress: &dyn Progress,
 ) -> Result<Vec<u64>, NormalsError> {
     let mut branches = vec![0u64];
-    for_tile_batches(tiles, runs, boundary, progress, |_, c| {
+    let contract_tile = |t: usize, forest: &[Edge], local: &LocalForest| {
+        Ok(contract(forest, local, boundary_core(boundary, &tiles[t])))
+    };
+    for_tile_batches(tiles, runs, progress, contract_tile, |_, c| {
         let first = *branches.last().unwrap_or(&0);
-        let dense = dense_nodes(c, boundary, first);
+        let dense = dense_nodes(&c, boundary, first);
         let run: Vec<Edge> = c
             .supers()
             .iter()
@@ -267,7 +285,7 @@ fn write_supers(
 /// Pass 3: Kruskal over the super-edges; the extra nodes are joined to the
 /// virtual `root` first. Returns the node components and the taken edges.
 fn kruskal(
-    supers: EdgeRuns,
+    supers: &mut EdgeRuns,
     nodes: u64,
     root: u32,
     extra: &[(u32, bool)],

@@ -221,14 +221,14 @@ impl EdgeRuns {
     }
     /// Calls `f` on every edge of every run in global [`Edge::key`] order.
     /// `buffer_bytes` is shared among the runs' read buffers.
-    pub fn merge(self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
+    pub fn merge(mut self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
         self.merge_numbered(buffer_bytes, |_, e| f(e))
     }
 
     /// As [`Self::merge`], each edge with its position in the file (see
     /// [`Self::run_start`]).
     pub fn merge_numbered(
-        mut self,
+        &mut self,
         buffer_bytes: usize,
         mut f: impl FnMut(u64, Edge),
     ) -> Result<(), IoError> {
