@@ -200,3 +200,22 @@ fn external_orientation_gives_the_in_memory_flips() {
         );
     }
 }
+
+#[test]
+fn external_orientation_on_a_million_points_gives_the_in_memory_flips() {
+    // A noisy Moebius band: no consistent orientation exists, so the sign
+    // seam shows any difference in the spanning tree.
+    let pts = generate(&Shape::moebius(1.0, 0.4), 1_000_000, 0.0005, 23)
+        .expect("generate")
+        .points;
+    let params = NormalParams::default();
+    let in_memory = normals_of(&pts, u64::MAX, 2, &params);
+    let tight = RunOptions::new(2).within(MemoryBudget::new(0, 2));
+    let external = normals_with(&pts, 12_000, tight, &params);
+    assert!(
+        external.report.tiles >= 64,
+        "{} tiles",
+        external.report.tiles
+    );
+    assert!(external.bytes == in_memory.bytes, "external flips differ");
+}
