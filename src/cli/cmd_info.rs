@@ -83,7 +83,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
 }
 
 fn store_report(dir: &std::path::Path) -> Result<serde_json::Value> {
-    let store = PointStore::open(dir)?;
+    let store = PointStore::open_shared(dir)?;
     let m = &store.manifest;
     let largest = m.tiles.iter().map(|t| t.count).max().unwrap_or(0);
     Ok(json!({
@@ -122,7 +122,7 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let points = if is_store(&a.input) {
-        PointStore::open(&a.input)?.len()
+        PointStore::open_shared(&a.input)?.len()
     } else {
         let progress = super::progress::progress(a.quiet);
         let r = scanmesh::io::open_reader(&a.input, InvalidPolicy::Reject)?;

@@ -3,6 +3,7 @@
 use anyhow::{bail, Result};
 use clap::Args;
 use scanmesh::io::open_reader;
+use scanmesh::io::{cleanup, place};
 use scanmesh::normals::NormalParams;
 use scanmesh::store::{build_store, spacing::ensure_spacing};
 use std::path::PathBuf;
@@ -25,8 +26,12 @@ pub fn run(a: TileArgs) -> Result<()> {
     if a.output.exists() && std::fs::read_dir(&a.output)?.next().is_some() {
         bail!("{}: exists and is not empty", a.output.display());
     }
+    place::check_writable_dir(&place::directory_of(&a.output), "output")?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
+    // Removed if the build is interrupted: a store without its manifest is
+    // no store.
+    let building = cleanup::register(&a.output);
     let mut reader = open_reader(&a.input, s.policy)?;
     let cost = NormalParams::default().cost();
     s.check_floor(&cost)?;
@@ -39,6 +44,7 @@ pub fn run(a: TileArgs) -> Result<()> {
         }
     };
     let spacing = ensure_spacing(&mut store)?;
+    drop(building);
     let m = &store.manifest;
     println!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",

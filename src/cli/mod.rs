@@ -13,11 +13,12 @@ mod progress;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use scanmesh::io::place;
 use scanmesh::io::InvalidPolicy;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
-use scanmesh::store::build::scratch_store_dir;
-use scanmesh::store::{open_input, BuildOptions, PointStore, TileTarget, Workspace};
-use std::path::Path;
+use scanmesh::store::build::scratch_store_dir_in;
+use scanmesh::store::{is_store, open_input, BuildOptions, PointStore, TileTarget, Workspace};
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -72,6 +73,10 @@ pub struct CommonArgs {
     /// Drop points with NaN/inf coordinates (counted) instead of failing.
     #[arg(long)]
     skip_invalid: bool,
+    /// Directory for the scratch store and spill files (default: beside
+    /// the output), for outputs on a small or slow volume.
+    #[arg(long, value_name = "DIR")]
+    scratch_dir: Option<PathBuf>,
 }
 
 /// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
@@ -92,13 +97,14 @@ pub struct Prepared {
 }
 
 /// Validated common options.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Settings {
     pub mem: u64,
     pub threads: usize,
     pub tile_points: Option<u64>,
     pub quiet: bool,
     pub policy: InvalidPolicy,
+    pub scratch_dir: Option<PathBuf>,
 }
 
 impl CommonArgs {
@@ -118,6 +124,7 @@ impl CommonArgs {
             threads,
             tile_points: self.tile_points,
             quiet: self.quiet,
+            scratch_dir: self.scratch_dir.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -162,7 +169,8 @@ impl Settings {
         progress: &dyn Progress,
     ) -> Result<Prepared> {
         self.check_floor(&cost)?;
-        let scratch = scratch_store_dir(output);
+        let scratch_dir = self.check_places(input, output, &cost)?;
+        let scratch = scratch_store_dir_in(&scratch_dir, output);
         let ws = open_input(
             input,
             &scratch,
@@ -172,6 +180,38 @@ impl Settings {
         )
         .with_context(|| format!("reading {}", input.display()))?;
         self.prepare(ws, cost)
+    }
+
+    /// Checks, before any input is read, that the output and scratch
+    /// directories take new files and (when the input says how many points
+    /// it holds) have room for the run; returns the scratch directory.
+    pub fn check_places(&self, input: &Path, output: &Path, cost: &KernelCost) -> Result<PathBuf> {
+        place::check_output(output)?;
+        let scratch_dir = match &self.scratch_dir {
+            Some(d) => d.clone(),
+            None => place::directory_of(output),
+        };
+        place::check_writable_dir(&scratch_dir, "scratch")?;
+        let count = if is_store(input) {
+            Some(PointStore::open(input)?.len())
+        } else {
+            scanmesh::io::open_reader(input, self.policy)
+                .with_context(|| format!("reading {}", input.display()))?
+                .info()
+                .declared_count
+        };
+        // A count past what a store holds is refused later, as such.
+        if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
+            let (scratch, out) = (cost.scratch_per_point, cost.output_per_point);
+            let output_dir = place::directory_of(output);
+            place::check_space(
+                &scratch_dir,
+                n.saturating_mul(scratch),
+                &output_dir,
+                n.saturating_mul(out),
+            )?;
+        }
+        Ok(scratch_dir)
     }
 
     /// The plan and run options for an open store.

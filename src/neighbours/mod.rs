@@ -124,6 +124,9 @@ impl NeighbourParams {
             contracts_boundaries: false,
             resident_per_point: 0.0,
             window_bytes_per_point: self.window_bytes_per_point(),
+            // The store (20) and the spilled lists with their index.
+            scratch_per_point: 36 + 4 * self.expected_size(),
+            output_per_point: 8 + 4 * self.expected_size(),
         }
     }
 

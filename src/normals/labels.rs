@@ -48,6 +48,7 @@ pub const BYTES_PER_NODE: u64 = 10;
 /// Per-point component labels and parities of the forest, on disk.
 pub struct ForestLabels {
     column: Column,
+    _cleanup: crate::io::cleanup::Registered,
     points: u64,
     /// Node components: how many, for per-component tables.
     pub node_components: usize,
@@ -89,6 +90,7 @@ impl ForestLabels {
             (store.len() + u64::from(l), p)
         });
         let labels = ForestLabels {
+            _cleanup: crate::io::cleanup::register(&dir.join(LABELS_FILE)),
             column: Column::create(&dir.join(LABELS_FILE), 8, store.len())?,
             points: store.len(),
             node_components: comps.count(),

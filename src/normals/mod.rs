@@ -150,6 +150,11 @@ impl NormalParams {
             contracts_boundaries: global,
             resident_per_point: 0.0,
             window_bytes_per_point: EXPORT_BYTES_PER_POINT,
+            // The store (20), normals and flags (13), forest runs (24),
+            // external labels (8) and the export's reorder file (29).
+            scratch_per_point: 94,
+            // x y z as double, normals as float, flags.
+            output_per_point: 37,
         }
     }
 

@@ -5,7 +5,7 @@
 
 use super::forest::Edge;
 use super::unionfind::ParityUnionFind;
-use crate::io::IoError;
+use crate::io::{cleanup, IoError};
 use crate::pipeline::Progress;
 use crossbeam::channel;
 use std::cmp::Reverse;
@@ -37,6 +37,8 @@ pub struct EdgeRuns {
     runs: Vec<(u64, u64)>,
     written: u64,
     outside: Option<(PathBuf, BufWriter<File>)>,
+    /// Both scratch files, for an interrupt handler.
+    _cleanup: [cleanup::Registered; 2],
 }
 
 impl EdgeRuns {
@@ -54,6 +56,10 @@ impl EdgeRuns {
             runs: Vec::new(),
             written: 0,
             outside: None,
+            _cleanup: [
+                cleanup::register(path),
+                cleanup::register(&path.with_extension("outside")),
+            ],
         })
     }
 

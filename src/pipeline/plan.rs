@@ -56,6 +56,10 @@ pub struct KernelCost {
     pub resident_per_point: f64,
     /// Bytes per point of an output window (0: no input-order output).
     pub window_bytes_per_point: u64,
+    /// Scratch disk per point at the run's peak (store, columns, runs).
+    pub scratch_per_point: u64,
+    /// Output file bytes per input point, roughly.
+    pub output_per_point: u64,
 }
 
 /// Why no plan fits.
@@ -237,6 +241,8 @@ mod tests {
             contracts_boundaries: true,
             resident_per_point: 0.0,
             window_bytes_per_point: 48,
+            scratch_per_point: 94,
+            output_per_point: 37,
         }
     }
 

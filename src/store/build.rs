@@ -387,11 +387,16 @@ fn flush(b: &mut TileBuffer, xyz: &Column, index: &Column) -> Result<(), StoreEr
 /// Where a store for `input` goes when the user did not build one: a scratch
 /// directory beside the output, removed after the run.
 pub fn scratch_store_dir(output: &Path) -> PathBuf {
+    scratch_store_dir_in(&crate::io::place::directory_of(output), output)
+}
+
+/// A scratch store directory for the run writing `output`, inside `dir`.
+pub fn scratch_store_dir_in(dir: &Path, output: &Path) -> PathBuf {
     let name = output
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    output.with_file_name(format!(".{}.store-{}", name, std::process::id()))
+    dir.join(format!(".{}.store-{}", name, std::process::id()))
 }
 
 #[cfg(test)]

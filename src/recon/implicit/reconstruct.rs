@@ -60,6 +60,8 @@ impl ImplicitParams {
             } else {
                 0.0
             },
+            // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
+            output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
             ..self.normals.cost()
         }
     }
