@@ -1,0 +1,19 @@
+//! Reconstruction from the 3-D Delaunay triangulation by local flatness
+//! (paper 4, `/work/shared/papers/README.md` section 4): the triangulation
+//! ([`triangulation`], exact predicates with a symbolic tie-break in
+//! [`predicates`], insertion order in [`order`], invariants in [`check`]).
+//!
+//! Rust has no production 3-D Delaunay triangulation: the `delaunay` crate
+//! is general-dimension and far too slow (about 1.7k points/s in its own
+//! baseline) and `tritet` wraps TetGen's C code, so it is written here.
+
+pub mod check;
+pub mod order;
+pub mod predicates;
+pub mod triangulation;
+
+#[cfg(test)]
+mod tests;
+
+pub use check::sanity_check;
+pub use triangulation::{Cell, Delaunay, DelaunayError, INFINITE};
