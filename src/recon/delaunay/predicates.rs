@@ -37,22 +37,69 @@ pub fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
 
 /// Exact in-sphere determinant: positive when `e` is strictly inside the
 /// sphere through `a, b, c, d` (which must have `orient > 0`).
+///
+/// A semi-static filter first (the form of CGAL's static filter for
+/// `Side_of_oriented_sphere_3`): Shewchuk's expansion of the determinant in
+/// f64 and a bound on its rounding error from the largest coordinate
+/// difference per axis, `C * X * Y * Z * M^2`. A forward error analysis
+/// of the expansion (24 products of four entries, each at most
+/// `X Y Z 3 M^2`, about 17 roundings deep) gives `C` of about 1.4e-13;
+/// CGAL's generated bound is 1.25e-13; [`INSPHERE_FILTER`] takes 8 times
+/// that. Cheaper than `robust`'s own filter, which sums a permanent as
+/// large as the determinant; when the bound does not settle the sign,
+/// `robust::insphere` (adaptive, exact) decides.
 #[inline]
 pub fn insphere(a: DVec3, b: DVec3, c: DVec3, d: DVec3, e: DVec3) -> f64 {
+    let (ae, be, ce, de) = (a - e, b - e, c - e, d - e);
+    let m = ae.abs().max(be.abs()).max(ce.abs()).max(de.abs());
+    let (lo, hi) = (m.min_element(), m.max_element());
+    if lo > 1e-58 && hi < 1e61 {
+        let ab = ae.x * be.y - be.x * ae.y;
+        let bc = be.x * ce.y - ce.x * be.y;
+        let cd = ce.x * de.y - de.x * ce.y;
+        let da = de.x * ae.y - ae.x * de.y;
+        let ac = ae.x * ce.y - ce.x * ae.y;
+        let bd = be.x * de.y - de.x * be.y;
+        let abc = ae.z * bc - be.z * ac + ce.z * ab;
+        let bcd = be.z * cd - ce.z * bd + de.z * bc;
+        let cda = ce.z * da + de.z * ac + ae.z * cd;
+        let dab = de.z * ab + ae.z * bd + be.z * da;
+        let det = (de.length_squared() * abc - ce.length_squared() * dab)
+            + (be.length_squared() * cda - ae.length_squared() * bcd);
+        let bound = INSPHERE_FILTER * m.x * m.y * m.z * hi * hi;
+        if det > bound || -det > bound {
+            return det;
+        }
+    }
     robust::insphere(c3(a), c3(b), c3(c), c3(d), c3(e))
 }
 
+/// Error-bound constant of [`insphere`]'s filter (see there).
+const INSPHERE_FILTER: f64 = 1e-12;
+
 /// Whether `p` (rank `rp`) is inside the sphere of the positively oriented
-/// cell `v` (ranks `r`), ties broken by the perturbation: the highest-ranked
+/// cell `v` (ranks from `r`, read only on a tie: they are a cache miss
+/// away in the hot loop), ties broken by the perturbation: the highest-ranked
 /// of the five points decides. If it is `p`, `p` is outside; otherwise `p`
 /// is inside when putting `p` in that vertex's place keeps the cell positive
 /// (the coefficient of that vertex's lifting infinitesimal). Four vertices of
 /// a cell are never coplanar, so the loop ends before its last step.
-pub fn in_sphere_perturbed(v: [DVec3; 4], r: [u64; 4], p: DVec3, rp: u64) -> bool {
+#[inline]
+pub fn in_sphere_perturbed(
+    v: [DVec3; 4],
+    r: impl FnOnce() -> [u64; 4],
+    p: DVec3,
+    rp: u64,
+) -> bool {
     let det = insphere(v[0], v[1], v[2], v[3], p);
     if det != 0.0 {
         return det > 0.0;
     }
+    sphere_tie(v, r(), p, rp)
+}
+
+#[cold]
+fn sphere_tie(v: [DVec3; 4], r: [u64; 4], p: DVec3, rp: u64) -> bool {
     let mut order = [0usize, 1, 2, 3, 4];
     let rank = |i: usize| if i == 4 { rp } else { r[i] };
     order.sort_unstable_by_key(|&i| std::cmp::Reverse(rank(i)));

@@ -19,7 +19,7 @@ fn finite_cells(d: &Delaunay) -> Vec<[u32; 4]> {
         .iter()
         .filter(|c| !c.is_free() && !c.v.contains(&INFINITE))
         .map(|c| {
-            let mut v = c.v;
+            let mut v = c.v.map(|v| d.input_index(v));
             v.sort_unstable();
             v
         })
@@ -49,7 +49,7 @@ fn brute_force(points: &[DVec3], ranks: &[u64]) -> Vec<[u32; 4]> {
                     let rk = v.map(|i| ranks[i]);
                     let empty = (0..n)
                         .filter(|m| !v.contains(m))
-                        .all(|m| !in_sphere_perturbed(pos, rk, points[m], ranks[m]));
+                        .all(|m| !in_sphere_perturbed(pos, || rk, points[m], ranks[m]));
                     if empty {
                         out.push([a as u32, b as u32, c as u32, e as u32]);
                     }
@@ -209,6 +209,7 @@ fn repeated_points_are_left_out() {
     let d = Delaunay::new(&points, &ranks).unwrap();
     sanity_check(&d).unwrap();
     assert_eq!(d.vertex_count(), 5);
+    assert_eq!(d.points().len() + d.duplicates().len(), points.len());
     assert_eq!(d.duplicates().len(), 999);
     assert!(d.duplicates().iter().all(|&(_, kept)| kept == 999));
 }

@@ -23,9 +23,37 @@ use super::predicates::{collinear, in_circle_perturbed, in_sphere_perturbed, ori
 use glam::DVec3;
 
 /// The vertex at infinity.
-pub const INFINITE: u32 = u32::MAX;
+pub const INFINITE: u32 = 0x7FFF_FFFF;
 /// `v[0]` of a free cell slot.
-const FREE: u32 = u32::MAX - 1;
+const FREE: u32 = 0x7FFF_FFFE;
+/// During one insertion, the top bit of `v[0]` marks a cell in conflict and
+/// that of `v[1]` a cell tested and not in conflict (vertex numbers use 31
+/// bits): the mark shares the cell's cache line, where a separate mark
+/// array cost a second cache miss per test. Both are clear between
+/// insertions.
+const IN: u32 = 1 << 31;
+const OUT: u32 = 1 << 31;
+/// `EDGE_OF[j][k]`: the two slots of a cell other than `j` and `k`.
+const EDGE_OF: [[[usize; 2]; 4]; 4] = {
+    let mut t = [[[0; 2]; 4]; 4];
+    let mut j = 0;
+    while j < 4 {
+        let mut k = 0;
+        while k < 4 {
+            let (mut m, mut i) = (0, 0);
+            while i < 4 {
+                if i != j && i != k && m < 2 {
+                    t[j][k][m] = i;
+                    m += 1;
+                }
+                i += 1;
+            }
+            k += 1;
+        }
+        j += 1;
+    }
+    t
+};
 /// Cells are addressed with 30 bits (the neighbour field keeps 2 for the face).
 const MAX_CELLS: usize = 1 << 30;
 
@@ -123,29 +151,29 @@ impl EdgeTable {
     }
 }
 
-/// The Delaunay triangulation of borrowed points; `ranks` (input ids) break
-/// ties, see [`super::predicates`].
-pub struct Delaunay<'a> {
-    points: &'a [DVec3],
-    ranks: &'a [u64],
+/// The Delaunay triangulation of a point set; ranks (input ids) break ties,
+/// see [`super::predicates`]. Vertices are numbered in insertion order (so
+/// the cells of one region address nearby memory) and keep their position,
+/// rank and index in the input.
+pub struct Delaunay {
+    pos: Vec<DVec3>,
+    rank: Vec<u64>,
+    input: Vec<u32>,
     cells: Vec<Cell>,
-    /// Per cell: `2 * stamp + 1` in conflict with the current point,
-    /// `2 * stamp` tested and not.
-    mark: Vec<u32>,
-    stamp: u32,
     free: Vec<u32>,
-    /// A cell of each inserted vertex ([`INFINITE`] for left-out points).
+    /// A cell of each vertex.
     vertex_cell: Vec<u32>,
+    /// `(duplicate, kept)` input indices.
     duplicates: Vec<(u32, u32)>,
     inserted: usize,
     rng: u32,
     scratch: Scratch,
 }
 
-impl<'a> Delaunay<'a> {
+impl Delaunay {
     /// Triangulates `points` (duplicates are left out, see
     /// [`Delaunay::duplicates`]).
-    pub fn new(points: &'a [DVec3], ranks: &'a [u64]) -> Result<Self, DelaunayError> {
+    pub fn new(points: &[DVec3], ranks: &[u64]) -> Result<Self, DelaunayError> {
         if points.len() != ranks.len() {
             return Err(DelaunayError::RankCount {
                 points: points.len(),
@@ -160,22 +188,21 @@ impl<'a> Delaunay<'a> {
         }
         let InsertionOrder { order, duplicates } = insertion_order(points, ranks);
         let mut d = Delaunay {
-            points,
-            ranks,
+            pos: order.iter().map(|&i| points[i as usize]).collect(),
+            rank: order.iter().map(|&i| ranks[i as usize]).collect(),
+            input: order,
             cells: Vec::with_capacity(points.len() * 7 + 16),
-            mark: Vec::with_capacity(points.len() * 7 + 16),
-            stamp: 0,
             free: Vec::new(),
-            vertex_cell: vec![INFINITE; points.len()],
+            vertex_cell: Vec::new(),
             duplicates,
             inserted: 0,
             rng: 0x2545_F491,
             scratch: Scratch::default(),
         };
-        let first = d.first_tetrahedron(&order)?;
+        let first = d.first_tetrahedron()?;
         let mut hint = 0;
-        for (k, &p) in order.iter().enumerate() {
-            if first.contains(&k) {
+        for p in 0..d.pos.len() as u32 {
+            if first.contains(&p) {
                 continue;
             }
             hint = d.insert(p, hint)?;
@@ -184,12 +211,19 @@ impl<'a> Delaunay<'a> {
         Ok(d)
     }
 
-    pub fn points(&self) -> &'a [DVec3] {
-        self.points
+    /// Vertex positions, by vertex number.
+    pub fn points(&self) -> &[DVec3] {
+        &self.pos
     }
 
-    pub fn ranks(&self) -> &'a [u64] {
-        self.ranks
+    /// Vertex ranks (input ids), by vertex number.
+    pub fn ranks(&self) -> &[u64] {
+        &self.rank
+    }
+
+    /// Index in the input of vertex `v`.
+    pub fn input_index(&self, v: u32) -> u32 {
+        self.input[v as usize]
     }
 
     /// Every cell slot, free ones included (see [`Cell::is_free`]).
@@ -211,52 +245,56 @@ impl<'a> Delaunay<'a> {
         self.inserted
     }
 
-    /// `(duplicate, kept)` pairs of equal points; the duplicate is not a vertex.
+    /// `(duplicate, kept)` pairs of equal points, as input indices; the
+    /// duplicate is not a vertex.
     pub fn duplicates(&self) -> &[(u32, u32)] {
         &self.duplicates
     }
 
-    /// A live cell with vertex `v`, or `None` for a left-out duplicate.
-    pub fn vertex_cell(&self, v: u32) -> Option<u32> {
-        Some(self.vertex_cell[v as usize]).filter(|&c| c != INFINITE)
+    /// A live cell with vertex `v`.
+    pub fn vertex_cell(&self, v: u32) -> u32 {
+        self.vertex_cell[v as usize]
     }
 
     /// Bytes held by the structure (capacity, not length), for reports.
     pub fn heap_bytes(&self) -> usize {
         self.cells.capacity() * std::mem::size_of::<Cell>()
-            + self.mark.capacity() * 4
+            + self.pos.capacity() * 24
+            + self.rank.capacity() * 8
+            + self.input.capacity() * 4
             + self.free.capacity() * 4
             + self.vertex_cell.capacity() * 4
             + self.duplicates.capacity() * 8
     }
 
     fn pos(&self, v: u32) -> DVec3 {
-        self.points[v as usize]
+        self.pos[v as usize]
     }
 
     fn rank(&self, v: u32) -> u64 {
-        self.ranks[v as usize]
+        self.rank[v as usize]
     }
 
-    /// Four non-coplanar points of `order` (their positions in it), made
-    /// into one positive cell and its four hull cells.
-    fn first_tetrahedron(&mut self, order: &[u32]) -> Result<[usize; 4], DelaunayError> {
-        let distinct = order.len();
+    /// Four non-coplanar vertices, made into one positive cell and its four
+    /// hull cells: the first two, the first not collinear with them, the
+    /// first not coplanar with those three.
+    fn first_tetrahedron(&mut self) -> Result<[u32; 4], DelaunayError> {
+        let distinct = self.pos.len();
         let degenerate = |shape| DelaunayError::Degenerate { distinct, shape };
         if distinct < 2 {
             return Err(degenerate("one point"));
         }
-        let (a, b) = (order[0], order[1]);
-        let (pa, pb) = (self.pos(a), self.pos(b));
-        let kc = (2..distinct)
-            .find(|&k| !collinear(pa, pb, self.pos(order[k])))
+        let (pa, pb) = (self.pos[0], self.pos[1]);
+        let c = (2..distinct)
+            .find(|&k| !collinear(pa, pb, self.pos[k]))
             .ok_or_else(|| degenerate("collinear"))?;
-        let pc = self.pos(order[kc]);
-        let kd = (2..distinct)
-            .find(|&k| orient(pa, pb, pc, self.pos(order[k])) != 0.0)
+        let pc = self.pos[c];
+        let d = (2..distinct)
+            .find(|&k| orient(pa, pb, pc, self.pos[k]) != 0.0)
             .ok_or_else(|| degenerate("coplanar"))?;
-        let mut v = [a, b, order[kc], order[kd]];
-        if orient(pa, pb, pc, self.pos(v[3])) < 0.0 {
+        let (c, d) = (c as u32, d as u32);
+        let mut v = [0, 1, c, d];
+        if orient(pa, pb, pc, self.pos(d)) < 0.0 {
             v.swap(0, 1);
         }
         let mut cells = vec![v];
@@ -271,7 +309,7 @@ impl<'a> Delaunay<'a> {
         }
         self.link_by_faces(5);
         self.inserted = 4;
-        Ok([0, 1, kc, kd])
+        Ok([0, 1, c, d])
     }
 
     /// Links the first `count` cells by matching faces (for the first five).
@@ -297,16 +335,11 @@ impl<'a> Delaunay<'a> {
             return Err(DelaunayError::TooLarge { limit: MAX_CELLS });
         }
         self.cells.push(cell);
-        self.mark.push(0);
         Ok(self.cells.len() as u32 - 1)
     }
 
     fn insert(&mut self, p: u32, hint: u32) -> Result<u32, DelaunayError> {
         let start = self.locate(self.pos(p), hint)?;
-        self.stamp += 1;
-        if self.stamp >= u32::MAX / 2 {
-            return Err(DelaunayError::TooLarge { limit: u32::MAX as usize / 2 });
-        }
         self.dig_cavity(p, start);
         self.inserted += 1;
         self.fill_cavity(p)
@@ -367,53 +400,54 @@ impl<'a> Delaunay<'a> {
         match cell.infinite_slot() {
             None => in_sphere_perturbed(
                 cell.v.map(|v| self.pos(v)),
-                cell.v.map(|v| self.rank(v)),
+                || cell.v.map(|v| self.rank(v)),
                 q,
                 self.rank(p),
             ),
-            Some(k) => {
-                let mut w = cell.v.map(|v| if v == INFINITE { q } else { self.pos(v) });
-                w[k] = q;
-                let o = orient(w[0], w[1], w[2], w[3]);
-                if o != 0.0 {
-                    return o > 0.0;
-                }
-                let f: Vec<u32> = (0..4).filter(|&i| i != k).map(|i| cell.v[i]).collect();
-                in_circle_perturbed(
-                    [f[0], f[1], f[2]].map(|v| self.pos(v)),
-                    [f[0], f[1], f[2]].map(|v| self.rank(v)),
-                    q,
-                    self.rank(p),
-                )
-            }
+            Some(k) => self.conflicts_hull(cell, k, p),
         }
+    }
+
+    fn conflicts_hull(&self, cell: &Cell, k: usize, p: u32) -> bool {
+        let q = self.pos(p);
+        let w = cell.v.map(|v| if v == INFINITE { q } else { self.pos(v) });
+        let o = orient(w[0], w[1], w[2], w[3]);
+        if o != 0.0 {
+            return o > 0.0;
+        }
+        let f = [(k + 1) & 3, (k + 2) & 3, (k + 3) & 3].map(|i| cell.v[i]);
+        in_circle_perturbed(
+            f.map(|v| self.pos(v)),
+            f.map(|v| self.rank(v)),
+            q,
+            self.rank(p),
+        )
     }
 
     /// Marks the conflict region of `p` from `start` and lists its boundary.
     fn dig_cavity(&mut self, p: u32, start: u32) {
-        let (yes, no) = (2 * self.stamp + 1, 2 * self.stamp);
         let mut s = std::mem::take(&mut self.scratch);
         s.stack.clear();
         s.conflict.clear();
         s.boundary.clear();
-        self.mark[start as usize] = yes;
+        self.cells[start as usize].v[0] |= IN;
         s.stack.push(start);
         s.conflict.push(start);
         while let Some(c) = s.stack.pop() {
             for j in 0..4 {
                 let nb = self.cells[c as usize].n[j] >> 2;
-                let m = self.mark[nb as usize];
-                if m == yes {
+                let v = self.cells[nb as usize].v;
+                if v[0] & IN != 0 {
                     continue;
                 }
-                if m != no {
+                if v[1] & OUT == 0 {
                     if self.conflicts(nb, p) {
-                        self.mark[nb as usize] = yes;
+                        self.cells[nb as usize].v[0] |= IN;
                         s.stack.push(nb);
                         s.conflict.push(nb);
                         continue;
                     }
-                    self.mark[nb as usize] = no;
+                    self.cells[nb as usize].v[1] |= OUT;
                 }
                 s.boundary.push((c, j as u8));
             }
@@ -434,6 +468,7 @@ impl<'a> Delaunay<'a> {
         for &(c, j) in &s.boundary {
             let cell = &self.cells[c as usize];
             let mut v = cell.v;
+            v[0] &= !IN;
             v[j as usize] = p;
             outer.push(cell.n[j as usize]);
             s.created.push((0, v, j));
@@ -450,7 +485,9 @@ impl<'a> Delaunay<'a> {
             n[j as usize] = outer[k];
             self.cells[slot as usize] = Cell { v, n };
             let (oc, of) = (outer[k] >> 2, outer[k] & 3);
-            self.cells[oc as usize].n[of as usize] = slot << 2 | j as u32;
+            let o = &mut self.cells[oc as usize];
+            o.n[of as usize] = slot << 2 | j as u32;
+            o.v[1] &= !OUT;
         }
         // Fewer new cells than conflict cells cannot happen (a cavity with
         // F boundary faces had F - 2 cells); free any left all the same.
@@ -464,15 +501,9 @@ impl<'a> Delaunay<'a> {
                 if k == j as usize {
                     continue;
                 }
-                let mut e = [0u32; 2];
-                let mut m = 0;
-                for (i, &vi) in v.iter().enumerate() {
-                    if i != k && i != j as usize {
-                        e[m] = vi;
-                        m += 1;
-                    }
-                }
-                let key = (e[0].min(e[1]) as u64) << 32 | e[0].max(e[1]) as u64;
+                let [x, y] = EDGE_OF[j as usize][k];
+                let (a, b) = (v[x], v[y]);
+                let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
                 let here = slot << 2 | k as u32;
                 if let Some(there) = s.edges.meet(key, here) {
                     self.cells[slot as usize].n[k] = there;
@@ -487,6 +518,7 @@ impl<'a> Delaunay<'a> {
     }
 
     fn index_vertices(&mut self) {
+        self.vertex_cell = vec![INFINITE; self.pos.len()];
         for (c, cell) in self.cells.iter().enumerate() {
             if cell.is_free() {
                 continue;
@@ -503,10 +535,7 @@ impl<'a> Delaunay<'a> {
     /// cleared first): a search over neighbours that keep `v`.
     pub fn star(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
-        let Some(c0) = self.vertex_cell(v) else {
-            return;
-        };
-        out.push(c0);
+        out.push(self.vertex_cell(v));
         let mut i = 0;
         while i < out.len() {
             let cell = self.cells[out[i] as usize];
