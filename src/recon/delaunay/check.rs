@@ -35,12 +35,20 @@ pub fn sanity_check(d: &Delaunay) -> Result<(), String> {
     }
     for v in 0..d.vertex_count() as u32 {
         let c = d.vertex_cell(v);
-        if !d.cell_slots().get(c as usize).is_some_and(|cell| cell.v.contains(&v)) {
+        if !d
+            .cell_slots()
+            .get(c as usize)
+            .is_some_and(|cell| cell.v.contains(&v))
+        {
             return Err(format!("vertex {v}: its cell {c} does not hold it"));
         }
     }
     if d.vertex_count() != d.points().len() {
-        return Err(format!("{} vertices of {} points", d.vertex_count(), d.points().len()));
+        return Err(format!(
+            "{} vertices of {} points",
+            d.vertex_count(),
+            d.points().len()
+        ));
     }
     edges.sort_unstable();
     edges.dedup();
@@ -102,7 +110,9 @@ fn check_link(d: &Delaunay, c: u32, j: usize) -> Result<(), String> {
         s
     };
     if face(cell.v, j) != face(other.v, f) {
-        return Err(format!("cells {c} and {nb} are linked across unequal faces"));
+        return Err(format!(
+            "cells {c} and {nb} are linked across unequal faces"
+        ));
     }
     Ok(())
 }

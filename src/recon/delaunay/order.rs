@@ -94,7 +94,11 @@ fn hilbert_sorted(points: &[DVec3]) -> Vec<(u64, u32)> {
 
 /// Drops points equal to another of smaller rank. Equal points have equal
 /// keys, so they sit in the same run of the sorted keys.
-fn remove_duplicates(keyed: &mut Vec<(u64, u32)>, points: &[DVec3], ranks: &[u64]) -> Vec<(u32, u32)> {
+fn remove_duplicates(
+    keyed: &mut Vec<(u64, u32)>,
+    points: &[DVec3],
+    ranks: &[u64],
+) -> Vec<(u32, u32)> {
     let mut duplicates = Vec::new();
     let mut out = 0;
     let mut run = 0;

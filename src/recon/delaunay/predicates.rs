@@ -85,12 +85,7 @@ const INSPHERE_FILTER: f64 = 1e-12;
 /// (the coefficient of that vertex's lifting infinitesimal). Four vertices of
 /// a cell are never coplanar, so the loop ends before its last step.
 #[inline]
-pub fn in_sphere_perturbed(
-    v: [DVec3; 4],
-    r: impl FnOnce() -> [u64; 4],
-    p: DVec3,
-    rp: u64,
-) -> bool {
+pub fn in_sphere_perturbed(v: [DVec3; 4], r: impl FnOnce() -> [u64; 4], p: DVec3, rp: u64) -> bool {
     let det = insphere(v[0], v[1], v[2], v[3], p);
     if det != 0.0 {
         return det > 0.0;

@@ -216,8 +216,8 @@ fn repeated_points_are_left_out() {
 
 #[test]
 fn noisy_surface_sample_is_delaunay() {
-    let scan = crate::synth::generate(&crate::synth::Shape::torus(1.0, 0.3), 20_000, 1e-3, 3)
-        .unwrap();
+    let scan =
+        crate::synth::generate(&crate::synth::Shape::torus(1.0, 0.3), 20_000, 1e-3, 3).unwrap();
     let ranks = ids(scan.points.len());
     let d = Delaunay::new(&scan.points, &ranks).unwrap();
     sanity_check(&d).unwrap();

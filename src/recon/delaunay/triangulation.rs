@@ -85,7 +85,10 @@ pub enum DelaunayError {
     #[error("{points} points and {ranks} ranks")]
     RankCount { points: usize, ranks: usize },
     #[error("the {distinct} distinct points are all {shape}: no 3-D triangulation exists (a flat or linear cloud needs a 2-D method)")]
-    Degenerate { distinct: usize, shape: &'static str },
+    Degenerate {
+        distinct: usize,
+        shape: &'static str,
+    },
     #[error("more than {limit} points or cells for one triangulation")]
     TooLarge { limit: usize },
     #[error("the point location walk did not end (inconsistent triangulation)")]
@@ -181,7 +184,9 @@ impl Delaunay {
             });
         }
         if points.len() >= MAX_CELLS / 8 {
-            return Err(DelaunayError::TooLarge { limit: MAX_CELLS / 8 });
+            return Err(DelaunayError::TooLarge {
+                limit: MAX_CELLS / 8,
+            });
         }
         if let Some(index) = points.iter().position(|p| !p.is_finite()) {
             return Err(DelaunayError::NonFinite { index });
@@ -474,17 +479,20 @@ impl Delaunay {
             s.created.push((0, v, j));
         }
         let mut reuse = s.conflict.iter().copied();
-        for k in 0..s.created.len() {
+        for (k, &out) in outer.iter().enumerate() {
             let slot = match reuse.next().or_else(|| self.free.pop()) {
                 Some(slot) => slot,
-                None => self.push_cell(Cell { v: [FREE; 4], n: [0; 4] })?,
+                None => self.push_cell(Cell {
+                    v: [FREE; 4],
+                    n: [0; 4],
+                })?,
             };
             let (_, v, j) = s.created[k];
             s.created[k].0 = slot;
             let mut n = [0u32; 4];
-            n[j as usize] = outer[k];
+            n[j as usize] = out;
             self.cells[slot as usize] = Cell { v, n };
-            let (oc, of) = (outer[k] >> 2, outer[k] & 3);
+            let (oc, of) = (out >> 2, out & 3);
             let o = &mut self.cells[oc as usize];
             o.n[of as usize] = slot << 2 | j as u32;
             o.v[1] &= !OUT;
@@ -497,11 +505,10 @@ impl Delaunay {
         }
         s.edges.reset(s.created.len() * 3 / 2);
         for &(slot, v, j) in &s.created {
-            for k in 0..4 {
+            for (k, &[x, y]) in EDGE_OF[j as usize].iter().enumerate() {
                 if k == j as usize {
                     continue;
                 }
-                let [x, y] = EDGE_OF[j as usize][k];
                 let (a, b) = (v[x], v[y]);
                 let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
                 let here = slot << 2 | k as u32;
@@ -534,18 +541,39 @@ impl Delaunay {
     /// The live cells incident to vertex `v`, appended to `out` (which is
     /// cleared first): a search over neighbours that keep `v`.
     pub fn star(&self, v: u32, out: &mut Vec<u32>) {
+        // Stars are small (about 26 cells): a stack table of 256 slots
+        // (open addressing) marks visited cells; larger stars (cospherical
+        // or degenerate inputs) fall back to scanning `out`.
+        const SLOTS: usize = 256;
+        let mut seen = [u32::MAX; SLOTS];
+        let mut visit = |c: u32, out: &mut Vec<u32>| {
+            if out.len() >= SLOTS / 2 {
+                if !out.contains(&c) {
+                    out.push(c);
+                }
+                return;
+            }
+            let mut h = (c.wrapping_mul(0x9E37_79B9) >> 24) as usize;
+            loop {
+                if seen[h] == c {
+                    return;
+                }
+                if seen[h] == u32::MAX {
+                    seen[h] = c;
+                    out.push(c);
+                    return;
+                }
+                h = (h + 1) & (SLOTS - 1);
+            }
+        };
         out.clear();
-        out.push(self.vertex_cell(v));
+        visit(self.vertex_cell(v), out);
         let mut i = 0;
         while i < out.len() {
             let cell = self.cells[out[i] as usize];
             for j in 0..4 {
-                if cell.v[j] == v {
-                    continue;
-                }
-                let nb = cell.n[j] >> 2;
-                if !out.contains(&nb) {
-                    out.push(nb);
+                if cell.v[j] != v {
+                    visit(cell.n[j] >> 2, out);
                 }
             }
             i += 1;
