@@ -182,3 +182,24 @@ fn degenerate_flat_cloud_gets_normals() {
     let text = std::fs::read_to_string(&out).expect("output");
     assert_eq!(text.lines().count(), 15);
 }
+
+#[test]
+fn a_budget_below_every_plan_fails_fast_naming_the_minimum() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let out = dir.path().join("o.ply");
+    for cmd in ["normals", "reconstruct", "neighbors", "tile"] {
+        let o = scanmesh(&[
+            cmd,
+            &input,
+            "-o",
+            out.to_str().unwrap_or(""),
+            "--mem",
+            "1KiB",
+        ]);
+        assert_fails_naming(&o, "--mem 1.00KiB is too small");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("needs at least"), "{cmd}: {err}");
+        no_output_left(dir.path(), "o.ply");
+    }
+}

@@ -105,20 +105,19 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let r = reconstruct_implicit(
-        &mut ws.store,
+        &mut run.ws.store,
         &params,
         &a.output,
         format,
-        s.run_options(),
+        run.opts,
         progress.as_ref(),
     )?;
     print_summary(
         &r,
-        ws.store.len(),
-        ws.store.tiles().len(),
+        run.ws.store.len(),
+        run.ws.store.tiles().len(),
         t0.elapsed().as_secs_f64(),
         &a.output,
     );

@@ -4,9 +4,8 @@
 use anyhow::{bail, Result};
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::delaunay::reconstruct::{
-    reconstruct_delaunay, DelaunayParams, DelaunayReport, BYTES_PER_POINT,
+    cost, reconstruct_delaunay, DelaunayParams, DelaunayReport,
 };
-use scanmesh::store::{BuildOptions, TileTarget};
 use std::path::Path;
 use std::time::Instant;
 
@@ -24,31 +23,20 @@ pub fn run(
     }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = BuildOptions {
-        tiles: match s.tile_points {
-            Some(n) => TileTarget::Points(n),
-            None => TileTarget::Budget {
-                budget: s.budget(),
-                bytes_per_point: BYTES_PER_POINT,
-                reserved_per_point: 0,
-            },
-        },
-        scatter_buffer: (s.mem / 8).min(64 << 20) as usize,
-    };
-    let mut ws = s.open_input(input, output, &opts, progress.as_ref())?;
+    let mut prepared = s.open_input(input, output, cost(), progress.as_ref())?;
     let params = DelaunayParams { hole };
     let r = reconstruct_delaunay(
-        &mut ws.store,
+        &mut prepared.ws.store,
         &params,
         output,
         format,
-        s.run_options(),
+        prepared.opts,
         progress.as_ref(),
     )?;
     print_summary(
         &r,
-        ws.store.len(),
-        ws.store.tiles().len(),
+        prepared.ws.store.len(),
+        prepared.ws.store.tiles().len(),
         t0.elapsed().as_secs_f64(),
         output,
     );

@@ -15,9 +15,9 @@ mod progress;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::InvalidPolicy;
-use scanmesh::pipeline::{MemoryBudget, Progress, RunOptions};
+use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
 use scanmesh::store::build::scratch_store_dir;
-use scanmesh::store::{open_input, BuildOptions, Workspace};
+use scanmesh::store::{open_input, BuildOptions, PointStore, TileTarget, Workspace};
 use std::path::Path;
 
 #[derive(Parser)]
@@ -85,6 +85,13 @@ pub enum HoodKind {
     Knn,
 }
 
+/// An open store with the plan a run keeps to.
+pub struct Prepared {
+    pub ws: Workspace,
+    pub opts: RunOptions,
+    pub plan: MemoryPlan,
+}
+
 /// Validated common options.
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
@@ -99,12 +106,6 @@ impl CommonArgs {
     fn settings(&self) -> Result<Settings> {
         let mem = scanmesh::units::parse_size(&self.mem)
             .with_context(|| format!("--mem {}", self.mem))?;
-        if mem < 32 << 20 {
-            bail!(
-                "--mem {} is below the 32MiB scanmesh needs to run",
-                self.mem
-            );
-        }
         let threads = match self.threads {
             Some(0) => bail!("--threads must be at least 1"),
             Some(t) => t,
@@ -132,22 +133,65 @@ impl Settings {
         MemoryBudget::new(self.mem, self.threads)
     }
 
-    pub fn run_options(&self) -> RunOptions {
-        RunOptions::new(self.threads)
+    /// Checks that some plan fits the promise whatever the point count
+    /// (the fixed costs and the smallest tiles), before any input is read.
+    pub fn check_floor(&self, cost: &KernelCost) -> Result<()> {
+        MemoryPlan::new(self.budget(), 0, cost)?;
+        Ok(())
     }
 
-    /// The store to work on: `input` itself when it is one, else a scratch
-    /// store beside `output` built from the input file.
+    /// Tile sizes for a kernel: forced by --tile-points, else from the plan.
+    pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
+        let within = BuildOptions::within(self.budget(), cost);
+        match self.tile_points {
+            Some(n) => BuildOptions {
+                tiles: TileTarget::Points(n),
+                ..within
+            },
+            None => within,
+        }
+    }
+
+    /// The store to work on (`input` itself when it is one, else a scratch
+    /// store beside `output` built from the input file), its memory plan,
+    /// and run options that keep the tiles in flight within it.
     pub fn open_input(
         &self,
         input: &Path,
         output: &Path,
-        opts: &BuildOptions,
+        cost: KernelCost,
         progress: &dyn Progress,
-    ) -> Result<Workspace> {
+    ) -> Result<Prepared> {
+        self.check_floor(&cost)?;
         let scratch = scratch_store_dir(output);
-        open_input(input, &scratch, opts, self.policy, progress)
-            .with_context(|| format!("reading {}", input.display()))
+        let ws = open_input(
+            input,
+            &scratch,
+            &self.build_options(cost),
+            self.policy,
+            progress,
+        )
+        .with_context(|| format!("reading {}", input.display()))?;
+        self.prepare(ws, cost)
+    }
+
+    /// The plan and run options for an open store.
+    pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared> {
+        let (plan, opts) = self.plan_for(&ws.store, cost)?;
+        Ok(Prepared { ws, opts, plan })
+    }
+
+    /// The memory plan for `store` and run options whose tiles in flight
+    /// fit it.
+    pub fn plan_for(
+        &self,
+        store: &PointStore,
+        cost: KernelCost,
+    ) -> Result<(MemoryPlan, RunOptions)> {
+        let plan = MemoryPlan::new(self.budget(), store.len(), &cost)?;
+        let largest = store.tiles().iter().map(|t| t.count).max().unwrap_or(0);
+        let opts = plan.run_options(&cost, largest)?;
+        Ok((plan, opts))
     }
 
     /// Sizes rayon's pool once per process.

@@ -57,6 +57,8 @@ pub enum StoreError {
     Index(#[from] crate::spatial::IndexError),
     #[error("store has no `{column}` column (run the pass that computes it first)")]
     MissingColumn { column: String },
+    #[error(transparent)]
+    Budget(#[from] crate::pipeline::BudgetError),
 }
 
 impl StoreError {

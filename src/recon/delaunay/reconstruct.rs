@@ -14,7 +14,7 @@ use super::fan::{Hole, LOCAL_HOLE};
 use super::kernel::{DelaunayKernel, DelaunayTile};
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
-use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::PointStore;
 use std::collections::HashMap;
 use std::io::{BufReader, BufWriter, Read, Seek, Write};
@@ -28,6 +28,19 @@ const MARGIN_SPACINGS: f64 = 40.0;
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
 /// edge index, the tile's own columns.
 pub const BYTES_PER_POINT: u64 = 900;
+
+/// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
+/// per loaded point and nothing per stored point beyond the seam side's
+/// map (seam-sized) and one union-find entry per tile component.
+pub fn cost() -> KernelCost {
+    KernelCost {
+        bytes_per_point: BYTES_PER_POINT,
+        global_per_point: 0,
+        contracts_boundaries: false,
+        resident_per_point: 0.0,
+        window_bytes_per_point: 0,
+    }
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelaunayParams {
