@@ -35,6 +35,13 @@ pub struct ReconstructArgs {
     /// patches, and pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
+    /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
+    /// triangles with a larger circumradius are boundaries. Default: 5 x
+    /// the largest nearest-neighbour distance of the triangle's corners
+    /// (from the local sampling, not the paper's share of the bounding
+    /// sphere).
+    #[arg(long, value_name = "DELTA")]
+    hole: Option<f64>,
     /// Drop connected pieces with fewer triangles than this share of the
     /// largest piece's (default 0.01 with --closed, else 0: keep all).
     #[arg(long, value_name = "SHARE")]
@@ -55,6 +62,10 @@ pub struct ReconstructArgs {
 enum Method {
     /// Signed distance to tangent planes + marching cubes (paper 1).
     Implicit,
+    /// 3-D Delaunay triangulation and local flatness (paper 4): the
+    /// input points are the vertices; open, multi-sheet and non-orientable
+    /// surfaces.
+    Delaunay,
 }
 
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
@@ -75,7 +86,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
-    let Method::Implicit = a.method;
+    if let Method::Delaunay = a.method {
+        return super::cmd_reconstruct_delaunay::run(&s, &a.input, &a.output, format, a.hole);
+    }
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
     }

@@ -8,6 +8,7 @@ mod cmd_info;
 mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
+mod cmd_reconstruct_delaunay;
 mod cmd_tile;
 mod progress;
 
