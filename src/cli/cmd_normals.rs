@@ -204,7 +204,7 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
         with_normals: true,
         with_flags: matches!(
             format,
-            Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe
+            Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd
         ),
         bounds: None,
         las_transform: None,

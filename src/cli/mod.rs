@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
     version,
     about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core",
     long_about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core.\n\n\
-        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, or a point store \
+        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, or a point store \
         built by `scanmesh tile`. Memory stays within --mem whatever the input size."
 )]
 struct Cli {
@@ -39,7 +39,7 @@ struct Cli {
 enum Command {
     /// Format, point count, bounding box and spacing of a file or store.
     Info(cmd_info::InfoArgs),
-    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ).
+    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ, PCD).
     Convert(cmd_convert::ConvertArgs),
     /// Build a tiled point store (a directory) for repeated runs.
     Tile(cmd_tile::TileArgs),

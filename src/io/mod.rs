@@ -14,6 +14,7 @@ pub mod las;
 pub mod memory;
 pub mod obj;
 pub mod open;
+pub mod pcd;
 pub mod place;
 pub mod ply;
 mod policy;
@@ -46,6 +47,9 @@ pub enum Format {
     Xyz,
     Las,
     Laz,
+    /// PCL's Point Cloud Data: read as ASCII, binary or binary_compressed,
+    /// written binary.
+    Pcd,
 }
 
 /// A bounded batch of consecutive input records.
@@ -175,7 +179,7 @@ pub trait PointWriter: Send {
 }
 
 /// Format implied by a file name (`.ply`, `.xyz`, `.txt`, `.csv`, `.las`,
-/// `.laz`, each optionally followed by `.gz` for text and PLY).
+/// `.laz`, `.pcd`, each optionally followed by `.gz` for text, PLY and PCD).
 pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
     let name = path.file_name()?.to_str()?.to_ascii_lowercase();
     let (stem, gz) = match name.strip_suffix(".gz") {
@@ -188,6 +192,7 @@ pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
         "xyz" | "txt" | "csv" | "pts" => Format::Xyz,
         "las" => Format::Las,
         "laz" => Format::Laz,
+        "pcd" => Format::Pcd,
         _ => return None,
     };
     Some((f, gz))
