@@ -23,7 +23,7 @@ pub struct DemoArgs {
     #[arg(short, default_value_t = 200_000)]
     n: usize,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 pub fn run(a: DemoArgs) -> Result<()> {

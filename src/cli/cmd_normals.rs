@@ -49,7 +49,7 @@ pub struct NormalsArgs {
     #[arg(long)]
     ascii: bool,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
@@ -212,7 +212,7 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
 }
 
 pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {
-    println!(
+    super::report::summary(format!(
         "normals: {} points, {} tiles ({} reloaded with a wider margin), {} degenerate, {} unoriented, {} components, {:.2} s, peak {} -> {}",
         r.points,
         r.tiles,
@@ -223,5 +223,5 @@ pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }

@@ -55,7 +55,7 @@ pub struct ReconstructArgs {
     #[arg(long)]
     ascii: bool,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -125,7 +125,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
 }
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {
-    println!(
+    super::report::summary(format!(
         "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles{}, {:.2} s, peak {} -> {}",
         points,
         tiles,
@@ -140,7 +140,7 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }
 
 /// " (N holes closed, M left open; P small pieces dropped)", the parts
