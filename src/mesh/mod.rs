@@ -21,7 +21,7 @@ pub mod write;
 
 mod bvh;
 mod closest;
-mod intersect;
+pub mod intersect;
 mod nearest;
 mod sampling;
 mod topology;

@@ -33,7 +33,7 @@ use rayon::prelude::*;
 const CHUNK: usize = 1024;
 
 /// The neighbour lists (local indices) of a sequence of loaded points.
-pub(super) struct Hoods {
+pub(crate) struct Hoods {
     chunks: Vec<HoodChunk>,
     /// How much wider the margin must be for every list to be certainly
     /// complete (0 when it is).
@@ -69,7 +69,7 @@ impl Hoods {
 }
 
 /// An index over one tile's loaded points, answering neighbourhoods.
-pub(super) enum HoodIndex<'a> {
+pub(crate) enum HoodIndex<'a> {
     Knn {
         index: Box<dyn KnnIndex + 'a>,
         k: usize,

@@ -2,3 +2,4 @@
 //! lattice + marching cubes (paper 1).
 
 pub mod implicit;
+pub mod projection;

@@ -1,0 +1,20 @@
+//! Local-projection Delaunay triangulation (paper 2, Wang et al. 2007): an
+//! interpolating mesh whose vertices are input points, grown greedily over
+//! the surface. Each vertex's neighbours are projected on its tangent plane,
+//! the ones it can see are joined to it as a fan, and the fan is made
+//! Delaunay in that plane.
+
+pub mod cloud;
+pub mod fan;
+pub mod frame;
+pub mod grow;
+pub mod local;
+pub mod orient;
+pub mod params;
+pub mod star;
+pub mod surface;
+pub mod thin;
+pub mod triangulate;
+
+pub use params::ProjectionParams;
+pub use triangulate::{triangulate_points, triangulate_tile};
