@@ -1,5 +1,6 @@
 //! `scanmesh reconstruct`: a mesh from a point cloud (paper 1's implicit
-//! method), streaming, seam-exact in tiles.
+//! method, seam-exact in tiles; or paper 2's local projection, whose seams
+//! are re-grown), streaming.
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
@@ -8,6 +9,7 @@ use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
+use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams, ProjectionReport};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -39,9 +41,17 @@ pub struct ReconstructArgs {
     /// largest piece's (default 0.01 with --closed, else 0: keep all).
     #[arg(long, value_name = "SHARE")]
     min_piece: Option<f64>,
-    /// Neighbours per point for the normals (per query when topological).
+    /// Neighbours per point for the normals (per query when topological);
+    /// for --method projection, each vertex's neighbourhood (paper 2: 6..15).
     #[arg(long, default_value_t = 12)]
     k: usize,
+    /// --method projection: leave out a point closer than this many local
+    /// spacings to a point of smaller input id (0 keeps every point).
+    #[arg(long, default_value_t = ProjectionParams::default().thin)]
+    thin: f64,
+    /// --method projection: longest edge, in local spacings.
+    #[arg(long, default_value_t = ProjectionParams::default().max_edge)]
+    max_edge: f64,
     #[command(flatten)]
     hood: super::cmd_normals::HoodArgs,
     /// Write PLY as ASCII instead of binary.
@@ -55,6 +65,9 @@ pub struct ReconstructArgs {
 enum Method {
     /// Signed distance to tangent planes + marching cubes (paper 1).
     Implicit,
+    /// Greedy local-projection Delaunay triangulation (paper 2): the
+    /// input points are the vertices.
+    Projection,
 }
 
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
@@ -75,7 +88,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
-    let Method::Implicit = a.method;
+    if let Method::Projection = a.method {
+        return run_projection(&a, &s, format);
+    }
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
     }
@@ -110,6 +125,51 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         &a.output,
     );
     Ok(())
+}
+
+fn run_projection(a: &ReconstructArgs, s: &super::Settings, format: MeshFormat) -> Result<()> {
+    let params = ProjectionParams {
+        k: a.k,
+        neighbourhood: a.hood.hood(),
+        thin: a.thin,
+        max_edge: a.max_edge,
+        ..ProjectionParams::default()
+    };
+    params.validate()?;
+    let progress = super::progress::progress(s.quiet);
+    let t0 = Instant::now();
+    let opts = super::cmd_tile::build_options(s, &params.hood());
+    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
+    let r = reconstruct_projection(
+        &mut ws.store,
+        &params,
+        &a.output,
+        format,
+        s.run_options(),
+        progress.as_ref(),
+    )?;
+    print_projection_summary(
+        &r,
+        ws.store.tiles().len(),
+        t0.elapsed().as_secs_f64(),
+        &a.output,
+    );
+    Ok(())
+}
+
+pub fn print_projection_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
+    let st = &r.stitch;
+    println!(
+        "reconstruct: {} points, {} tiles, projection (paper 2), spacing {:.4e} -> {} triangles ({} grown on seams), {:.2} s, peak {} -> {}",
+        st.vertices,
+        tiles,
+        r.spacing,
+        st.triangles,
+        st.seam_triangles,
+        secs,
+        super::peak(),
+        out.display()
+    );
 }
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {

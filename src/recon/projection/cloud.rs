@@ -3,6 +3,7 @@
 //! processed as centres.
 
 use crate::normals::hood::Hoods;
+use crate::spatial::KnnIndex;
 use glam::DVec3;
 
 /// Neighbour lists by point (local indices, nearest first).
@@ -43,6 +44,8 @@ pub struct Cloud<'a, H: Neighbourhoods> {
     pub centre: &'a [bool],
     /// Input ids: the growth order and every tie.
     pub ids: &'a [u64],
+    /// Exact kNN over `points`, for checks beyond a neighbour list.
+    pub index: &'a dyn KnnIndex,
 }
 
 impl<H: Neighbourhoods> Cloud<'_, H> {

@@ -34,6 +34,9 @@ use glam::DVec2;
 /// tested in space against the triangles around its corners.
 const RISKY_EDGE: f64 = 4.0;
 
+/// Points looked up around a big triangle's centre.
+const CIRCLE_PROBE: usize = 16;
+
 /// A walk's current edge end.
 #[derive(Clone, Copy, Debug)]
 struct End {
@@ -221,6 +224,63 @@ fn acceptable<H: Neighbourhoods>(
         })
         && !holds_a_vertex(star, s, t)
         && !(risky(star, cloud, ids) && meets_nearby(star, cloud, s, ids))
+        && !big_and_not_empty(star, cloud, s, ids)
+}
+
+/// For a triangle too big for `v`'s neighbour list to vouch for (its
+/// smallest enclosing ball wider than the list's reach): whether a point
+/// (other than its corners, and not left out) lies inside it, as seen along
+/// its normal within the ball, found with the tile's kNN index around the
+/// ball's centre. A long triangle across a gap otherwise lays itself over
+/// triangles of points `v` does not see.
+fn big_and_not_empty<H: Neighbourhoods>(
+    star: &mut Star,
+    cloud: &Cloud<H>,
+    s: &Surface,
+    t: [u32; 3],
+) -> bool {
+    let p = t.map(|x| cloud.points[x as usize]);
+    let (centre, r2) = enclosing_ball(p);
+    if 4.0 * r2 <= star.reach * star.reach {
+        return false;
+    }
+    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    if n == glam::DVec3::ZERO {
+        return true;
+    }
+    let mut found = std::mem::take(&mut star.found);
+    cloud.index.knn(centre, CIRCLE_PROBE, None, &mut found);
+    let hit = found.iter().any(|q| {
+        q.dist2 < r2
+            && !t.contains(&q.index)
+            && s.state[q.index as usize] != State::Unused
+            && above_triangle(p, n, cloud.points[q.index as usize])
+    });
+    star.found = found;
+    hit
+}
+
+/// Smallest ball holding triangle `p`: the circumscribed one when acute,
+/// else the one on its longest edge. Centre and squared radius.
+fn enclosing_ball(p: [glam::DVec3; 3]) -> (glam::DVec3, f64) {
+    for i in 0..3 {
+        let (a, b, c) = (p[i], p[(i + 1) % 3], p[(i + 2) % 3]);
+        if (b - a).dot(c - a) <= 0.0 {
+            let m = 0.5 * (b + c);
+            return (m, (b - m).length_squared());
+        }
+    }
+    let (a, ab, ac) = (p[0], p[1] - p[0], p[2] - p[0]);
+    let n = ab.cross(ac);
+    let centre = a
+        + (ac.length_squared() * n.cross(ab) + ab.length_squared() * ac.cross(n))
+            / (2.0 * n.length_squared());
+    (centre, (centre - a).length_squared())
+}
+
+/// Whether `q` projects strictly inside triangle `p` along its normal `n`.
+fn above_triangle(p: [glam::DVec3; 3], n: glam::DVec3, q: glam::DVec3) -> bool {
+    (0..3).all(|i| (p[(i + 1) % 3] - p[i]).cross(q - p[i]).dot(n) > 0.0)
 }
 
 /// Edges within the local limit, corner angles below the largest allowed.

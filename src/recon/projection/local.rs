@@ -47,13 +47,13 @@ impl Neighbourhoods for TileHoods {
     }
 }
 
-/// Neighbour lists and point data of every loaded point. Fails with
-/// `MarginTooSmall` when a core point's list may reach beyond the loaded
-/// region.
-pub fn local_data(
-    tile: &TilePoints,
+/// The index over the loaded points, their neighbour lists and point
+/// data. Fails with `MarginTooSmall` when a core point's list may reach
+/// beyond the loaded region.
+pub(crate) fn local_data<'a>(
+    tile: &'a TilePoints,
     params: &ProjectionParams,
-) -> Result<(TileHoods, Vec<PointInfo>), KernelError> {
+) -> Result<(HoodIndex<'a>, TileHoods, Vec<PointInfo>), KernelError> {
     let index = HoodIndex::build(tile, &params.hood())?;
     let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
     let n_core = tile.n_core;
@@ -68,6 +68,7 @@ pub fn local_data(
     info.extend(margin_info);
     let n_core = u32::try_from(n_core).map_err(|e| KernelError::Failed(e.to_string()))?;
     Ok((
+        index,
         TileHoods {
             core,
             margin,

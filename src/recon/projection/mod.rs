@@ -8,13 +8,18 @@ pub mod cloud;
 pub mod fan;
 pub mod frame;
 pub mod grow;
+pub mod kernel;
 pub mod local;
 pub mod orient;
 pub mod params;
+pub mod reconstruct;
+pub mod seam;
 pub mod star;
+pub mod stitch;
 pub mod surface;
 pub mod thin;
 pub mod triangulate;
 
 pub use params::ProjectionParams;
+pub use reconstruct::{reconstruct_projection, ProjectionError, ProjectionReport};
 pub use triangulate::{triangulate_points, triangulate_tile};

@@ -110,6 +110,9 @@ pub struct Star {
     /// Some neighbour stands high over the plane: projections distort, so
     /// new triangles are also tested in space (`fan.rs`).
     pub curved: bool,
+    /// Distance from `v` to its farthest neighbour: circles up to this
+    /// diameter through `v` hold only neighbours.
+    pub reach: f64,
     wedges: Vec<Wedge>,
     arcs: Vec<Arc>,
     /// Arcs of other vertices in this frame: (vertex, first, end) into
@@ -118,6 +121,8 @@ pub struct Star {
     corner_arcs: Vec<Arc>,
     /// Triangles already tested (`fan.rs`).
     pub seen: Vec<u32>,
+    /// kNN answers (`fan.rs`).
+    pub found: Vec<crate::spatial::Neighbour>,
 }
 
 impl Star {
@@ -165,7 +170,7 @@ impl Star {
         self.wedges.extend(s.wedges(v));
         let pv = cloud.points[v as usize];
         let mut sum = DVec3::ZERO;
-        self.piece = v;
+        self.piece = s.seed_piece(v);
         if let Some(first) = self.wedges.first() {
             let (root, _) = s.orientation(first.tri);
             self.piece = root;
@@ -188,8 +193,11 @@ impl Star {
     fn project_neighbours<H: Neighbourhoods>(&mut self, v: u32, cloud: &Cloud<H>, s: &Surface) {
         self.pts.clear();
         self.curved = false;
+        self.reach = 0.0;
         let frame = *self.frame();
         for &u in cloud.hoods.get(v) {
+            let d = cloud.points[u as usize] - frame.origin;
+            self.reach = self.reach.max(d.length());
             if u == v || s.state[u as usize] == State::Unused {
                 continue;
             }

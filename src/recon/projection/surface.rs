@@ -60,8 +60,10 @@ pub struct Surface {
     /// First corner at each vertex, or [`NONE`].
     head: Vec<u32>,
     pub state: Vec<State>,
-    /// Pieces: one element per vertex (a piece is named by its seed).
+    /// Pieces: pieces handed in first (`seed_base` of them), then one
+    /// element per vertex (a new piece is named by its seed).
     pub pieces: ParityUnionFind,
+    seed_base: u32,
 }
 
 /// Why a triangle was refused.
@@ -75,14 +77,26 @@ pub enum Refusal {
 
 impl Surface {
     pub fn new(n: usize) -> Self {
+        Self::with_pieces(n, 0)
+    }
+
+    /// A surface over `n` vertices that will also hold triangles of
+    /// `given` pieces named `0..given` (the seam pass's fixed triangles).
+    pub fn with_pieces(n: usize, given: u32) -> Self {
         Surface {
             tris: Vec::with_capacity(2 * n),
             piece: Vec::with_capacity(2 * n),
             next: Vec::with_capacity(6 * n),
             head: vec![NONE; n],
             state: vec![State::Free; n],
-            pieces: ParityUnionFind::new(n),
+            pieces: ParityUnionFind::new(given as usize + n),
+            seed_base: given,
         }
+    }
+
+    /// The piece a growth seeded at `v` starts.
+    pub fn seed_piece(&self, v: u32) -> u32 {
+        self.seed_base + v
     }
 
     /// The triangles around `v`, most recent first.

@@ -4,7 +4,7 @@
 
 use super::cloud::Cloud;
 use super::grow::Grower;
-use super::local::{local_data, PointInfo};
+use super::local::{local_data, PointInfo, TileHoods};
 use super::orient::settle;
 use super::params::ProjectionParams;
 use super::surface::{State, Surface};
@@ -17,6 +17,7 @@ use glam::DVec3;
 pub struct TileSurface {
     pub surface: Surface,
     pub info: Vec<PointInfo>,
+    pub hoods: TileHoods,
     pub processed: u64,
 }
 
@@ -24,7 +25,7 @@ pub fn triangulate_tile(
     tile: &TilePoints,
     params: &ProjectionParams,
 ) -> Result<TileSurface, KernelError> {
-    let (hoods, info) = local_data(tile, params)?;
+    let (index, hoods, info) = local_data(tile, params)?;
     let normals: Vec<DVec3> = info.iter().map(|p| p.normal).collect();
     let spacing: Vec<f64> = info.iter().map(|p| p.spacing).collect();
     let centre: Vec<bool> = info.iter().map(|p| p.complete).collect();
@@ -35,6 +36,7 @@ pub fn triangulate_tile(
         hoods: &hoods,
         centre: &centre,
         ids: &tile.ids,
+        index: index.as_knn(),
     };
     let mut surface = Surface::new(tile.points.len());
     for (state, p) in surface.state.iter_mut().zip(&info) {
@@ -46,10 +48,13 @@ pub fn triangulate_tile(
     seeds.sort_unstable_by_key(|&i| tile.ids[i as usize]);
     let mut grower = Grower::new(params, tile.points.len());
     grower.grow(&cloud, &mut surface, &seeds);
+    let processed = grower.processed;
+    drop(index);
     Ok(TileSurface {
         surface,
         info,
-        processed: grower.processed,
+        hoods,
+        processed,
     })
 }
 
