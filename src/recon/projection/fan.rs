@@ -32,7 +32,7 @@ use glam::DVec2;
 
 /// A triangle with an edge longer than this many local spacings is also
 /// tested in space against the triangles around its corners.
-const RISKY_EDGE: f64 = 4.0;
+const RISKY_EDGE: f64 = 5.0;
 
 /// Points looked up around a big triangle's centre.
 const CIRCLE_PROBE: usize = 16;
@@ -227,8 +227,8 @@ fn acceptable<H: Neighbourhoods>(
         && !big_and_not_empty(star, cloud, s, ids)
 }
 
-/// For a triangle too big for `v`'s neighbour list to vouch for (its
-/// smallest enclosing ball wider than the list's reach): whether a point
+/// For a triangle too big for `v`'s neighbour list to vouch for (a corner
+/// beyond the list's reach): whether a point
 /// (other than its corners, and not left out) lies inside it, as seen along
 /// its normal within the ball, found with the tile's kNN index around the
 /// ball's centre. A long triangle across a gap otherwise lays itself over
@@ -240,10 +240,14 @@ fn big_and_not_empty<H: Neighbourhoods>(
     t: [u32; 3],
 ) -> bool {
     let p = t.map(|x| cloud.points[x as usize]);
-    let (centre, r2) = enclosing_ball(p);
-    if 4.0 * r2 <= star.reach * star.reach {
+    // With every corner within the list's reach of `v`, so is the whole
+    // triangle: the list holds every point inside, `holds_a_vertex` has
+    // seen them.
+    let pv = cloud.points[star.v as usize];
+    if p.iter().all(|c| (*c - pv).length() <= star.reach) {
         return false;
     }
+    let (centre, r2) = enclosing_ball(p);
     let n = (p[1] - p[0]).cross(p[2] - p[0]);
     if n == glam::DVec3::ZERO {
         return true;

@@ -10,8 +10,8 @@ use super::surface::{State, Surface, Wedge};
 use glam::{DVec2, DVec3};
 
 /// Elevation (height over distance in the plane) above which a neighbour
-/// makes the neighbourhood "curved": tan 15 degrees.
-const CURVED_ELEVATION: f64 = 0.268;
+/// makes the neighbourhood "curved": tan 25 degrees.
+const CURVED_ELEVATION: f64 = 0.466;
 
 /// A projected point of the neighbourhood.
 #[derive(Clone, Copy, Debug)]
@@ -264,34 +264,36 @@ impl Star {
     /// Boundary edges (one triangle) at `v` and at its neighbours.
     fn find_front<H: Neighbourhoods>(&mut self, cloud: &Cloud<H>, s: &Surface) {
         self.front.clear();
-        let mut around = [0u32; 32];
         let frame = *self.frame();
-        let mut add = |x: u32, front: &mut Vec<FrontEdge>| {
+        let open = |x: u32| matches!(s.state[x as usize], State::Fringe | State::Boundary);
+        let xs = std::iter::once(self.v).chain(self.pts.iter().map(|p| p.id).filter(|&x| open(x)));
+        let mut ends = [0u32; 32];
+        for x in xs {
+            // A triangle edge at `x` is on the boundary when its far end
+            // appears once among the ends of `x`'s triangles.
             let mut n = 0;
             for w in s.wedges(x) {
-                if n + 2 > around.len() {
+                if n + 2 > ends.len() {
                     break;
                 }
-                around[n] = w.a;
-                around[n + 1] = w.b;
+                ends[n] = w.a;
+                ends[n + 1] = w.b;
                 n += 2;
             }
+            let ends = &mut ends[..n];
+            ends.sort_unstable();
+            let qx = frame.project(cloud.points[x as usize]).0;
             for i in 0..n {
-                let y = around[i];
-                if around[..n].iter().filter(|&&z| z == y).count() == 1 {
-                    front.push(FrontEdge {
+                let y = ends[i];
+                let single = (i == 0 || ends[i - 1] != y) && (i + 1 == n || ends[i + 1] != y);
+                if single {
+                    self.front.push(FrontEdge {
                         x,
                         y,
-                        qx: frame.project(cloud.points[x as usize]).0,
+                        qx,
                         qy: frame.project(cloud.points[y as usize]).0,
                     });
                 }
-            }
-        };
-        add(self.v, &mut self.front);
-        for p in &self.pts {
-            if matches!(s.state[p.id as usize], State::Fringe | State::Boundary) {
-                add(p.id, &mut self.front);
             }
         }
     }

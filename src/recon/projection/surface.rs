@@ -198,35 +198,28 @@ impl Surface {
         tri
     }
 
-    /// Whether the triangles around `v` close into one fan: in effective
-    /// winding, each wedge's `b` is the next one's `a`, round the whole
-    /// list.
-    pub fn is_closed(&mut self, v: u32) -> bool {
-        let mut links = [(0u32, 0u32); MAX_CLOSED];
+    /// Whether the triangles around `v` close around it: at least three,
+    /// and every triangle edge at `v` shared by two of them (each far end
+    /// appears twice). With the directed-edge rule that is one closed fan,
+    /// or, rarely, two fans pinched at `v`; either way nothing more can be
+    /// added at `v`.
+    pub fn is_closed(&self, v: u32) -> bool {
+        let mut ends = [0u32; 2 * MAX_CLOSED];
         let mut n = 0;
-        let mut corner = self.head[v as usize];
-        while corner != NONE {
-            if n == MAX_CLOSED {
+        for w in self.wedges(v) {
+            if n == ends.len() {
                 return false;
             }
-            let w = self.wedge_at(corner);
-            let (_, flip) = self.orientation(w.tri);
-            links[n] = if flip { (w.b, w.a) } else { (w.a, w.b) };
-            n += 1;
-            corner = self.next[corner as usize];
+            ends[n] = w.a;
+            ends[n + 1] = w.b;
+            n += 2;
         }
-        if n < 3 {
+        if n < 6 {
             return false;
         }
-        let links = &links[..n];
-        let mut at = links[0].1;
-        for _ in 1..n {
-            match links.iter().find(|l| l.0 == at) {
-                Some(l) => at = l.1,
-                None => return false,
-            }
-        }
-        at == links[0].0
+        let ends = &mut ends[..n];
+        ends.sort_unstable();
+        ends.chunks(2).all(|pair| pair[0] == pair[1])
     }
 
     fn wedge_at(&self, corner: u32) -> Wedge {
