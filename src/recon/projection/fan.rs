@@ -26,7 +26,7 @@
 
 use super::cloud::{Cloud, Neighbourhoods};
 use super::frame::{arcs_overlap, orient, strictly_inside};
-use super::star::{Arc, Limits, Star};
+use super::star::{Arc, Limits, Star, HOLE_MAX_ANGLE_COS};
 use super::surface::{State, Surface, NONE};
 use glam::DVec2;
 
@@ -66,8 +66,10 @@ impl Fan {
         for g in 0..star.gaps.len() {
             let gap = star.gaps[g];
             if gap.from == NONE {
+                star.closing_hole = false;
                 self.whole_circle(star, cloud, s, lim);
             } else {
+                star.closing_hole = star.add_hole_candidates(g, cloud, s);
                 let from = End {
                     id: gap.from,
                     q: star.q(cloud.points, gap.from),
@@ -213,18 +215,22 @@ fn acceptable<H: Neighbourhoods>(
 ) -> bool {
     let existing = [0, 1, 2].map(|i| s.edge_triangles(t[i].0, t[(i + 1) % 3].0).1 > 0);
     // A triangle whose three edges exist closes a three-edge hole: it adds
-    // no edge, and a sliver there is better than a hole.
+    // no edge, and a sliver there is better than a hole. Closing a hole
+    // (this one, or a small one `v`'s gap opens onto), the corners are not
+    // held to the tangent plane's picture, which folds near creases; the
+    // exact test in space keeps the surface from crossing itself instead.
     let closes_hole = existing.iter().all(|&e| e);
+    let hole = closes_hole || star.closing_hole;
     let ids = t.map(|x| x.0);
-    (closes_hole || shape_ok(cloud, lim, ids))
-        && corners_free(star, cloud, s, t)
+    (closes_hole || shape_ok(cloud, lim, ids, star.closing_hole))
+        && (hole || corners_free(star, cloud, s, t))
         && (0..3).all(|i| {
             let (a, b) = (t[i], t[(i + 1) % 3]);
             existing[i] || !star.crosses_front(a.0, a.1, b.0, b.1)
         })
         && !holds_a_vertex(star, s, t)
-        && !(risky(star, cloud, ids) && meets_nearby(star, cloud, s, ids))
-        && !big_and_not_empty(star, cloud, s, ids)
+        && !((hole || risky(star, cloud, ids)) && meets_nearby(star, cloud, s, ids))
+        && (closes_hole || !big_and_not_empty(star, cloud, s, ids))
 }
 
 /// For a triangle too big for `v`'s neighbour list to vouch for (a corner
@@ -288,14 +294,19 @@ fn above_triangle(p: [glam::DVec3; 3], n: glam::DVec3, q: glam::DVec3) -> bool {
 }
 
 /// Edges within the local limit, corner angles below the largest allowed.
-fn shape_ok<H: Neighbourhoods>(cloud: &Cloud<H>, lim: &Limits, t: [u32; 3]) -> bool {
+fn shape_ok<H: Neighbourhoods>(cloud: &Cloud<H>, lim: &Limits, t: [u32; 3], in_hole: bool) -> bool {
     let p = t.map(|x| cloud.points[x as usize]);
+    let cos_max = if in_hole {
+        HOLE_MAX_ANGLE_COS
+    } else {
+        lim.cos_max_angle
+    };
     let h = t.map(|x| cloud.spacing[x as usize]);
     (0..3).all(|i| {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
         let (e1, e2) = (p[j] - p[i], p[k] - p[i]);
         e1.length() <= lim.max_edge * h[i].max(h[j])
-            && e1.dot(e2) >= lim.cos_max_angle * e1.length() * e2.length()
+            && e1.dot(e2) >= cos_max * e1.length() * e2.length()
     })
 }
 
