@@ -26,7 +26,8 @@
 
 use super::cloud::{Cloud, Neighbourhoods};
 use super::frame::{arcs_overlap, orient, strictly_inside};
-use super::star::{Arc, Limits, Star, HOLE_MAX_ANGLE_COS};
+use super::holes::HOLE_MAX_ANGLE_COS;
+use super::star::{Arc, Limits, Star};
 use super::surface::{State, Surface, NONE};
 use glam::DVec2;
 
