@@ -55,20 +55,27 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let params = ImplicitParams::default();
     let dir = scratch_store_dir(&a.output);
     let mut reader = MemoryReader::new("embedded dragon sample", scan.points.clone(), None);
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
+    let projection = ProjectionParams::default();
+    let cost = match a.method {
+        DemoMethod::Implicit => params.cost(),
+        DemoMethod::Projection => projection.cost(),
+    };
+    s.check_floor(&cost)?;
+    let opts = s.build_options(cost);
     let result = (|| -> Result<()> {
         let mut store = build_store(&mut reader, &dir, &opts, progress.as_ref())?;
+        let (_, run_options) = s.plan_for(&store, cost)?;
         if a.method == DemoMethod::Projection {
             let r = reconstruct_projection(
                 &mut store,
-                &ProjectionParams::default(),
+                &projection,
                 &a.output,
                 MeshFormat::PlyBinary,
-                s.run_options(),
+                run_options,
                 progress.as_ref(),
             )?;
             let secs = t0.elapsed().as_secs_f64();
-            super::cmd_reconstruct::print_projection_summary(
+            super::cmd_reconstruct_projection::print_summary(
                 &r,
                 store.tiles().len(),
                 secs,
@@ -80,7 +87,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 &params,
                 &a.output,
                 MeshFormat::PlyBinary,
-                s.run_options(),
+                run_options,
                 progress.as_ref(),
             )?;
             super::cmd_reconstruct::print_summary(

@@ -9,7 +9,7 @@ use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
-use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams, ProjectionReport};
+use scanmesh::recon::projection::ProjectionParams;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,6 +37,13 @@ pub struct ReconstructArgs {
     /// patches, and pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
+    /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
+    /// triangles with a larger circumradius are boundaries. Default: 5 x
+    /// the largest nearest-neighbour distance of the triangle's corners
+    /// (from the local sampling, not the paper's share of the bounding
+    /// sphere).
+    #[arg(long, value_name = "DELTA")]
+    hole: Option<f64>,
     /// Drop connected pieces with fewer triangles than this share of the
     /// largest piece's (default 0.01 with --closed, else 0: keep all).
     #[arg(long, value_name = "SHARE")]
@@ -68,6 +75,10 @@ enum Method {
     /// Greedy local-projection Delaunay triangulation (paper 2): the
     /// input points are the vertices.
     Projection,
+    /// 3-D Delaunay triangulation and local flatness (paper 4): the
+    /// input points are the vertices; open, multi-sheet and non-orientable
+    /// surfaces.
+    Delaunay,
 }
 
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
@@ -88,8 +99,18 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
+    if let Method::Delaunay = a.method {
+        return super::cmd_reconstruct_delaunay::run(&s, &a.input, &a.output, format, a.hole);
+    }
     if let Method::Projection = a.method {
-        return run_projection(&a, &s, format);
+        let params = ProjectionParams {
+            k: a.k,
+            neighbourhood: a.hood.hood(),
+            thin: a.thin,
+            max_edge: a.max_edge,
+            ..ProjectionParams::default()
+        };
+        return super::cmd_reconstruct_projection::run(&s, &a.input, &a.output, format, &params);
     }
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
@@ -107,69 +128,23 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let r = reconstruct_implicit(
-        &mut ws.store,
+        &mut run.ws.store,
         &params,
         &a.output,
         format,
-        s.run_options(),
+        run.opts,
         progress.as_ref(),
     )?;
     print_summary(
         &r,
-        ws.store.len(),
-        ws.store.tiles().len(),
+        run.ws.store.len(),
+        run.ws.store.tiles().len(),
         t0.elapsed().as_secs_f64(),
         &a.output,
     );
     Ok(())
-}
-
-fn run_projection(a: &ReconstructArgs, s: &super::Settings, format: MeshFormat) -> Result<()> {
-    let params = ProjectionParams {
-        k: a.k,
-        neighbourhood: a.hood.hood(),
-        thin: a.thin,
-        max_edge: a.max_edge,
-        ..ProjectionParams::default()
-    };
-    params.validate()?;
-    let progress = super::progress::progress(s.quiet);
-    let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(s, &params.hood());
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
-    let r = reconstruct_projection(
-        &mut ws.store,
-        &params,
-        &a.output,
-        format,
-        s.run_options(),
-        progress.as_ref(),
-    )?;
-    print_projection_summary(
-        &r,
-        ws.store.tiles().len(),
-        t0.elapsed().as_secs_f64(),
-        &a.output,
-    );
-    Ok(())
-}
-
-pub fn print_projection_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
-    let st = &r.stitch;
-    println!(
-        "reconstruct: {} points, {} tiles, projection (paper 2), spacing {:.4e} -> {} triangles ({} grown on seams), {:.2} s, peak {} -> {}",
-        st.vertices,
-        tiles,
-        r.spacing,
-        st.triangles,
-        st.seam_triangles,
-        secs,
-        super::peak(),
-        out.display()
-    );
 }
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {

@@ -4,6 +4,7 @@
 //! terrain.
 
 use crate::normals::{NormalHood, NormalParams};
+use crate::pipeline::plan::KernelCost;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionParams {
@@ -91,4 +92,37 @@ impl ProjectionParams {
             ..NormalParams::default()
         }
     }
+
+    /// What a run costs, for the memory plan (measured, see
+    /// [`BYTES_PER_POINT_BASE`]): the kernel's bytes per loaded point; no
+    /// global pass (pieces are per seed, the seam frames seam-sized).
+    pub fn cost(&self) -> KernelCost {
+        let k = self.k as u64;
+        let per_k = match self.neighbourhood {
+            NormalHood::Knn => BYTES_PER_POINT_PER_K,
+            NormalHood::Topological { .. } => 2 * BYTES_PER_POINT_PER_K,
+        };
+        KernelCost {
+            bytes_per_point: BYTES_PER_POINT_BASE + per_k * k,
+            global_per_point: 0,
+            contracts_boundaries: false,
+            resident_per_point: 0.0,
+            window_bytes_per_point: 0,
+            // The store (20) and the triangle spool (16 B, two per point).
+            scratch_per_point: 20 + 2 * 16,
+            // Vertices (3 f64) and faces (13 B, two per point).
+            output_per_point: 24 + 2 * 13,
+        }
+    }
 }
+
+/// Kernel bytes per loaded point beside the neighbour lists. Measured with
+/// `peak-rss` on the 1M dragon as one tile, one thread (the tile's points,
+/// kNN index, planes, spacings, states, directed edges, fixed triangles):
+/// 326 MiB at k = 12, 372 MiB at k = 24, so ~4 B per neighbour and ~270 B
+/// beside them once the binary and the mapped store are taken off; a
+/// tenth more for denser or noisier tiles.
+pub const BYTES_PER_POINT_BASE: u64 = 300;
+/// Kernel bytes per loaded point per neighbour (the list's id and the
+/// search's scratch).
+pub const BYTES_PER_POINT_PER_K: u64 = 6;
