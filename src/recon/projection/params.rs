@@ -28,12 +28,20 @@ pub struct ProjectionParams {
 /// dragon (see the module docs of `recon::projection`).
 pub const DEFAULT_K: usize = 12;
 
+/// Default thinning, in local spacings (`thin.rs`). Measured on the 1M
+/// noisy dragon, the same store of 6 tiles: 0.6 left 1.24 % of the
+/// triangles under 10 degrees, 0.7 left 0.96 %, with the same 62 boundary
+/// loops, 0 non-manifold, inconsistent or self-intersecting, and the same
+/// mean distances to the dragon mesh (0.046 / 0.052 of the reference's
+/// spacing, mesh to dragon / dragon to mesh).
+pub const DEFAULT_THIN: f64 = 0.7;
+
 impl Default for ProjectionParams {
     fn default() -> Self {
         ProjectionParams {
             k: DEFAULT_K,
             neighbourhood: NormalHood::Knn,
-            thin: 0.6,
+            thin: DEFAULT_THIN,
             max_edge: 8.0,
             max_elevation_deg: 45.0,
             max_angle_deg: 170.0,
