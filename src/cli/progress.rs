@@ -56,7 +56,8 @@ impl Progress for Bars {
 /// scratch data) is printed as `(between stages)` so no cost hides. Each
 /// line gives the wall time, the process CPU time (all threads; steadier
 /// than wall time on a shared machine), the RSS at the end and the peak RSS
-/// so far, to see which stage sets it.
+/// so far, to see which stage sets it, and the bytes read from and written
+/// to storage.
 struct Timings {
     start: Mutex<Option<(String, Mark)>>,
     last_end: Mutex<Mark>,
@@ -67,6 +68,7 @@ struct Timings {
 struct Mark {
     wall: std::time::Instant,
     cpu: f64,
+    io: [u64; 2],
 }
 
 impl Mark {
@@ -74,18 +76,22 @@ impl Mark {
         Mark {
             wall: std::time::Instant::now(),
             cpu: cpu_seconds().unwrap_or(0.0),
+            io: io_bytes().unwrap_or([0; 2]),
         }
     }
 
     fn report(&self, name: &str) {
         let now = Mark::now();
+        let io = |i: usize| scanmesh::units::human_bytes(now.io[i].saturating_sub(self.io[i]));
         eprintln!(
-            "{:>24}: {:.3} s (cpu {:.2} s, rss {}, peak {})",
+            "{:>24}: {:.3} s (cpu {:.2} s, rss {}, peak {}, disk r {} w {})",
             name,
             now.wall.duration_since(self.wall).as_secs_f64(),
             now.cpu - self.cpu,
             rss(),
-            super::peak()
+            super::peak(),
+            io(0),
+            io(1)
         );
     }
 }
@@ -100,6 +106,17 @@ fn cpu_seconds() -> Option<f64> {
     let ticks = |i: usize| fields.get(i)?.parse::<f64>().ok();
     // Fields 14 and 15 of stat(5), counted after the command name.
     Some((ticks(11)? + ticks(12)?) / 100.0)
+}
+
+/// Bytes the process made the storage layer read and write (pages dirtied
+/// through a mapping count too), from `/proc/self/io`.
+fn io_bytes() -> Option<[u64; 2]> {
+    let io = std::fs::read_to_string("/proc/self/io").ok()?;
+    let field = |name: &str| {
+        io.lines()
+            .find_map(|l| l.strip_prefix(name)?.trim().parse::<u64>().ok())
+    };
+    Some([field("read_bytes:")?, field("write_bytes:")?])
 }
 
 fn rss() -> String {

@@ -130,6 +130,13 @@ pub trait PointReader: Send {
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError>;
     /// Records dropped under [`InvalidPolicy::Skip`] so far.
     fn skipped(&self) -> u64;
+    /// A new reader over the same points from the first, when reading the
+    /// source again costs no more than reading a copy of it (an uncompressed
+    /// binary file of fixed-size records): a store build then reads the
+    /// input again instead of spilling a copy to disk. `None` otherwise.
+    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
+        None
+    }
 }
 
 /// What a point writer is asked to produce.
