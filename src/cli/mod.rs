@@ -10,6 +10,7 @@ mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
 mod cmd_reconstruct_delaunay;
+mod cmd_reconstruct_projection;
 mod cmd_tile;
 mod progress;
 mod report;
