@@ -8,6 +8,7 @@
 #![deny(unsafe_code)]
 
 pub mod demo;
+pub mod features;
 pub mod geom;
 pub mod io;
 pub mod mesh;

@@ -2,6 +2,7 @@
 //! into [`Settings`], then dispatch to one module per command.
 
 mod cmd_convert;
+mod cmd_curvature;
 mod cmd_demo;
 mod cmd_eval;
 mod cmd_info;
@@ -43,6 +44,8 @@ enum Command {
     Tile(cmd_tile::TileArgs),
     /// Oriented normals for every point, written in input order.
     Normals(cmd_normals::NormalsArgs),
+    /// Per-point principal, mean and Gaussian curvature (paper 5), in input order.
+    Curvature(cmd_curvature::CurvatureArgs),
     /// Topological (paper 3) or k nearest neighbours of every point, in input order.
     #[command(visible_alias = "neighbours")]
     Neighbors(cmd_neighbors::NeighborsArgs),
@@ -165,6 +168,7 @@ pub fn run() -> Result<()> {
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
         Command::Normals(a) => cmd_normals::run(a),
+        Command::Curvature(a) => cmd_curvature::run(a),
         Command::Neighbors(a) => cmd_neighbors::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
         Command::Eval(a) => cmd_eval::run(a),
