@@ -16,6 +16,7 @@ pub mod neighbours;
 pub mod normals;
 pub mod pipeline;
 pub mod recon;
+pub mod render;
 pub mod spatial;
 pub mod store;
 pub mod synth;

@@ -171,6 +171,7 @@ impl CurvatureKernel {
             out.stats.count_flags(flags);
             if let Some(q) = q {
                 out.stats.residual2.add(q.rms * q.rms);
+                out.stats.residual.add(q.rms);
                 out.stats.max_error = out.stats.max_error.max(q.max_error);
             }
             if flags == 0 {
@@ -217,6 +218,8 @@ pub struct CurvatureMeta {
     pub flagged: [u64; 4],
     /// RMS of the fits' residuals, and the largest `|E_j|`.
     pub rms: f64,
+    /// Median of the points' RMS residuals (log-histogram bin edge).
+    pub median_residual: f64,
     pub max_error: f64,
     /// Percentiles 0..=100 of `|k_i|` (larger-magnitude principal curvature)
     /// over the oriented points (log-histogram bin edges: at most 1.1 % high).
@@ -314,6 +317,7 @@ pub fn compute_curvature(
         points: store.len(),
         flagged: stats.flagged,
         rms: stats.rms(),
+        median_residual: stats.residual.quantile(0.5),
         max_error: stats.max_error,
         dominant_percentiles: (0..=100)
             .map(|p| stats.dominant.quantile(p as f64 / 100.0))

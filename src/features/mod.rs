@@ -12,12 +12,23 @@
 //! not available, and they are NaN, never made up).
 
 pub mod curvature;
+pub mod curve;
+pub mod enhance;
 pub mod export;
+pub mod extract;
 pub mod grid;
 pub(crate) mod hood;
+pub mod kernel;
+pub mod lines;
 pub mod order;
+pub mod params;
+pub mod polyline;
 pub mod quadric;
+pub mod repair;
+pub mod score;
+pub mod smooth;
 pub mod spacing;
+pub(crate) mod stages;
 pub mod stats;
 
 pub use curvature::{compute_curvature, CurvatureReport};

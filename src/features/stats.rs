@@ -67,6 +67,9 @@ pub struct CurvatureStats {
     pub dominant: LogHistogram,
     /// Squared RMS residual of each fit (mean: the cloud's RMS squared).
     pub residual2: ExactSum,
+    /// RMS residual of each fit (for its median: the noise level of the
+    /// smooth parts, which creases do not inflate as they do the RMS).
+    pub residual: LogHistogram,
     /// Largest `|E_j|` of any fit.
     pub max_error: f64,
     /// Points per flag bit (sparse, degenerate, ill-conditioned, unoriented).
@@ -79,6 +82,7 @@ impl CurvatureStats {
         CurvatureStats {
             dominant: LogHistogram::new(1.0 / spacing),
             residual2: ExactSum::new(spacing * spacing),
+            residual: LogHistogram::new(spacing),
             max_error: 0.0,
             flagged: [0; 4],
         }
@@ -87,6 +91,7 @@ impl CurvatureStats {
     pub fn merge(&mut self, o: &CurvatureStats) {
         self.dominant.merge(&o.dominant);
         self.residual2.merge(&o.residual2);
+        self.residual.merge(&o.residual);
         self.max_error = self.max_error.max(o.max_error);
         for (a, b) in self.flagged.iter_mut().zip(o.flagged) {
             *a += b;
