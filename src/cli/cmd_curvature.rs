@@ -32,9 +32,10 @@ pub struct FitArgs {
     #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = FitHood::Radius)]
     neighbours: FitHood,
     /// Fit radius in mean spacings d (d = mean distance to the 6 nearest
-    /// neighbours; paper: 2..4).
-    #[arg(long, default_value_t = scanmesh::features::DEFAULT_RADIUS_SPACINGS)]
-    radius: f64,
+    /// neighbours; paper: 2..4). Default: 3, widened up to 4.5 on noisy
+    /// input by the normals pass's noise estimate.
+    #[arg(long)]
+    radius: Option<f64>,
     /// Neighbours of the fit (--neighbours knn; per query for topological).
     #[arg(long, default_value_t = 15)]
     k: usize,
@@ -65,8 +66,9 @@ enum FitOrient {
 impl FitArgs {
     pub fn params(&self) -> Result<CurvatureParams> {
         let hood = match self.neighbours {
-            FitHood::Radius => HoodChoice::Radius {
-                spacings: self.radius,
+            FitHood::Radius => match self.radius {
+                Some(spacings) => HoodChoice::Radius { spacings },
+                None => HoodChoice::Auto,
             },
             FitHood::Knn => HoodChoice::Knn { k: self.k },
             FitHood::Topological => HoodChoice::Topological {

@@ -288,7 +288,14 @@ pub fn compute_curvature(
             store.dir.display()
         )));
     }
-    let hood = params.hood.resolve(d);
+    // The tangent-plane noise in nearest-neighbour distances, when the
+    // normals pass measured it (exact sums: the same for any tiling).
+    let noise_ratio = store
+        .manifest
+        .sampling
+        .filter(|s| s.mean_nn > 0.0)
+        .map_or(0.0, |s| s.noise / s.mean_nn);
+    let hood = params.hood.resolve(d, noise_ratio);
     let kernel = CurvatureKernel {
         hood,
         margin: match hood {

@@ -53,6 +53,10 @@ impl Curve {
         let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
         let t = DVec2::new(angle.cos(), angle.sin());
         let n = t.perp();
+        // The system is solved in coordinates scaled by the spread, so its
+        // entries are O(1) whatever the units (x^4 of a 1e-3 set is 1e-12).
+        let scale = spread.sqrt() / total.sqrt();
+        let inv = 1.0 / scale;
         let mut m = [[0.0f64; 3]; 3];
         let mut rhs = [0.0f64; 3];
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -61,6 +65,7 @@ impl Curve {
             let (x, y) = (d.dot(t), d.dot(n));
             lo = lo.min(x);
             hi = hi.max(x);
+            let (x, y) = (x * inv, y * inv);
             let b = [1.0, x, x * x];
             for r in 0..3 {
                 rhs[r] += w[i] * b[r] * y;
@@ -72,7 +77,8 @@ impl Curve {
         if (hi - lo).is_nan() || hi - lo <= 0.0 {
             return None;
         }
-        let coef = solve3(m, rhs)?;
+        let [a, b, c] = solve3(m, rhs)?;
+        let coef = [a * scale, b, c * inv];
         Some(Curve {
             origin,
             t,
@@ -252,6 +258,24 @@ mod tests {
         let (near, t) = c.nearest(DVec2::new(-0.3, 0.0));
         assert!(t.x.abs() < 1e-6, "{t}");
         assert!(near.distance(DVec2::ZERO) < 1e-6, "{near}");
+    }
+
+    #[test]
+    fn tiny_units_fit_as_well_as_unit_ones() {
+        for unit in [1.0, 1e-4, 1e4] {
+            let q: Vec<DVec2> = (-10..=10)
+                .map(|i| {
+                    let x = i as f64 * 0.1;
+                    DVec2::new(x, 0.3 * x * x + 0.1) * unit
+                })
+                .collect();
+            let w = vec![2.0; q.len()];
+            let set: Vec<usize> = (0..q.len()).collect();
+            let c = Curve::fit(&q, &w, &set, 0.6).expect("fits at any unit");
+            for p in &q {
+                assert!(c.offset(*p).abs() < 1e-9 * unit, "unit {unit}: {p}");
+            }
+        }
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The whole feature-line pass over a store: curvature (reused when the
 //! store holds it for the same neighbourhood), the feature kernel over the
-//! tiles, then, over every polyline in cell order, the endpoint repair and
+//! tiles, then, over every polyline in cell order, the removal of copies
+//! grown on both sides of a cell face (`seams.rs`), the endpoint repair and
 //! the relaxation (paper 5 section 5).
 
 use super::curvature::{compute_curvature, CurvatureMeta};
@@ -8,6 +9,7 @@ use super::kernel::{CellLines, FeatureCounts, FeaturesKernel, FeaturesTile};
 use super::lines::LineGraph;
 use super::params::{FeatureParams, Resolved};
 use super::repair::{repair, Cone};
+use super::seams::{drop_copies, CellPolyline};
 use super::{CurvatureHood, FeaturesError, CURVATURE_FILE, CURVATURE_FLAGS_FILE};
 use crate::pipeline::{run_tiles, Progress, RunOptions, RunStats};
 use crate::store::{spacing::ensure_spacing, PointStore};
@@ -68,7 +70,7 @@ pub fn extract_lines(
         params: resolved,
         values: store.attribute(CURVATURE_FILE, 4 * super::curvature::VALUES)?,
         flags: store.attribute(CURVATURE_FLAGS_FILE, 1)?,
-        margin: (resolved.cell + resolved.chain() + reach.max(resolved.phi)) * 1.0001 + 1e-12,
+        margin: (resolved.cell + resolved.chain() + reach + resolved.phi) * 1.0001 + 1e-12,
     };
     let mut cells: Vec<CellLines> = Vec::new();
     let mut corners = Vec::new();
@@ -82,9 +84,19 @@ pub fn extract_lines(
     // Canonical order, whatever the tiling: cells by key, corners by id.
     cells.sort_by_key(|c| (c.key, c.kind));
     corners.sort_by_key(|c| (c.0, c.1));
-    let polylines: Vec<(LineKind, Vec<DVec3>)> = cells
+    let grown: Vec<CellPolyline> = cells
         .into_iter()
-        .flat_map(|c| c.lines.into_iter().map(move |l| (c.kind, l)))
+        .flat_map(|c| {
+            c.lines.into_iter().map(move |points| CellPolyline {
+                cell: c.key,
+                kind: c.kind,
+                points,
+            })
+        })
+        .collect();
+    let polylines: Vec<(LineKind, Vec<DVec3>)> = drop_copies(&grown, 0.5 * resolved.gamma_max)
+        .into_iter()
+        .map(|l| (l.kind, l.points))
         .collect();
     let corner_points: Vec<(LineKind, DVec3)> = corners.iter().map(|c| (c.1, c.2)).collect();
     let cone = Cone {

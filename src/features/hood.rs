@@ -83,4 +83,24 @@ impl<'a> HoodIndex<'a> {
             }
         })
     }
+
+    /// The points around an arbitrary position `at` (no point excluded)
+    /// into `s.nbrs`, and their reach: within `r`, or the k nearest (for
+    /// the topological kind too: the reverse shift is defined at data
+    /// points only).
+    pub(crate) fn around(&self, at: glam::DVec3, s: &mut HoodScratch) -> f64 {
+        let (index, k): (&dyn KnnIndex, usize) = match self {
+            HoodIndex::Radius(grid, r) => {
+                grid.within(at, *r, None, &mut s.nbrs);
+                return *r;
+            }
+            HoodIndex::Knn(index, k) => (index.as_ref(), *k),
+            HoodIndex::Topological(index, params) => (index, params.k),
+        };
+        index.knn(at, k, None, &mut s.nbrs);
+        match s.nbrs.last() {
+            Some(n) if s.nbrs.len() >= k => n.dist2.sqrt(),
+            _ => f64::INFINITY,
+        }
+    }
 }

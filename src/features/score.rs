@@ -5,6 +5,7 @@
 //! every `step` along the lines (the protocol: 1 sp and 0.25 sp).
 
 use super::lines::LineGraph;
+use super::seams::segment_distance;
 use crate::synth::{LineKind, TrueSegment};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -99,18 +100,6 @@ impl<'a> SegmentGrid<'a> {
             })
         })
     }
-}
-
-/// Distance from `p` to the segment `a b`.
-fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + ab * t).distance(p)
 }
 
 #[cfg(test)]
