@@ -132,7 +132,7 @@ struct Grower<'a> {
     w: &'a [f64],
     kappa: f64,
     r2: f64,
-    cos_sector: f64,
+    cos2_sector: f64,
     assigned: Vec<bool>,
     /// Growth-point pairs of crossing curves, to grow before new seeds.
     crossing: Vec<(usize, usize)>,
@@ -161,14 +161,12 @@ impl Grower<'_> {
             if len2 > self.r2 {
                 continue;
             }
-            let c = if len2 > 0.0 {
-                d.dot(ahead) / len2.sqrt()
-            } else {
-                -1.0
-            };
-            if c >= self.cos_sector {
+            // The cosine to `ahead` against the sector's, squared (no root).
+            let along = d.dot(ahead);
+            let steep = along * along >= self.cos2_sector * len2 && len2 > 0.0;
+            if steep && along > 0.0 {
                 r.ahead.push(j);
-            } else if c <= -self.cos_sector {
+            } else if steep || len2 == 0.0 {
                 r.behind.push(j);
             } else {
                 r.side.push(j);
@@ -178,7 +176,7 @@ impl Grower<'_> {
     }
 
     /// The heaviest of `set` above `kappa` (the first on ties: local sets
-    /// come in (distance, id) order).
+    /// come in a canonical order, `grid.rs`).
     fn heaviest(&self, set: &[usize]) -> Option<usize> {
         set.iter()
             .copied()
@@ -300,7 +298,7 @@ pub(crate) fn curve_sets(q: &[DVec2], w: &[f64], p: &EnhanceParams) -> Vec<Vec<u
         w,
         kappa,
         r2: p.radius * p.radius,
-        cos_sector: p.sector.cos(),
+        cos2_sector: p.sector.cos() * p.sector.cos(),
         assigned: vec![false; q.len()],
         crossing: Vec::new(),
     };

@@ -1,9 +1,11 @@
 //! The curvature fit's neighbourhood over one tile (paper 5 section 2): every
 //! point within `r` (the paper's default for uniform sampling), the `k`
 //! nearest (its choice for curvature-adaptive sampling) or paper 3's
-//! topological neighbours. Each answers in (dist2, id) order with the point
-//! itself excluded, and says how far its answer reaches, so the kernel can
-//! check the answer lies inside the loaded region.
+//! topological neighbours. Each answers in an order no tiling changes (the
+//! k-queries in (dist2, id) order, the radius query in the grid's canonical
+//! order) with the point itself excluded, and says how far its answer
+//! reaches, so the kernel can check the answer lies inside the loaded
+//! region.
 
 use super::grid::BallGrid;
 use super::CurvatureHood;

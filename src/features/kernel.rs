@@ -246,7 +246,8 @@ fn priority(s: DVec3, corners: Option<&BallGrid>, cap: f64) -> f64 {
     if let Some(g) = corners {
         g.within(s, cap, None, &mut found);
     }
-    found.first().map_or(cap, |n| n.dist2.sqrt().min(cap))
+    let nearest = found.iter().map(|n| n.dist2).fold(f64::INFINITY, f64::min);
+    nearest.sqrt().min(cap)
 }
 
 /// Section 3's corner merge for the corners whose status the tile can
@@ -371,10 +372,11 @@ impl Entries {
     /// of the owned region (the rest are only neighbours); `None` for the
     /// others and for noise.
     fn smooth(&self, dist: &impl Fn(usize) -> f64, p: &Resolved) -> Vec<Option<DVec3>> {
-        let Some(grid) = BallGrid::new(&self.pos, &self.ids, p.delta_max) else {
+        // Cells of the first radius: most points settle there.
+        let Some(grid) = BallGrid::new(&self.pos, &self.ids, p.smooth_cell()) else {
             return vec![None; self.pos.len()];
         };
-        let cgrid = BallGrid::new(&self.corners.pos, &self.corners.ids, p.delta_max);
+        let cgrid = BallGrid::new(&self.corners.pos, &self.corners.ids, p.smooth_cell());
         let which: Vec<u32> = (0..self.pos.len())
             .filter(|&e| dist(self.source[e] as usize) <= p.corner_cap())
             .map(|e| e as u32)

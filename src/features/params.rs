@@ -187,6 +187,13 @@ fn bad(reason: String) -> FeaturesError {
 }
 
 impl Resolved {
+    /// Cells of the smoothing's grid: the first radius, where most points
+    /// settle, but wide enough that `delta_max` spans at most the 8 cells
+    /// a grid query reaches (`grid.rs`).
+    pub fn smooth_cell(&self) -> f64 {
+        self.delta.max(self.delta_max / 8.0)
+    }
+
     /// How far the priority of a polyline seed looks for corners.
     pub fn corner_cap(&self) -> f64 {
         3.0 * self.gamma_max

@@ -164,15 +164,19 @@ pub fn pca_frame(pts: &[DVec3], toward: DVec3) -> Result<Frame, FitFlag> {
     })
 }
 
-/// Fits paper 5's quadratic (formula (3)) to `pts` in `frame`.
+/// Fits paper 5's quadratic (formula (3)) to `pts` in `frame`. The local
+/// coordinates are recomputed in each pass rather than stored: three dot
+/// products cost less than an allocation per fit.
 pub fn fit_quadric(pts: &[DVec3], frame: Frame) -> Result<Quadric, FitFlag> {
     if pts.len() < MIN_FIT_POINTS {
         return Err(FLAG_SPARSE);
     }
-    let local: Vec<DVec3> = pts.iter().map(|p| frame.local(*p)).collect();
-    let scale = local
+    let scale = pts
         .iter()
-        .map(|l| l.x * l.x + l.y * l.y)
+        .map(|p| {
+            let l = frame.local(*p);
+            l.x * l.x + l.y * l.y
+        })
         .fold(0.0f64, f64::max)
         .sqrt();
     if !(scale > 0.0 && scale.is_finite()) {
@@ -181,7 +185,8 @@ pub fn fit_quadric(pts: &[DVec3], frame: Frame) -> Result<Quadric, FitFlag> {
     let inv = 1.0 / scale;
     let mut ata = [[0.0f64; 6]; 6];
     let mut atz = [0.0f64; 6];
-    for l in &local {
+    for p in pts {
+        let l = frame.local(*p);
         let row = basis(l.x * inv, l.y * inv);
         let z = l.z * inv;
         for r in 0..6 {
@@ -201,12 +206,13 @@ pub fn fit_quadric(pts: &[DVec3], frame: Frame) -> Result<Quadric, FitFlag> {
         max_error: 0.0,
     };
     let mut sum2 = 0.0;
-    for l in &local {
+    for p in pts {
+        let l = frame.local(*p);
         let err = (l.z - q.height(l.x, l.y)).abs();
         sum2 += err * err;
         q.max_error = q.max_error.max(err);
     }
-    q.rms = (sum2 / local.len() as f64).sqrt();
+    q.rms = (sum2 / pts.len() as f64).sqrt();
     Ok(q)
 }
 

@@ -92,7 +92,7 @@ pub fn repair(
         if joined[a] || t == DVec3::ZERO {
             continue;
         }
-        grid.within(g.vertices[a], cone.length, Some(a as u32), &mut found);
+        grid.nearest_first(g.vertices[a], cone.length, Some(a as u32), &mut found);
         for n in &found {
             let q = n.index as usize;
             if kinds[q] != kinds[a] || owner[q] == Owner::Line(line) {

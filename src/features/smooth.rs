@@ -63,20 +63,37 @@ pub fn elongation(pts: &[DVec3]) -> (f64, DVec3, DVec3) {
     (rho, vecs[2], anchor + offset)
 }
 
-/// The smoothed position of the edge point `s`, or `None` (noise).
-/// `around` holds the enhanced points of its kind within `delta_max` of `s`
-/// (itself included) in (distance, id) order, `positions` their
-/// positions; `corners` the kept corners of its kind within `delta_max`.
+/// What the smoothing makes of a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Smoothed {
+    /// Projected onto its neighbours' principal axis.
+    At(DVec3),
+    /// Never elongated enough up to `delta_max`: noise.
+    Noise,
+    /// Needs neighbours beyond the radius they were gathered within.
+    Wider,
+}
+
+/// The smoothed position of the edge point `s`. `around` holds the
+/// enhanced points of its kind within `within` of `s` (itself included)
+/// in a canonical order (`grid.rs`), `positions` their positions; `corners` the
+/// kept corners of its kind within `within`. Most points settle at the
+/// first radius, so callers gather that first and ask again with
+/// `delta_max` on [`Smoothed::Wider`].
 pub fn smooth_point(
     s: DVec3,
     around: &[Neighbour],
+    within: f64,
     positions: &[DVec3],
     corners: &[DVec3],
     p: &SmoothParams,
     buf: &mut Vec<DVec3>,
-) -> Option<DVec3> {
+) -> Smoothed {
     let mut delta = p.delta;
     loop {
+        if delta > within {
+            return Smoothed::Wider;
+        }
         let r2 = delta * delta;
         buf.clear();
         let near_corners: Vec<DVec3> = corners
@@ -84,7 +101,7 @@ pub fn smooth_point(
             .copied()
             .filter(|c| c.distance_squared(s) <= r2 && *c != s)
             .collect();
-        for n in around.iter().take_while(|n| n.dist2 <= r2) {
+        for n in around.iter().filter(|n| n.dist2 <= r2) {
             let q = positions[n.index as usize];
             // Other lines leave a corner in other directions.
             let same_line = |c: &DVec3| {
@@ -98,11 +115,11 @@ pub fn smooth_point(
         if buf.len() >= 3 {
             let (rho, axis, centre) = elongation(buf);
             if rho >= p.rho {
-                return Some(centre + axis * (s - centre).dot(axis));
+                return Smoothed::At(centre + axis * (s - centre).dot(axis));
             }
         }
         if delta >= p.delta_max {
-            return None;
+            return Smoothed::Noise;
         }
         delta = (delta * p.growth).min(p.delta_max);
     }
@@ -144,7 +161,11 @@ mod tests {
             .collect();
         let mut buf = Vec::new();
         for s in pts.iter().take(20).filter(|s| s.x.abs() < 0.5) {
-            let out = smooth_point(*s, &hood(*s, &pts), &pts, &[], &params(), &mut buf).unwrap();
+            let Smoothed::At(out) =
+                smooth_point(*s, &hood(*s, &pts), 0.4, &pts, &[], &params(), &mut buf)
+            else {
+                panic!("{s} not smoothed");
+            };
             assert!(
                 out.y.abs() < 0.01 && (out.x - s.x).abs() < 0.01,
                 "{s} -> {out}"
@@ -152,7 +173,15 @@ mod tests {
         }
         let blob: Vec<DVec3> = (0..100).map(|_| rng.unit_vector() * 0.05).collect();
         let s = blob[0];
-        assert!(smooth_point(s, &hood(s, &blob), &blob, &[], &params(), &mut buf).is_none());
+        assert_eq!(
+            smooth_point(s, &hood(s, &blob), 0.4, &blob, &[], &params(), &mut buf),
+            Smoothed::Noise
+        );
+        // Gathered within the first radius only: ask for more.
+        assert_eq!(
+            smooth_point(s, &hood(s, &blob), 0.1, &blob, &[], &params(), &mut buf),
+            Smoothed::Wider
+        );
     }
 
     #[test]
@@ -168,7 +197,11 @@ mod tests {
             delta: 0.2,
             ..params()
         };
-        let with = smooth_point(s, &hood(s, &pts), &pts, &[DVec3::ZERO], &p, &mut buf).unwrap();
+        let Smoothed::At(with) =
+            smooth_point(s, &hood(s, &pts), 0.4, &pts, &[DVec3::ZERO], &p, &mut buf)
+        else {
+            panic!("not smoothed");
+        };
         assert!(with.y.abs() < 1e-9, "{with}");
     }
 }

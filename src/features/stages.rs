@@ -10,7 +10,7 @@ use super::grid::BallGrid;
 use super::hood::{HoodIndex, HoodScratch};
 use super::lift::two_sided_lift;
 use super::params::Resolved;
-use super::smooth::{smooth_point, SmoothParams};
+use super::smooth::{smooth_point, SmoothParams, Smoothed};
 use crate::pipeline::KernelError;
 use crate::synth::LineKind;
 use crate::tiling::TilePoints;
@@ -235,13 +235,20 @@ pub fn smooth_points(
             || (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
             |(found, cfound, near, buf), &i| {
                 let s = positions[i as usize];
-                grid.within(s, p.delta_max, None, found);
-                near.clear();
-                if let Some(cg) = corner_grid {
-                    cg.within(s, p.delta_max, None, cfound);
-                    near.extend(cfound.iter().map(|n| corners[n.index as usize]));
+                for within in [p.delta, p.delta_max] {
+                    grid.within(s, within, None, found);
+                    near.clear();
+                    if let Some(cg) = corner_grid {
+                        cg.within(s, within, None, cfound);
+                        near.extend(cfound.iter().map(|n| corners[n.index as usize]));
+                    }
+                    match smooth_point(s, found, within, positions, near, &sp, buf) {
+                        Smoothed::At(x) => return Some(x),
+                        Smoothed::Noise => return None,
+                        Smoothed::Wider => {}
+                    }
                 }
-                smooth_point(s, found, positions, near, &sp, buf)
+                None
             },
         )
         .collect()
