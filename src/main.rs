@@ -6,6 +6,7 @@ mod cli;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    on_interrupt_clean_up_and_exit();
     match cli::run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
@@ -16,4 +17,27 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// SIGINT and SIGTERM end the run at once with the conventional code (130,
+/// 143), after removing the scratch stores, spill files and partial
+/// outputs the library registered (`scanmesh::io::cleanup`): nothing is
+/// left beside the output, and no file under its final name is partial.
+fn on_interrupt_clean_up_and_exit() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            let removed = scanmesh::io::cleanup::remove_registered();
+            let name = if signal == SIGINT {
+                "SIGINT"
+            } else {
+                "SIGTERM"
+            };
+            eprintln!("\ninterrupted ({name}): removed {removed} temporary files and directories");
+            std::process::exit(128 + signal);
+        }
+    });
 }

@@ -182,3 +182,81 @@ fn degenerate_flat_cloud_gets_normals() {
     let text = std::fs::read_to_string(&out).expect("output");
     assert_eq!(text.lines().count(), 15);
 }
+
+#[test]
+fn a_budget_below_every_plan_fails_fast_naming_the_minimum() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let out = dir.path().join("o.ply");
+    for cmd in ["normals", "reconstruct", "neighbors", "tile"] {
+        let o = scanmesh(&[
+            cmd,
+            &input,
+            "-o",
+            out.to_str().unwrap_or(""),
+            "--mem",
+            "1KiB",
+        ]);
+        assert_fails_naming(&o, "--mem 1.00KiB is too small");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("needs at least"), "{cmd}: {err}");
+        no_output_left(dir.path(), "o.ply");
+    }
+}
+
+#[test]
+fn a_missing_output_directory_is_named_and_not_created() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let missing = dir.path().join("typo/out.ply");
+    for cmd in ["normals", "reconstruct", "neighbors"] {
+        let o = scanmesh(&[cmd, &input, "-o", missing.to_str().unwrap_or(""), "--quiet"]);
+        assert_fails_naming(&o, "typo");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("output directory"), "{cmd}: {err}");
+        assert!(
+            !dir.path().join("typo").exists(),
+            "{cmd} created the directory"
+        );
+    }
+}
+
+#[test]
+fn a_store_in_use_is_refused_not_corrupted() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let store = dir.path().join("s");
+    let o = scanmesh(&[
+        "tile",
+        &input,
+        "-o",
+        store.to_str().unwrap_or(""),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Hold the store as a run would, then start a second run on it.
+    let held = scanmesh::store::PointStore::open(&store).expect("open");
+    let out = dir.path().join("n.ply");
+    let o = scanmesh(&[
+        "normals",
+        store.to_str().unwrap_or(""),
+        "-o",
+        out.to_str().unwrap_or(""),
+        "--quiet",
+        "--k",
+        "5",
+    ]);
+    assert_fails_naming(&o, "in use by another scanmesh process");
+    assert!(!out.exists());
+    drop(held);
+    let o = scanmesh(&[
+        "normals",
+        store.to_str().unwrap_or(""),
+        "-o",
+        out.to_str().unwrap_or(""),
+        "--quiet",
+        "--k",
+        "5",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

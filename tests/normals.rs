@@ -3,9 +3,10 @@
 
 mod common;
 
-use common::{angle_deg, median, normals_of};
+use common::{angle_deg, median, normals_of, normals_with};
 use glam::DVec3;
 use scanmesh::normals::{NormalParams, Orientation, FLAG_DEGENERATE, FLAG_UNORIENTED};
+use scanmesh::pipeline::{MemoryBudget, RunOptions};
 use scanmesh::spatial::KnnBackend;
 use scanmesh::synth::{generate, Shape};
 
@@ -154,4 +155,67 @@ fn a_small_island_is_flagged_unoriented() {
         .collect();
     assert_eq!(unoriented, (30_000..30_020).collect::<Vec<_>>());
     assert_eq!(out.report.unoriented, 20);
+}
+
+/// A band, a sphere and seven 20-point islands: the island rule orients
+/// five of the islands and cuts through their size class by top id.
+/// A Moebius band (which no spanning tree orients consistently, so the
+/// tree decides where the sign jumps) stands in for the torus.
+fn islands_cloud() -> Vec<DVec3> {
+    let mut pts = generate(&Shape::moebius(1.0, 0.4), 36_000, 0.001, 21)
+        .expect("generate")
+        .points;
+    let ball = Shape::sphere(DVec3::new(3.0, 0.5, 0.2), 0.4);
+    pts.extend(generate(&ball, 4_000, 0.001, 22).expect("generate").points);
+    for k in 0..7 {
+        let centre = DVec3::new(4.0 + 0.8 * k as f64, -3.0, 0.5 * k as f64);
+        let island = generate(&Shape::sphere(centre, 0.01), 20, 0.0, 30 + k);
+        pts.extend(island.expect("generate").points);
+    }
+    pts
+}
+
+#[test]
+fn external_orientation_gives_the_in_memory_flips() {
+    let pts = islands_cloud();
+    let params = NormalParams::default();
+    let in_memory = normals_of(&pts, u64::MAX, 2, &params);
+    // A promise of 0 bytes keeps no per-point state in memory.
+    let tight = RunOptions::new(2).within(MemoryBudget::new(0, 2));
+    let external_whole = normals_with(&pts, u64::MAX, tight, &params);
+    let external_tiled = normals_with(&pts, 400, tight, &params);
+    assert!(
+        external_tiled.report.tiles >= 64,
+        "{} tiles",
+        external_tiled.report.tiles
+    );
+    assert_eq!(in_memory.report.components, 9);
+    assert_eq!(in_memory.report.unoriented, 40);
+    for (what, out) in [("untiled", &external_whole), ("tiled", &external_tiled)] {
+        assert_eq!(out.report.components, 9, "{what}");
+        assert_eq!(out.report.unoriented, 40, "{what}");
+        assert!(
+            out.bytes == in_memory.bytes,
+            "{what}: external flips differ"
+        );
+    }
+}
+
+#[test]
+fn external_orientation_on_a_million_points_gives_the_in_memory_flips() {
+    // A noisy Moebius band: no consistent orientation exists, so the sign
+    // seam shows any difference in the spanning tree.
+    let pts = generate(&Shape::moebius(1.0, 0.4), 1_000_000, 0.0005, 23)
+        .expect("generate")
+        .points;
+    let params = NormalParams::default();
+    let in_memory = normals_of(&pts, u64::MAX, 2, &params);
+    let tight = RunOptions::new(2).within(MemoryBudget::new(0, 2));
+    let external = normals_with(&pts, 12_000, tight, &params);
+    assert!(
+        external.report.tiles >= 64,
+        "{} tiles",
+        external.report.tiles
+    );
+    assert!(external.bytes == in_memory.bytes, "external flips differ");
 }

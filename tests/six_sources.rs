@@ -16,7 +16,7 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalParams, NormalsReport, Orientation, FLAG_DEGENERATE,
     FLAG_UNORIENTED,
 };
-use scanmesh::pipeline::{NoProgress, RunOptions};
+use scanmesh::pipeline::{MemoryBudget, NoProgress, RunOptions};
 use scanmesh::store::{PointStore, FLAGS_FILE, NORMAL_FILE};
 use scanmesh::synth::{generate, mean_spacing_hint, Rng, Shape};
 
@@ -33,13 +33,17 @@ struct Run {
 /// (from the exact mean nearest-neighbour distance, the same for any
 /// tiling).
 fn run(points: &[DVec3], tile_points: u64, threads: usize, orientation: Orientation) -> Run {
-    with_store(points, tile_points, threads, |store, _dir| {
+    run_with(points, tile_points, RunOptions::new(threads), orientation)
+}
+
+/// [`run`] with the run options given.
+fn run_with(points: &[DVec3], tile_points: u64, opts: RunOptions, orientation: Orientation) -> Run {
+    with_store(points, tile_points, opts.threads, |store, _dir| {
         let params = NormalParams {
             orientation,
             ..NormalParams::default()
         };
-        let report = compute_normals(store, &params, RunOptions::new(threads), &NoProgress)
-            .expect("normals");
+        let report = compute_normals(store, &params, opts, &NoProgress).expect("normals");
         let (points, normals, flags) = read_back(store);
         Run {
             report,
@@ -314,6 +318,30 @@ fn a_part_no_pair_reaches_faces_out_on_its_own() {
             "seed {seed}: point {i}"
         );
         assert_eq!(whole.flags[i] & FLAG_UNORIENTED, 0);
+    }
+}
+
+#[test]
+fn external_pass_gives_the_in_memory_flips() {
+    // A Moebius strip (its sign seam shows any change of the forest) and a
+    // sphere the sources do not reach, rooted at its own extreme point.
+    let band = generate(&Shape::moebius(1.0, 0.4), 30_000, 0.002, 51).expect("generate");
+    // Inside the band's hole and within its height: no source on it.
+    let ball = Shape::sphere(DVec3::ZERO, 0.15);
+    let mut points = band.points;
+    points.extend(generate(&ball, 4_000, 0.0, 52).expect("generate").points);
+    let in_memory = run(&points, u64::MAX, 2, six());
+    let tight = RunOptions::new(2).within(MemoryBudget::new(0, 2));
+    for tile_points in [u64::MAX, 500] {
+        let external = run_with(&points, tile_points, tight, six());
+        assert_eq!(external.report.components, in_memory.report.components);
+        assert_eq!(in_memory.report.components, 2);
+        assert!(
+            external.normals == in_memory.normals,
+            "{} tiles: external flips differ",
+            external.report.tiles
+        );
+        assert_eq!(external.flags, in_memory.flags);
     }
 }
 

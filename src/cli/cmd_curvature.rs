@@ -103,11 +103,10 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     check_ply(&a.output)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
-    let report = compute_curvature(&mut ws.store, &params, s.run_options(), progress.as_ref())?;
-    let window = (s.mem / 8 / 64).max(1 << 16);
-    write_curvature_ply(&ws.store, &a.output, window)
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let store = &mut run.ws.store;
+    let report = compute_curvature(store, &params, run.opts, progress.as_ref())?;
+    write_curvature_ply(store, &a.output, run.plan.window_points)
         .with_context(|| format!("writing {}", a.output.display()))?;
     print_summary(&report, t0.elapsed().as_secs_f64(), &a.output);
     Ok(())

@@ -41,15 +41,18 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let params = ImplicitParams::default();
     let dir = scratch_store_dir(&a.output);
     let mut reader = MemoryReader::new("embedded dragon sample", scan.points.clone(), None);
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
+    let cost = params.cost();
+    s.check_floor(&cost)?;
+    let opts = s.build_options(cost);
     let result = (|| -> Result<()> {
         let mut store = build_store(&mut reader, &dir, &opts, progress.as_ref())?;
+        let (_, run_options) = s.plan_for(&store, cost)?;
         let r = reconstruct_implicit(
             &mut store,
             &params,
             &a.output,
             MeshFormat::PlyBinary,
-            s.run_options(),
+            run_options,
             progress.as_ref(),
         )?;
         super::cmd_reconstruct::print_summary(

@@ -117,12 +117,11 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     }
     let progress = super::progress::progress(s.quiet || a.json);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.curvature.normals);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
-    let (graph, report) =
-        extract_lines(&mut ws.store, &params, s.run_options(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let store = &mut run.ws.store;
+    let (graph, report) = extract_lines(store, &params, run.opts, progress.as_ref())?;
     graph
-        .write(&a.output, ws.store.origin(), a.ascii)
+        .write(&a.output, store.origin(), a.ascii)
         .with_context(|| format!("writing {}", a.output.display()))?;
     let secs = t0.elapsed().as_secs_f64();
     if a.json {

@@ -8,7 +8,6 @@ use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
     compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions, MAX_K,
 };
-use scanmesh::store::{BuildOptions, TileTarget};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -80,22 +79,17 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let mut ws = s.open_input(
-        &a.input,
-        &a.output,
-        &build_options(&s, &params),
-        progress.as_ref(),
-    )?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let out = OutputOptions {
         format: a.format(),
-        window_points: (s.mem / 8 / params.window_bytes_per_point()).max(1 << 12),
+        window_points: run.plan.window_points,
     };
     let report = compute_neighbours(
-        &mut ws.store,
+        &mut run.ws.store,
         &params,
         &a.output,
         &out,
-        s.run_options(),
+        run.opts,
         progress.as_ref(),
     )
     .with_context(|| format!("writing {}", a.output.display()))?;
@@ -106,22 +100,6 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     }
     print_summary(&report, &params, secs, &a.output);
     Ok(())
-}
-
-/// Tiles sized from the budget for this kernel, or forced by --tile-points.
-fn build_options(s: &super::Settings, params: &NeighbourParams) -> BuildOptions {
-    let tiles = match s.tile_points {
-        Some(n) => TileTarget::Points(n),
-        None => TileTarget::Budget {
-            budget: s.budget(),
-            bytes_per_point: params.bytes_per_point(),
-            reserved_per_point: 0,
-        },
-    };
-    BuildOptions {
-        tiles,
-        scatter_buffer: (s.mem / 8).min(64 << 20) as usize,
-    }
 }
 
 fn write_summary(

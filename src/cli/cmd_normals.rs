@@ -166,11 +166,11 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let spec = output_spec(&a.output, a.ascii)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
-    let report = compute_normals(&mut ws.store, &params, s.run_options(), progress.as_ref())?;
-    let window = (s.mem / 8 / 48).max(1 << 16);
-    export_points(&ws.store, &a.output, &spec, window, progress.as_ref())
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let store = &mut run.ws.store;
+    let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
+    let window = run.plan.window_points;
+    export_points(store, &a.output, &spec, window, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
     print_summary(&report, t0.elapsed().as_secs_f64(), &a.output);
     Ok(())

@@ -35,6 +35,13 @@ pub struct ReconstructArgs {
     /// patches, and pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
+    /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
+    /// triangles with a larger circumradius are boundaries. Default: 5 x
+    /// the largest nearest-neighbour distance of the triangle's corners
+    /// (from the local sampling, not the paper's share of the bounding
+    /// sphere).
+    #[arg(long, value_name = "DELTA")]
+    hole: Option<f64>,
     /// Drop connected pieces with fewer triangles than this share of the
     /// largest piece's (default 0.01 with --closed, else 0: keep all).
     #[arg(long, value_name = "SHARE")]
@@ -55,6 +62,10 @@ pub struct ReconstructArgs {
 enum Method {
     /// Signed distance to tangent planes + marching cubes (paper 1).
     Implicit,
+    /// 3-D Delaunay triangulation and local flatness (paper 4): the
+    /// input points are the vertices; open, multi-sheet and non-orientable
+    /// surfaces.
+    Delaunay,
 }
 
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
@@ -75,7 +86,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
-    let Method::Implicit = a.method;
+    if let Method::Delaunay = a.method {
+        return super::cmd_reconstruct_delaunay::run(&s, &a.input, &a.output, format, a.hole);
+    }
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
     }
@@ -92,20 +105,19 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.normals.neighbourhood = a.hood.hood();
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let opts = super::cmd_tile::build_options(&s, &params.normals);
-    let mut ws = s.open_input(&a.input, &a.output, &opts, progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let r = reconstruct_implicit(
-        &mut ws.store,
+        &mut run.ws.store,
         &params,
         &a.output,
         format,
-        s.run_options(),
+        run.opts,
         progress.as_ref(),
     )?;
     print_summary(
         &r,
-        ws.store.len(),
-        ws.store.tiles().len(),
+        run.ws.store.len(),
+        run.ws.store.tiles().len(),
         t0.elapsed().as_secs_f64(),
         &a.output,
     );

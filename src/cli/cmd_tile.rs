@@ -3,8 +3,9 @@
 use anyhow::{bail, Result};
 use clap::Args;
 use scanmesh::io::open_reader;
+use scanmesh::io::{cleanup, place};
 use scanmesh::normals::NormalParams;
-use scanmesh::store::{build_store, spacing::ensure_spacing, BuildOptions};
+use scanmesh::store::{build_store, spacing::ensure_spacing};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -25,10 +26,16 @@ pub fn run(a: TileArgs) -> Result<()> {
     if a.output.exists() && std::fs::read_dir(&a.output)?.next().is_some() {
         bail!("{}: exists and is not empty", a.output.display());
     }
+    place::check_writable_dir(&place::directory_of(&a.output), "output")?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
+    // Removed if the build is interrupted: a store without its manifest is
+    // no store.
+    let building = cleanup::register(&a.output);
     let mut reader = open_reader(&a.input, s.policy)?;
-    let opts = build_options(&s, &NormalParams::default());
+    let cost = NormalParams::default().cost();
+    s.check_floor(&cost)?;
+    let opts = s.build_options(cost);
     let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress.as_ref()) {
         Ok(st) => st,
         Err(e) => {
@@ -37,6 +44,7 @@ pub fn run(a: TileArgs) -> Result<()> {
         }
     };
     let spacing = ensure_spacing(&mut store)?;
+    drop(building);
     let m = &store.manifest;
     println!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
@@ -50,22 +58,4 @@ pub fn run(a: TileArgs) -> Result<()> {
         a.output.display()
     );
     Ok(())
-}
-
-/// Tile sizes for a kernel: forced by --tile-points, else from the budget.
-pub fn build_options(s: &super::Settings, params: &NormalParams) -> BuildOptions {
-    use scanmesh::store::TileTarget;
-    let tiles = match s.tile_points {
-        Some(n) => TileTarget::Points(n),
-        None => TileTarget::Budget {
-            budget: s.budget(),
-            bytes_per_point: params.bytes_per_point(),
-            // Orientation's union-find: 4 + 1 bytes and a parity bit per point.
-            reserved_per_point: 6,
-        },
-    };
-    BuildOptions {
-        tiles,
-        scatter_buffer: (s.mem / 8).min(64 << 20) as usize,
-    }
 }

@@ -10,17 +10,19 @@ mod cmd_info;
 mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
+mod cmd_reconstruct_delaunay;
 mod cmd_render;
 mod cmd_tile;
 mod progress;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use scanmesh::io::place;
 use scanmesh::io::InvalidPolicy;
-use scanmesh::pipeline::{MemoryBudget, Progress, RunOptions};
-use scanmesh::store::build::scratch_store_dir;
-use scanmesh::store::{open_input, BuildOptions, Workspace};
-use std::path::Path;
+use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
+use scanmesh::store::build::scratch_store_dir_in;
+use scanmesh::store::{is_store, open_input, BuildOptions, PointStore, TileTarget, Workspace};
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -81,6 +83,10 @@ pub struct CommonArgs {
     /// Drop points with NaN/inf coordinates (counted) instead of failing.
     #[arg(long)]
     skip_invalid: bool,
+    /// Directory for the scratch store and spill files (default: beside
+    /// the output), for outputs on a small or slow volume.
+    #[arg(long, value_name = "DIR")]
+    scratch_dir: Option<PathBuf>,
 }
 
 /// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
@@ -93,26 +99,28 @@ pub enum HoodKind {
     Knn,
 }
 
+/// An open store with the plan a run keeps to.
+pub struct Prepared {
+    pub ws: Workspace,
+    pub opts: RunOptions,
+    pub plan: MemoryPlan,
+}
+
 /// Validated common options.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Settings {
     pub mem: u64,
     pub threads: usize,
     pub tile_points: Option<u64>,
     pub quiet: bool,
     pub policy: InvalidPolicy,
+    pub scratch_dir: Option<PathBuf>,
 }
 
 impl CommonArgs {
     fn settings(&self) -> Result<Settings> {
         let mem = scanmesh::units::parse_size(&self.mem)
             .with_context(|| format!("--mem {}", self.mem))?;
-        if mem < 32 << 20 {
-            bail!(
-                "--mem {} is below the 32MiB scanmesh needs to run",
-                self.mem
-            );
-        }
         let threads = match self.threads {
             Some(0) => bail!("--threads must be at least 1"),
             Some(t) => t,
@@ -126,6 +134,7 @@ impl CommonArgs {
             threads,
             tile_points: self.tile_points,
             quiet: self.quiet,
+            scratch_dir: self.scratch_dir.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -140,22 +149,98 @@ impl Settings {
         MemoryBudget::new(self.mem, self.threads)
     }
 
-    pub fn run_options(&self) -> RunOptions {
-        RunOptions::new(self.threads)
+    /// Checks that some plan fits the promise whatever the point count
+    /// (the fixed costs and the smallest tiles), before any input is read.
+    pub fn check_floor(&self, cost: &KernelCost) -> Result<()> {
+        MemoryPlan::new(self.budget(), 0, cost)?;
+        Ok(())
     }
 
-    /// The store to work on: `input` itself when it is one, else a scratch
-    /// store beside `output` built from the input file.
+    /// Tile sizes for a kernel: forced by --tile-points, else from the plan.
+    pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
+        let within = BuildOptions::within(self.budget(), cost);
+        match self.tile_points {
+            Some(n) => BuildOptions {
+                tiles: TileTarget::Points(n),
+                ..within
+            },
+            None => within,
+        }
+    }
+
+    /// The store to work on (`input` itself when it is one, else a scratch
+    /// store beside `output` built from the input file), its memory plan,
+    /// and run options that keep the tiles in flight within it.
     pub fn open_input(
         &self,
         input: &Path,
         output: &Path,
-        opts: &BuildOptions,
+        cost: KernelCost,
         progress: &dyn Progress,
-    ) -> Result<Workspace> {
-        let scratch = scratch_store_dir(output);
-        open_input(input, &scratch, opts, self.policy, progress)
-            .with_context(|| format!("reading {}", input.display()))
+    ) -> Result<Prepared> {
+        self.check_floor(&cost)?;
+        let scratch_dir = self.check_places(input, output, &cost)?;
+        let scratch = scratch_store_dir_in(&scratch_dir, output);
+        let ws = open_input(
+            input,
+            &scratch,
+            &self.build_options(cost),
+            self.policy,
+            progress,
+        )
+        .with_context(|| format!("reading {}", input.display()))?;
+        self.prepare(ws, cost)
+    }
+
+    /// Checks, before any input is read, that the output and scratch
+    /// directories take new files and (when the input says how many points
+    /// it holds) have room for the run; returns the scratch directory.
+    pub fn check_places(&self, input: &Path, output: &Path, cost: &KernelCost) -> Result<PathBuf> {
+        place::check_output(output)?;
+        let scratch_dir = match &self.scratch_dir {
+            Some(d) => d.clone(),
+            None => place::directory_of(output),
+        };
+        place::check_writable_dir(&scratch_dir, "scratch")?;
+        let count = if is_store(input) {
+            Some(PointStore::open(input)?.len())
+        } else {
+            scanmesh::io::open_reader(input, self.policy)
+                .with_context(|| format!("reading {}", input.display()))?
+                .info()
+                .declared_count
+        };
+        // A count past what a store holds is refused later, as such.
+        if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
+            let (scratch, out) = (cost.scratch_per_point, cost.output_per_point);
+            let output_dir = place::directory_of(output);
+            place::check_space(
+                &scratch_dir,
+                n.saturating_mul(scratch),
+                &output_dir,
+                n.saturating_mul(out),
+            )?;
+        }
+        Ok(scratch_dir)
+    }
+
+    /// The plan and run options for an open store.
+    pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared> {
+        let (plan, opts) = self.plan_for(&ws.store, cost)?;
+        Ok(Prepared { ws, opts, plan })
+    }
+
+    /// The memory plan for `store` and run options whose tiles in flight
+    /// fit it.
+    pub fn plan_for(
+        &self,
+        store: &PointStore,
+        cost: KernelCost,
+    ) -> Result<(MemoryPlan, RunOptions)> {
+        let plan = MemoryPlan::new(self.budget(), store.len(), &cost)?;
+        let largest = store.tiles().iter().map(|t| t.count).max().unwrap_or(0);
+        let opts = plan.run_options(&cost, largest)?;
+        Ok((plan, opts))
     }
 
     /// Sizes rayon's pool once per process.

@@ -12,7 +12,7 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Bytes of one output record.
-const RECORD: usize = 24 + 4 * VALUES + 1;
+pub(crate) const RECORD: usize = 24 + 4 * VALUES + 1;
 
 /// The PLY header for `n` points.
 fn header(n: u64) -> String {

@@ -11,6 +11,7 @@
 //! Flags of a point's curvature (a bit set means the values it names are
 //! not available, and they are NaN, never made up).
 
+pub mod cost;
 pub mod curvature;
 pub mod curve;
 pub mod enhance;

@@ -15,6 +15,8 @@ pub struct AtomicFile {
     temp_path: PathBuf,
     file: File,
     committed: bool,
+    /// Removed by an interrupt handler if the run stops before the commit.
+    _cleanup: super::cleanup::Registered,
 }
 
 impl AtomicFile {
@@ -38,6 +40,7 @@ impl AtomicFile {
             .map_err(|e| IoError::os(path, e))?;
         Ok(AtomicFile {
             final_path: path.to_path_buf(),
+            _cleanup: super::cleanup::register(&temp_path),
             temp_path,
             file,
             committed: false,

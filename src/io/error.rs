@@ -37,6 +37,8 @@ pub enum IoError {
     },
     #[error("{path}: {reason}")]
     Unsupported { path: PathBuf, reason: String },
+    #[error("{path}: cannot write here: {reason}")]
+    Unwritable { path: PathBuf, reason: String },
     #[error("{path}: LAS: {reason}")]
     Las { path: PathBuf, reason: String },
     #[error("{path}: file is empty (no header, no points)")]

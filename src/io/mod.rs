@@ -6,6 +6,7 @@
 //! consistent with headers), so nothing downstream checks again.
 
 pub mod atomic;
+pub mod cleanup;
 pub mod convert;
 pub mod error;
 pub mod inspect;
@@ -13,6 +14,7 @@ pub mod las;
 pub mod memory;
 pub mod obj;
 pub mod open;
+pub mod place;
 pub mod ply;
 mod policy;
 pub(crate) mod scratch;

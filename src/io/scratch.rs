@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 pub(crate) struct ScratchFile {
     pub(crate) path: PathBuf,
     pub(crate) file: File,
+    _cleanup: super::cleanup::Registered,
 }
 
 impl ScratchFile {
@@ -22,7 +23,11 @@ impl ScratchFile {
             .truncate(true)
             .open(&path)
             .map_err(|e| IoError::os(&path, e))?;
-        Ok(ScratchFile { path, file })
+        Ok(ScratchFile {
+            _cleanup: super::cleanup::register(&path),
+            path,
+            file,
+        })
     }
 
     pub(crate) fn path(&self) -> &Path {

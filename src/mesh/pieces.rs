@@ -20,6 +20,11 @@ use glam::DVec3;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 
+/// Memory per mesh vertex when spooling: the disjoint sets' parents (4,
+/// with an eighth of headroom) and, on replay, the triangle counts that
+/// become the new numbers (4).
+pub const BYTES_PER_VERTEX: u64 = 9;
+
 /// Items replayed into the writer at a time.
 const BATCH: usize = 1 << 16;
 

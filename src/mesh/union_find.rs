@@ -79,6 +79,11 @@ impl<S: Slot> DisjointSets<S> {
     /// Adds singleton sets up to `n` members in all.
     pub fn grow(&mut self, n: usize) {
         let len = self.parent.len();
+        // An eighth of headroom, not the doubling `extend` would give: the
+        // sets are counted per member in the memory plan.
+        if n > self.parent.capacity() {
+            self.parent.reserve_exact(n - len + n / 8);
+        }
         self.parent.extend((len..n).map(S::from_usize));
     }
 

@@ -34,7 +34,7 @@ pub use kernel::{NeighboursKernel, NeighboursTile};
 pub use stats::{HoodStats, Summary};
 
 use crate::io::IoError;
-use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
 use crate::store::{PointStore, StoreError};
@@ -114,6 +114,20 @@ impl NeighbourParams {
     /// core lists in local and global ids), for the memory planner.
     pub fn bytes_per_point(&self) -> u64 {
         120 + 12 * 3 * self.k() as u64
+    }
+
+    /// What a neighbours run costs, for the memory plan (no global pass).
+    pub fn cost(&self) -> KernelCost {
+        KernelCost {
+            bytes_per_point: self.bytes_per_point(),
+            global_per_point: 0,
+            contracts_boundaries: false,
+            resident_per_point: 0.0,
+            window_bytes_per_point: self.window_bytes_per_point(),
+            // The store (20) and the spilled lists with their index.
+            scratch_per_point: 36 + 4 * self.expected_size(),
+            output_per_point: 8 + 4 * self.expected_size(),
+        }
     }
 
     /// Bytes per point of an output window (decoded lists, scratch records).

@@ -8,11 +8,13 @@
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
 pub mod components;
+pub mod contract;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
 pub mod hood;
 pub mod kernel;
+pub mod labels;
 pub mod orient;
 pub mod pca;
 pub mod runs;
@@ -20,7 +22,7 @@ pub mod sources;
 pub mod stats;
 pub mod unionfind;
 
-use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
 use crate::store::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
@@ -28,6 +30,10 @@ use glam::DVec3;
 use kernel::{NormalsKernel, NormalsTile};
 use runs::EdgeRuns;
 use stats::{SamplingHistograms, SamplingStats};
+
+/// Bytes per point of an input-order output window of positions, normals
+/// and flags (the record and its share of the reorder buffers).
+pub const EXPORT_BYTES_PER_POINT: u64 = 48;
 
 /// The neighbourhood was too small or degenerate (colinear, coincident) for
 /// a tangent plane: the normal is zero, never made up.
@@ -127,6 +133,28 @@ impl NormalParams {
         match self.neighbourhood {
             NormalHood::Knn => 120 + 20 * k,
             NormalHood::Topological { .. } => 160 + 20 * 2 * k,
+        }
+    }
+
+    /// What a normals run costs, for the memory plan: the kernel's bytes per
+    /// loaded point, the orientation's union-find (or its contracted
+    /// boundaries when that does not fit), and the output's records.
+    pub fn cost(&self) -> KernelCost {
+        let global = !matches!(
+            self.orientation,
+            Orientation::None | Orientation::Viewpoint(_)
+        );
+        KernelCost {
+            bytes_per_point: self.bytes_per_point(),
+            global_per_point: if global { orient::BYTES_PER_POINT } else { 0 },
+            contracts_boundaries: global,
+            resident_per_point: 0.0,
+            window_bytes_per_point: EXPORT_BYTES_PER_POINT,
+            // The store (20), normals and flags (13), forest runs (24),
+            // external labels (8) and the export's reorder file (29).
+            scratch_per_point: 94,
+            // x y z as double, normals as float, flags.
+            output_per_point: 37,
         }
     }
 
@@ -231,14 +259,19 @@ fn normals_into(
             .iter()
             .filter(|f| **f & FLAG_DEGENERATE != 0)
             .count() as u64;
-        runs.push_run(&out.forest)?;
+        let tile = &store.tiles()[t];
+        runs.push_tile_run(&out.forest, tile.start..tile.start + tile.count)?;
         sampling.merge(&out.sampling);
         Ok(())
     })?;
     report.sampling = sampling.stats();
     report.forest_edges = runs.edges();
     if params.orientation == Orientation::SpanningTree {
-        let stats = orient::orient_by_forest(store, runs, normals, flags, progress)?;
+        let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
+            orient::orient_by_forest(store, runs, normals, flags, progress)?
+        } else {
+            orient::orient_external(store, runs, normals, flags, progress)?
+        };
         report.unoriented = stats.unoriented;
         report.components = stats.components;
     }

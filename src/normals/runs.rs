@@ -5,13 +5,14 @@
 
 use super::forest::Edge;
 use super::unionfind::ParityUnionFind;
-use crate::io::IoError;
+use crate::io::{cleanup, IoError};
 use crate::pipeline::Progress;
 use crossbeam::channel;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, Read, Write};
+use std::ops::Range;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
@@ -26,12 +27,18 @@ const MERGE_BUFFER: usize = 16 << 20;
 /// An edge's slots and flip parity, as the union-find takes them.
 type Pair = (u32, u32, bool);
 
-/// Sorted runs of edges in one scratch file, removed on drop.
+/// Sorted runs of edges in one scratch file, removed on drop. Runs pushed
+/// with [`EdgeRuns::push_tile_run`] also log the slots their edges reach
+/// outside their tile's core (a second scratch file): the boundary the
+/// external orientation needs, gathered while the forests are at hand.
 pub struct EdgeRuns {
     path: PathBuf,
     out: BufWriter<File>,
     runs: Vec<(u64, u64)>,
     written: u64,
+    outside: Option<(PathBuf, BufWriter<File>)>,
+    /// Both scratch files, for an interrupt handler.
+    _cleanup: [cleanup::Registered; 2],
 }
 
 impl EdgeRuns {
@@ -48,7 +55,73 @@ impl EdgeRuns {
             out: BufWriter::with_capacity(1 << 20, file),
             runs: Vec::new(),
             written: 0,
+            outside: None,
+            _cleanup: [
+                cleanup::register(path),
+                cleanup::register(&path.with_extension("outside")),
+            ],
         })
+    }
+
+    /// Appends one tile's run (as [`Self::push_run`]) and logs every slot
+    /// of it outside `core`, the tile's store range.
+    pub fn push_tile_run(&mut self, edges: &[Edge], core: Range<u64>) -> Result<(), IoError> {
+        self.push_run(edges)?;
+        if self.outside.is_none() {
+            let path = self.path.with_extension("outside");
+            let file = File::create(&path).map_err(|e| IoError::os(&path, e))?;
+            self.outside = Some((path, BufWriter::with_capacity(1 << 20, file)));
+        }
+        if let Some((path, log)) = &mut self.outside {
+            for s in edges.iter().flat_map(|e| e.slots) {
+                if !core.contains(&u64::from(s)) {
+                    log.write_all(&s.to_le_bytes())
+                        .map_err(|e| IoError::os(&*path, e))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The slots logged by [`Self::push_tile_run`] (and `extra`), sorted,
+    /// each once. The log is read in chunks and compacted as it goes, so
+    /// memory stays near the result's size.
+    pub fn outside_slots(&mut self, extra: &[u32]) -> Result<Vec<u32>, IoError> {
+        let mut all = extra.to_vec();
+        let Some((path, log)) = self.outside.take() else {
+            all.sort_unstable();
+            all.dedup();
+            return Ok(all);
+        };
+        let file = log
+            .into_inner()
+            .map_err(|e| IoError::os(&path, e.into_error()))?;
+        drop(file);
+        let mut input = std::io::BufReader::with_capacity(
+            1 << 20,
+            File::open(&path).map_err(|e| IoError::os(&path, e))?,
+        );
+        let mut chunk = vec![0u8; 1 << 22];
+        loop {
+            let n = read_full(&mut input, &mut chunk).map_err(|e| IoError::os(&path, e))?;
+            all.extend(
+                chunk[..n - n % 4]
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            );
+            // A vertex is met once per tile it borders: compacting keeps
+            // the list near its final size.
+            if n < chunk.len() || all.len() > all.capacity() / 2 {
+                all.sort_unstable();
+                all.dedup();
+            }
+            if n < chunk.len() {
+                break;
+            }
+        }
+        let _ = std::fs::remove_file(&path);
+        all.shrink_to_fit();
+        Ok(all)
     }
 
     /// Appends one run; `edges` must be sorted by [`Edge::key`].
@@ -65,6 +138,28 @@ impl EdgeRuns {
 
     pub fn edges(&self) -> u64 {
         self.written
+    }
+
+    /// Number of runs pushed (one per tile, in tile order).
+    pub fn run_count(&self) -> usize {
+        self.runs.len()
+    }
+
+    /// Position in the file (in edges) of run `r`'s first edge: runs lie
+    /// one after another, so `run_start(r) + i` numbers every edge.
+    pub fn run_start(&self, r: usize) -> u64 {
+        self.runs[r].0
+    }
+
+    /// Makes every pushed run readable by [`Self::read_run`].
+    pub fn flush(&mut self) -> Result<(), IoError> {
+        self.out.flush().map_err(|e| IoError::os(&self.path, e))
+    }
+
+    /// The edges of run `r` (after [`Self::flush`]).
+    pub fn read_run(&self, r: usize) -> Result<Vec<Edge>, IoError> {
+        let (start, len) = self.runs[r];
+        read_edges(self.out.get_ref(), start, len as usize, &self.path)
     }
 
     /// Kruskal over all runs: joins every edge's slots in `uf` with its flip
@@ -133,6 +228,16 @@ impl EdgeRuns {
     /// Calls `f` on every edge of every run in global [`Edge::key`] order.
     /// `buffer_bytes` is shared among the runs' read buffers.
     pub fn merge(mut self, buffer_bytes: usize, mut f: impl FnMut(Edge)) -> Result<(), IoError> {
+        self.merge_numbered(buffer_bytes, |_, e| f(e))
+    }
+
+    /// As [`Self::merge`], each edge with its position in the file (see
+    /// [`Self::run_start`]).
+    pub fn merge_numbered(
+        &mut self,
+        buffer_bytes: usize,
+        mut f: impl FnMut(u64, Edge),
+    ) -> Result<(), IoError> {
         self.out.flush().map_err(|e| IoError::os(&self.path, e))?;
         let file = self.out.get_ref();
         let per_run = (buffer_bytes / Edge::BYTES / self.runs.len().max(1)).max(64);
@@ -155,8 +260,9 @@ impl EdgeRuns {
         while let Some(Reverse((_, r))) = heap.pop() {
             let c = &mut cursors[r];
             let e = c.buf[c.pos];
+            let at = c.next - (c.buf.len() - c.pos) as u64;
             c.pos += 1;
-            f(e);
+            f(at, e);
             if let Some(e) = c.peek(file, per_run, &self.path)? {
                 heap.push(Reverse((e.key(), r)));
             }
@@ -168,7 +274,24 @@ impl EdgeRuns {
 impl Drop for EdgeRuns {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        if let Some((path, _)) = &self.outside {
+            let _ = std::fs::remove_file(path);
+        }
     }
+}
+
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
 }
 
 struct RunCursor {
@@ -186,20 +309,27 @@ impl RunCursor {
             if n == 0 {
                 return Ok(None);
             }
-            let mut bytes = vec![0u8; n * Edge::BYTES];
-            file.read_exact_at(&mut bytes, self.next * Edge::BYTES as u64)
-                .map_err(|e| IoError::os(path, e))?;
-            self.buf.clear();
-            self.buf.extend(bytes.chunks_exact(Edge::BYTES).map(|c| {
-                let mut a = [0u8; Edge::BYTES];
-                a.copy_from_slice(c);
-                Edge::from_bytes(&a)
-            }));
+            self.buf = read_edges(file, self.next, n, path)?;
             self.pos = 0;
             self.next += n as u64;
         }
         Ok(Some(self.buf[self.pos]))
     }
+}
+
+/// `n` edges from position `start` (in edges) of `file`.
+fn read_edges(file: &File, start: u64, n: usize, path: &Path) -> Result<Vec<Edge>, IoError> {
+    let mut bytes = vec![0u8; n * Edge::BYTES];
+    file.read_exact_at(&mut bytes, start * Edge::BYTES as u64)
+        .map_err(|e| IoError::os(path, e))?;
+    Ok(bytes
+        .chunks_exact(Edge::BYTES)
+        .map(|c| {
+            let mut a = [0u8; Edge::BYTES];
+            a.copy_from_slice(c);
+            Edge::from_bytes(&a)
+        })
+        .collect())
 }
 
 #[cfg(test)]

@@ -33,6 +33,7 @@
 //! holds about 10-30 points on a surface, the paper's 10-20 "fit well".
 
 mod best_first;
+mod external;
 mod graph;
 mod hood;
 pub mod kernel;

@@ -1,14 +1,13 @@
 //! The memory budget: turns `--mem` (a promise about peak RSS) into tile sizes.
 
 /// Peak-RSS budget split between fixed costs and tiles in flight.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryBudget {
     pub bytes: u64,
     pub threads: usize,
 }
 
-/// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O buffers.
-const BASE_BYTES: u64 = 48 << 20;
+use super::plan::BASE_BYTES;
 
 impl MemoryBudget {
     pub fn new(bytes: u64, threads: usize) -> Self {
@@ -18,6 +17,14 @@ impl MemoryBudget {
         }
     }
 
+    /// Whether per-point state of `bytes_per_point` bytes for `points`
+    /// points may stay in memory through a global pass: at most half of
+    /// what is left beside the fixed costs. Beyond that, global passes take
+    /// their external path, whose memory does not grow with the points.
+    pub fn holds(&self, points: u64, bytes_per_point: u64) -> bool {
+        points.saturating_mul(bytes_per_point) <= self.bytes.saturating_sub(BASE_BYTES) / 2
+    }
+
     /// Largest tile (core points) such that `threads + 1` tiles in flight, each
     /// with `margin_factor` times its core points loaded at
     /// `bytes_per_point`, fit beside `reserved` bytes and the base cost.
@@ -25,7 +32,7 @@ impl MemoryBudget {
         let free = self.bytes.saturating_sub(BASE_BYTES + reserved);
         let per_tile = free / (self.threads as u64 + 1);
         let pts = per_tile as f64 / (bytes_per_point.max(1) as f64 * margin_factor.max(1.0));
-        (pts as u64).max(1024)
+        pts as u64
     }
 }
 

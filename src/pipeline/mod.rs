@@ -3,10 +3,12 @@
 //! hands them to the kernel's seam policy. It knows nothing of geometry.
 
 pub mod budget;
+pub mod plan;
 pub mod progress;
 pub mod run;
 
 pub use budget::{peak_rss_bytes, MemoryBudget};
+pub use plan::{BudgetError, KernelCost, MemoryPlan};
 pub use progress::{NoProgress, Progress};
 pub use run::{run_tiles, KernelError, RunOptions, RunStats, TileKernel};
 

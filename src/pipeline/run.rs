@@ -41,15 +41,36 @@ pub struct RunOptions {
     pub threads: usize,
     /// Tiles loaded, running or waiting in the reorder buffer at once.
     pub in_flight: usize,
+    /// The memory promise global passes plan by (`None`: unbounded, every
+    /// pass keeps its state in memory).
+    pub budget: Option<super::MemoryBudget>,
 }
 
 impl RunOptions {
+    /// `threads` workers, no memory promise.
     pub fn new(threads: usize) -> Self {
         let threads = threads.max(1);
         RunOptions {
             threads,
             in_flight: threads + 1,
+            budget: None,
         }
+    }
+}
+
+impl RunOptions {
+    /// The same options under the memory promise `budget`.
+    pub fn within(self, budget: super::MemoryBudget) -> Self {
+        RunOptions {
+            budget: Some(budget),
+            ..self
+        }
+    }
+
+    /// Whether a global pass may keep `bytes_per_point` per point in memory
+    /// (see [`super::MemoryBudget::holds`]).
+    pub fn holds(&self, points: u64, bytes_per_point: u64) -> bool {
+        self.budget.is_none_or(|b| b.holds(points, bytes_per_point))
     }
 }
 

@@ -1,4 +1,6 @@
 //! Surface reconstruction kernels. [`implicit`]: signed distance on one global
-//! lattice + marching cubes (paper 1).
+//! lattice + marching cubes (paper 1). [`delaunay`]: 3-D Delaunay
+//! triangulation and paper 4's local-flatness selection.
 
+pub mod delaunay;
 pub mod implicit;

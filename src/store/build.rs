@@ -15,8 +15,8 @@ use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOC
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
 use crate::geom::Aabb;
 use crate::io::{PointChunk, PointReader, DEFAULT_CHUNK};
-use crate::pipeline::{MemoryBudget, Progress};
-use crate::tiling::{plan_tiles, TilePlan};
+use crate::pipeline::{BudgetError, KernelCost, MemoryBudget, MemoryPlan, Progress};
+use crate::tiling::{plan_tiles, CellCount, TilePlan};
 use glam::DVec3;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -32,6 +32,9 @@ pub struct BuildOptions {
     pub tiles: TileTarget,
     /// Bytes of per-tile write buffers during the scatter pass, in total.
     pub scatter_buffer: usize,
+    /// Most occupied histogram cells held at once (36 bytes each at the
+    /// peak); a finer grid is coarsened until its histogram fits.
+    pub histogram_cells: usize,
 }
 
 /// How large tiles may be.
@@ -39,25 +42,34 @@ pub struct BuildOptions {
 pub enum TileTarget {
     /// At most this many core points per tile.
     Points(u64),
-    /// As large as the memory budget allows for a kernel needing
-    /// `bytes_per_point` per loaded point, after `reserved_per_point` bytes
-    /// per stored point kept for global passes (e.g. orientation).
+    /// As large as the memory plan for the kernel allows ([`MemoryPlan`]).
     Budget {
         budget: MemoryBudget,
-        bytes_per_point: u64,
-        reserved_per_point: u64,
+        cost: KernelCost,
     },
 }
 
 impl TileTarget {
-    pub fn points(&self, count: u64) -> u64 {
+    /// Core points per tile for a store of `count` points, or why the
+    /// budget fits no plan.
+    pub fn points(&self, count: u64) -> Result<u64, BudgetError> {
         match *self {
-            TileTarget::Points(n) => n.max(1),
-            TileTarget::Budget {
-                budget,
-                bytes_per_point,
-                reserved_per_point,
-            } => budget.tile_points(bytes_per_point, 1.5, reserved_per_point * count),
+            TileTarget::Points(n) => Ok(n.max(1)),
+            TileTarget::Budget { budget, cost } => {
+                Ok(MemoryPlan::new(budget, count, &cost)?.tile_points)
+            }
+        }
+    }
+}
+
+impl BuildOptions {
+    /// Tiles, histogram and scatter buffers sized by `budget` for a kernel
+    /// costing `cost`.
+    pub fn within(budget: MemoryBudget, cost: KernelCost) -> Self {
+        BuildOptions {
+            tiles: TileTarget::Budget { budget, cost },
+            scatter_buffer: crate::pipeline::plan::scatter_buffer(budget),
+            histogram_cells: crate::pipeline::plan::histogram_cells(budget),
         }
     }
 }
@@ -67,6 +79,7 @@ impl Default for BuildOptions {
         BuildOptions {
             tiles: TileTarget::Points(1 << 20),
             scatter_buffer: 32 << 20,
+            histogram_cells: 1 << 23,
         }
     }
 }
@@ -102,9 +115,11 @@ fn build_with_spill(
             path: reader.info().path.clone(),
         });
     }
-    let grid = grid_for(&bounds, count);
-    let cells = histogram(spill_path, &grid, count, progress)?;
-    let plan = plan_tiles(cells, grid.dims, opts.tiles.points(count));
+    // Checked once the count is known, before the input is read again.
+    let target = opts.tiles.points(count)?;
+    let fine = grid_for(&bounds, count);
+    let (cells, grid) = histogram(spill_path, &fine, count, opts.histogram_cells, progress)?;
+    let plan = plan_tiles(cells, grid.dims, target);
     let origin = bounds.center();
     let mut tiles = tile_entries(&plan);
     scatter(
@@ -226,13 +241,16 @@ fn for_each_spilled(
     Ok(())
 }
 
+/// Points per occupied cell of `grid`, or of a coarser grid if more than
+/// `cap` cells are occupied; returns the cells and the grid they are of.
 fn histogram(
     path: &Path,
     grid: &GridSpec,
     count: u64,
+    cap: usize,
     progress: &dyn Progress,
-) -> Result<Vec<([u32; 3], u64)>, StoreError> {
-    let mut cells = CellCounts::new(grid.dims);
+) -> Result<(Vec<CellCount>, GridSpec), StoreError> {
+    let mut cells = CellCounts::new(grid.dims, cap);
     progress.begin("histogram", count);
     for_each_spilled(path, count, |_, pts| {
         for p in pts {
@@ -241,9 +259,16 @@ fn histogram(
         progress.advance(pts.len() as u64);
         Ok(())
     })?;
-    let cells = cells.into_cells();
+    let (cells, level) = cells.into_cells();
     progress.end();
-    Ok(cells)
+    // Cells 2^level times as wide: `cell_of` on the coarse grid gives the
+    // fine cell shifted right by `level` (the power of two scales exactly).
+    let coarse = GridSpec {
+        min: grid.min,
+        cell: grid.cell * f64::from(1u32 << level),
+        dims: grid.dims.map(|d| d.div_ceil(1 << level)),
+    };
+    Ok((cells, coarse))
 }
 
 fn tile_entries(plan: &TilePlan) -> Vec<TileEntry> {
@@ -275,6 +300,12 @@ struct TileBuffer {
     index: Vec<u8>,
 }
 
+/// Fewest points a tile buffers before a positioned write: fewer would make
+/// the writes too short to be efficient.
+const MIN_BUFFERED: usize = 256;
+/// Bytes a buffered point takes (12 of coordinates, 8 of index).
+const BUFFERED_BYTES: usize = 20;
+
 #[allow(clippy::too_many_arguments)]
 fn scatter(
     spill_path: &Path,
@@ -291,36 +322,50 @@ fn scatter(
     let index = Column::create(&dir.join(INDEX_FILE), 8, count)?;
     let nblocks: u64 = tiles.iter().map(|t| t.count.div_ceil(BLOCK)).sum();
     Column::create(&dir.join(BLOCKS_FILE), 24, nblocks)?;
-    // Points buffered per tile before a positioned write: the whole budget
-    // split across tiles, at least a page worth.
-    let per_tile = (opts.scatter_buffer / tiles.len().max(1) / 20).clamp(256, 1 << 16);
-    let mut bufs: Vec<TileBuffer> = tiles
-        .iter()
-        .map(|t| TileBuffer {
-            next: t.start,
-            xyz: Vec::new(),
-            index: Vec::new(),
-        })
-        .collect();
-    progress.begin("scatter", count);
-    for_each_spilled(spill_path, count, |first, pts| {
-        for (i, p) in pts.iter().enumerate() {
-            let t = plan.tile_of(cell_of(grid, *p)) as usize;
-            let b = &mut bufs[t];
-            let rel = *p - origin;
-            for v in [rel.x as f32, rel.y as f32, rel.z as f32] {
-                b.xyz.extend_from_slice(&v.to_le_bytes());
+    // The buffers share `scatter_buffer` bytes whatever the tile count:
+    // with more tiles than fit at MIN_BUFFERED points each, the spill is
+    // read once per group of tiles that fits.
+    let per_pass = (opts.scatter_buffer / (MIN_BUFFERED * BUFFERED_BYTES)).max(1);
+    let per_tile = (opts.scatter_buffer / tiles.len().clamp(1, per_pass) / BUFFERED_BYTES)
+        .clamp(MIN_BUFFERED, 1 << 16);
+    let passes = tiles.len().div_ceil(per_pass);
+    progress.begin("scatter", count * passes as u64);
+    for group in tiles.chunks(per_pass).enumerate() {
+        let (g, group) = group;
+        let first_tile = g * per_pass;
+        let mut bufs: Vec<TileBuffer> = group
+            .iter()
+            .map(|t| TileBuffer {
+                next: t.start,
+                xyz: Vec::new(),
+                index: Vec::new(),
+            })
+            .collect();
+        for_each_spilled(spill_path, count, |first, pts| {
+            for (i, p) in pts.iter().enumerate() {
+                let t = plan.tile_of(cell_of(grid, *p)) as usize;
+                let Some(b) = t.checked_sub(first_tile).and_then(|k| bufs.get_mut(k)) else {
+                    continue;
+                };
+                if b.index.capacity() == 0 {
+                    b.xyz.reserve_exact(per_tile * 12);
+                    b.index.reserve_exact(per_tile * 8);
+                }
+                let rel = *p - origin;
+                for v in [rel.x as f32, rel.y as f32, rel.z as f32] {
+                    b.xyz.extend_from_slice(&v.to_le_bytes());
+                }
+                b.index.extend_from_slice(&(first + i as u64).to_le_bytes());
+                if b.index.len() >= per_tile * 8 {
+                    flush(b, &xyz, &index)?;
+                }
             }
-            b.index.extend_from_slice(&(first + i as u64).to_le_bytes());
-            if b.index.len() >= per_tile * 8 {
-                flush(b, &xyz, &index)?;
-            }
+            progress.advance(pts.len() as u64);
+            Ok(())
+        })?;
+        for b in &mut bufs {
+            flush(b, &xyz, &index)?;
         }
-        progress.advance(pts.len() as u64);
-        Ok(())
-    })?;
-    for b in &mut bufs {
-        flush(b, &xyz, &index)?;
     }
     progress.end();
     Ok(())
@@ -342,9 +387,69 @@ fn flush(b: &mut TileBuffer, xyz: &Column, index: &Column) -> Result<(), StoreEr
 /// Where a store for `input` goes when the user did not build one: a scratch
 /// directory beside the output, removed after the run.
 pub fn scratch_store_dir(output: &Path) -> PathBuf {
+    scratch_store_dir_in(&crate::io::place::directory_of(output), output)
+}
+
+/// A scratch store directory for the run writing `output`, inside `dir`.
+pub fn scratch_store_dir_in(dir: &Path, output: &Path) -> PathBuf {
     let name = output
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    output.with_file_name(format!(".{}.store-{}", name, std::process::id()))
+    dir.join(format!(".{}.store-{}", name, std::process::id()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::memory::MemoryReader;
+    use crate::pipeline::NoProgress;
+
+    fn build(pts: &[DVec3], dir: &Path, scatter_buffer: usize) -> PointStore {
+        let mut reader = MemoryReader::new("cloud", pts.to_vec(), None);
+        let opts = BuildOptions {
+            tiles: TileTarget::Points(300),
+            scatter_buffer,
+            ..BuildOptions::default()
+        };
+        build_store(&mut reader, dir, &opts, &NoProgress).unwrap()
+    }
+
+    #[test]
+    fn scatter_in_passes_gives_the_same_store() {
+        let mut rng = crate::synth::Rng::new(17);
+        let pts: Vec<DVec3> = (0..20_000)
+            .map(|_| DVec3::new(0.0, 0.0, 0.0).map(|_| rng.below(1 << 20) as f64 / 1e4))
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let one = build(&pts, &dir.path().join("one"), 32 << 20);
+        // Room for three tiles' buffers: a pass per three tiles.
+        let many = build(
+            &pts,
+            &dir.path().join("many"),
+            3 * MIN_BUFFERED * BUFFERED_BYTES,
+        );
+        assert!(one.tiles().len() > 30, "{} tiles", one.tiles().len());
+        assert_eq!(one.manifest.tiles, many.manifest.tiles);
+        for file in [XYZ_FILE, INDEX_FILE, BLOCKS_FILE] {
+            let a = std::fs::read(one.dir.join(file)).unwrap();
+            let b = std::fs::read(many.dir.join(file)).unwrap();
+            assert!(a == b, "{file} differs");
+        }
+    }
+
+    #[test]
+    fn a_budget_no_plan_fits_is_refused_with_the_minimum() {
+        let pts: Vec<DVec3> = (0..5000).map(|i| DVec3::new(i as f64, 0.5, 0.0)).collect();
+        let mut reader = MemoryReader::new("cloud", pts, None);
+        let cost = crate::normals::NormalParams::default().cost();
+        let opts = BuildOptions::within(MemoryBudget::new(1024, 2), cost);
+        let dir = tempfile::tempdir().unwrap();
+        let err = build_store(&mut reader, &dir.path().join("s"), &opts, &NoProgress).unwrap_err();
+        let needed = MemoryPlan::minimum_budget(2, 5000, &cost);
+        match err {
+            StoreError::Budget(BudgetError::TooSmall { needed: n, .. }) => assert_eq!(n, needed),
+            e => panic!("unexpected {e}"),
+        }
+    }
 }

@@ -7,6 +7,13 @@
 //! order: 137k cells on 1M points, 1.4M on 10M, a table of 8-64 MB. Sorting
 //! touches memory in sequence, and the list (12 bytes a cell) is smaller
 //! than the table was.
+//!
+//! The list is bounded: when it would hold more than `cap` cells (a volume
+//! scan, or a budget too small for the grid), the grid is coarsened by two
+//! along each axis and the list merged down, as often as needed. Occupied
+//! cells only grow as points come and only shrink as the grid coarsens, so
+//! the final grid is the finest one whose whole histogram fits: it does not
+//! depend on the order of the points.
 
 use crate::tiling::CellCount;
 
@@ -18,6 +25,10 @@ const DIGIT: u32 = 11;
 /// Counts per cell of a grid of `dims` cells.
 pub(super) struct CellCounts {
     dims: [u64; 3],
+    /// Cells are the given grid's cells shifted right by this many bits.
+    level: u32,
+    /// Most distinct cells the list may hold.
+    cap: usize,
     /// Significant bits of a key.
     bits: u32,
     /// Sorted distinct keys and their counts.
@@ -28,12 +39,15 @@ pub(super) struct CellCounts {
 }
 
 impl CellCounts {
-    pub(super) fn new(dims: [u32; 3]) -> Self {
+    /// Counts over a grid of `dims` cells, holding at most `cap` (at least
+    /// one) distinct cells.
+    pub(super) fn new(dims: [u32; 3], cap: usize) -> Self {
         let dims = dims.map(|d| u64::from(d.max(1)));
-        let space = dims[0] * dims[1] * dims[2];
         CellCounts {
             dims,
-            bits: u64::BITS - (space - 1).leading_zeros(),
+            level: 0,
+            cap: cap.max(1),
+            bits: key_bits(dims),
             keys: Vec::new(),
             counts: Vec::new(),
             batch: Vec::with_capacity(BATCH),
@@ -41,29 +55,66 @@ impl CellCounts {
         }
     }
 
-    /// Adds one point to `cell` (inside the grid).
+    /// Adds one point to `cell` (inside the grid given to [`Self::new`]).
     #[inline]
     pub(super) fn add(&mut self, cell: [u32; 3]) {
-        let [x, y, z] = cell.map(u64::from);
+        let [x, y, z] = cell.map(|c| u64::from(c >> self.level));
         self.batch.push(x + self.dims[0] * (y + self.dims[1] * z));
         if self.batch.len() == BATCH {
             self.merge_batch();
         }
     }
 
-    /// Occupied cells and their counts, in key order.
-    pub(super) fn into_cells(mut self) -> Vec<CellCount> {
+    /// Occupied cells and their counts, in key order, and how many times
+    /// the grid was coarsened (cells are `2^level` given cells wide).
+    pub(super) fn into_cells(mut self) -> (Vec<CellCount>, u32) {
         self.merge_batch();
         (self.batch, self.scratch) = (Vec::new(), Vec::new());
-        let [nx, ny, _] = self.dims;
-        self.keys
+        let cells = self
+            .keys
             .iter()
             .zip(&self.counts)
-            .map(|(&k, &n)| {
-                let cell = [k % nx, k / nx % ny, k / nx / ny].map(|c| c as u32);
-                (cell, u64::from(n))
+            .map(|(&k, &n)| (self.cell_of_key(k), u64::from(n)))
+            .collect();
+        (cells, self.level)
+    }
+
+    fn cell_of_key(&self, k: u64) -> [u32; 3] {
+        let [nx, ny, _] = self.dims;
+        [k % nx, k / nx % ny, k / nx / ny].map(|c| c as u32)
+    }
+
+    /// Halves the grid along each axis and merges the list down.
+    fn coarsen(&mut self) {
+        let old: Vec<[u32; 3]> = self.keys.iter().map(|&k| self.cell_of_key(k)).collect();
+        self.level += 1;
+        self.dims = self.dims.map(|d| d.div_ceil(2));
+        self.bits = key_bits(self.dims);
+        let [nx, ny, _] = self.dims;
+        let mut pairs: Vec<(u64, u32)> = old
+            .iter()
+            .zip(&self.counts)
+            .map(|(c, &n)| {
+                let [x, y, z] = c.map(|v| u64::from(v >> 1));
+                (x + nx * (y + ny * z), n)
             })
-            .collect()
+            .collect();
+        pairs.sort_unstable_by_key(|p| p.0);
+        self.keys.clear();
+        self.counts.clear();
+        for (k, n) in pairs {
+            match self.keys.last() {
+                Some(&last) if last == k => {
+                    if let Some(c) = self.counts.last_mut() {
+                        *c += n;
+                    }
+                }
+                _ => {
+                    self.keys.push(k);
+                    self.counts.push(n);
+                }
+            }
+        }
     }
 
     fn merge_batch(&mut self) {
@@ -95,7 +146,15 @@ impl CellCounts {
         self.keys = keys;
         self.counts = counts;
         self.batch.clear();
+        while self.keys.len() > self.cap {
+            self.coarsen();
+        }
     }
+}
+
+/// Significant bits of the keys of a grid of `dims` cells.
+fn key_bits(dims: [u64; 3]) -> u32 {
+    u64::BITS - (dims[0] * dims[1] * dims[2] - 1).leading_zeros()
 }
 
 /// Compacts sorted `keys` to their distinct values, returning how often
@@ -153,7 +212,7 @@ mod tests {
         for seed in 0..5u64 {
             let mut rng = crate::synth::Rng::new(seed);
             let dims = [0u32; 3].map(|_| 1 + rng.below(1025) as u32);
-            let mut table = CellCounts::new(dims);
+            let mut table = CellCounts::new(dims, usize::MAX);
             let mut want: BTreeMap<[u32; 3], u64> = BTreeMap::new();
             // More than a batch for some seeds, so merges are exercised.
             let n = rng.below(3 * BATCH as u64);
@@ -172,10 +231,41 @@ mod tests {
             }
             table.add(dims.map(|d| d - 1));
             *want.entry(dims.map(|d| d - 1)).or_insert(0) += 1;
-            let mut got = table.into_cells();
+            let (mut got, level) = table.into_cells();
+            assert_eq!(level, 0);
             got.sort_unstable();
             let want: Vec<CellCount> = want.into_iter().collect();
             assert_eq!(got, want, "seed {seed}, dims {dims:?}");
+        }
+    }
+
+    #[test]
+    fn a_capped_list_coarsens_to_the_finest_grid_that_fits() {
+        let mut rng = crate::synth::Rng::new(7);
+        let dims = [1000u32, 700, 300];
+        let cells: Vec<[u32; 3]> = (0..200_000)
+            .map(|_| [0, 1, 2].map(|a| rng.below(dims[a] as u64) as u32))
+            .collect();
+        for cap in [50_000usize, 5_000, 100] {
+            let mut table = CellCounts::new(dims, cap);
+            cells.iter().for_each(|c| table.add(*c));
+            let (got, level) = table.into_cells();
+            assert!(got.len() <= cap, "cap {cap}");
+            let at = |level: u32| -> BTreeMap<[u32; 3], u64> {
+                let mut m = BTreeMap::new();
+                for c in &cells {
+                    *m.entry(c.map(|v| v >> level)).or_insert(0) += 1;
+                }
+                m
+            };
+            let want: Vec<CellCount> = at(level).into_iter().collect();
+            let mut got = got;
+            got.sort_unstable();
+            assert_eq!(got, want, "cap {cap}");
+            assert!(
+                level == 0 || at(level - 1).len() > cap,
+                "cap {cap}: too coarse"
+            );
         }
     }
 

@@ -11,6 +11,7 @@ pub mod build;
 mod cells;
 pub mod column;
 pub mod export;
+mod lock;
 pub mod manifest;
 mod reorder;
 mod sort;
@@ -57,6 +58,10 @@ pub enum StoreError {
     Index(#[from] crate::spatial::IndexError),
     #[error("store has no `{column}` column (run the pass that computes it first)")]
     MissingColumn { column: String },
+    #[error(transparent)]
+    Budget(#[from] crate::pipeline::BudgetError),
+    #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
+    Busy { path: PathBuf },
 }
 
 impl StoreError {
@@ -79,10 +84,24 @@ pub struct PointStore {
     /// Removed when the run ends (see [`Workspace`]): nothing needs to
     /// reach the disk.
     scratch: bool,
+    /// The advisory lock held while the store is open.
+    _lock: lock::StoreLock,
 }
 
 impl PointStore {
+    /// Opens the store at `dir` for a run that may add or rewrite columns:
+    /// no other process may have it open meanwhile ([`StoreError::Busy`]).
     pub fn open(dir: &Path) -> Result<Self, StoreError> {
+        Self::open_locked(dir, lock::StoreLock::exclusive(dir)?)
+    }
+
+    /// Opens the store at `dir` to read it only: other readers may have it
+    /// open, a run that writes may not.
+    pub fn open_shared(dir: &Path) -> Result<Self, StoreError> {
+        Self::open_locked(dir, lock::StoreLock::shared(dir)?)
+    }
+
+    fn open_locked(dir: &Path, lock: lock::StoreLock) -> Result<Self, StoreError> {
         let mpath = dir.join(manifest::MANIFEST_FILE);
         let text = std::fs::read_to_string(&mpath).map_err(|e| StoreError::os(&mpath, e))?;
         let manifest: Manifest = serde_json::from_str(&text).map_err(|e| StoreError::Corrupt {
@@ -106,6 +125,7 @@ impl PointStore {
             dir: dir.to_path_buf(),
             manifest,
             scratch: false,
+            _lock: lock,
         };
         store.validate()?;
         Ok(store)

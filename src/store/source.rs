@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug)]
 pub struct Workspace {
     pub store: PointStore,
-    scratch: Option<PathBuf>,
+    scratch: Option<(PathBuf, crate::io::cleanup::Registered)>,
 }
 
 impl Workspace {
@@ -22,7 +22,7 @@ impl Workspace {
 
 impl Drop for Workspace {
     fn drop(&mut self) {
-        if let Some(dir) = &self.scratch {
+        if let Some((dir, _)) = &self.scratch {
             let _ = std::fs::remove_dir_all(dir);
         }
     }
@@ -48,14 +48,16 @@ pub fn open_input(
         });
     }
     let mut reader = open_reader(input, policy)?;
-    // Own the directory before building, so a failed build is cleaned up too.
+    // Own the directory before building, so a failed or interrupted build
+    // is cleaned up too.
+    let registered = crate::io::cleanup::register(scratch);
     let guard = ScratchGuard(scratch.to_path_buf());
     let mut store = build_store(reader.as_mut(), scratch, opts, progress)?;
     store.mark_scratch();
     std::mem::forget(guard);
     Ok(Workspace {
         store,
-        scratch: Some(scratch.to_path_buf()),
+        scratch: Some((scratch.to_path_buf(), registered)),
     })
 }
 

@@ -55,9 +55,19 @@ pub fn normals_of(
     threads: usize,
     params: &NormalParams,
 ) -> NormalsOut {
-    with_store(points, tile_points, threads, |store, dir| {
-        let report =
-            compute_normals(store, params, RunOptions::new(threads), &NoProgress).expect("normals");
+    normals_with(points, tile_points, RunOptions::new(threads), params)
+}
+
+/// [`normals_of`] with the run options given (e.g. a memory promise that
+/// sends global passes down their external path).
+pub fn normals_with(
+    points: &[DVec3],
+    tile_points: u64,
+    opts: RunOptions,
+    params: &NormalParams,
+) -> NormalsOut {
+    with_store(points, tile_points, opts.threads, |store, dir| {
+        let report = compute_normals(store, params, opts, &NoProgress).expect("normals");
         let out = dir.join("out.ply");
         let spec = WriterSpec {
             with_normals: true,

@@ -17,12 +17,15 @@
 //!
 //! Memory: the union-find holds 5 bytes and a bit per point, as the
 //! spanning-tree pass does; the forests (about one edge per point) stay on
-//! disk. Like that pass, the union-find is indexed by store index.
+//! disk. Like that pass, the union-find is indexed by store index. When it
+//! does not fit the memory promise, [`super::external`] gives the same
+//! flips from the contracted forests.
 
+use super::external::orient_external;
 use super::kernel::SourcesKernel;
 use super::propagate::faces_away;
 use super::{Extreme, Extremes, Neighbourhood, Order, SourceParams, SourcesError};
-use crate::normals::orient::rewrite_signs;
+use crate::normals::orient::{rewrite_signs, BYTES_PER_POINT};
 use crate::normals::runs::EdgeRuns;
 use crate::normals::unionfind::ParityUnionFind;
 use crate::normals::{initial_margin, NormalsError, FLAG_DEGENERATE};
@@ -87,14 +90,22 @@ pub fn orient_store(
         margin: tile_margin(params, spacing),
     };
     let mut runs = EdgeRuns::create(&store.dir.join(FOREST_FILE))?;
-    run_tiles(store, &kernel, opts, progress, |_, forest| {
-        runs.push_run(&forest).map_err(Into::into)
+    run_tiles(store, &kernel, opts, progress, |t, forest| {
+        let tile = &store.tiles()[t];
+        let core = tile.start..tile.start + tile.count;
+        runs.push_tile_run(&forest, core).map_err(Into::into)
     })?;
     let mut stats = SourceStats {
         sources: sources.len(),
         forest_edges: runs.edges(),
         ..SourceStats::default()
     };
+    if !opts.holds(store.len() + 1, BYTES_PER_POINT) {
+        let dir = params.first_direction();
+        (stats.components, stats.unoriented) =
+            orient_external(store, runs, &sources, dir, normals, flags, progress)?;
+        return Ok(stats);
+    }
     let root = store.len() as u32;
     let mut uf = ParityUnionFind::new(store.len() as usize + 1);
     for &(e, flip) in &sources {

@@ -10,7 +10,7 @@ use super::lattice::{Lattice, LatticeError};
 use super::stitch::Stitcher;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport};
 use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
-use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::{PointStore, StoreError, NORMAL_FILE};
 use crate::tiling::load::core_box;
 use glam::DVec3;
@@ -40,6 +40,29 @@ impl ImplicitParams {
             Ok(share)
         } else {
             Err(ReconError::BadShare(share))
+        }
+    }
+}
+
+/// Mesh vertices per input point allowed for when planning the small-piece
+/// filter's memory: 0.1 on the 1M dragon and 0.14 on 10M at the default
+/// cell (rho + delta), more as the cell shrinks relative to the spacing.
+const VERTICES_PER_POINT: f64 = 0.2;
+
+impl ImplicitParams {
+    /// What a reconstruction costs, for the memory plan: the normals run's
+    /// cost, plus the small-piece filter's sets when pieces are dropped.
+    pub fn cost(&self) -> KernelCost {
+        let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
+        KernelCost {
+            resident_per_point: if pieces {
+                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX as f64
+            } else {
+                0.0
+            },
+            // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
+            output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
+            ..self.normals.cost()
         }
     }
 }

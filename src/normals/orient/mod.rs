@@ -22,6 +22,10 @@
 //! total order over input ids), so neither the thread count nor the tiling
 //! (which moves store indices, labels and roots) can change a result.
 
+mod external;
+
+pub use external::orient_external;
+
 use super::components::Components;
 use super::runs::EdgeRuns;
 use super::unionfind::ParityUnionFind;
@@ -31,6 +35,10 @@ use crate::store::{Column, PointStore, TileEntry};
 use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::HashMap;
+
+/// Memory per point of the in-memory pass: the union-find's parent (4),
+/// rank (1) and parity bit, rounded up.
+pub const BYTES_PER_POINT: u64 = 6;
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct OrientStats {
@@ -93,11 +101,14 @@ fn components(
     flags: &Column,
     progress: &dyn Progress,
 ) -> Result<Vec<Component>, NormalsError> {
-    let partials: Vec<Vec<(u32, Component)>> = store
+    let partials: Vec<Vec<(u64, Component)>> = store
         .tiles()
         .par_iter()
         .map(|t| {
-            let part = tile_components(store, t, comps, normals, flags);
+            let part = tile_components(store, t, normals, flags, |i| {
+                let (label, parity) = comps.get(i as u32);
+                (u64::from(label), parity)
+            });
             progress.advance(t.count);
             part
         })
@@ -109,29 +120,31 @@ fn components(
     Ok(facts)
 }
 
-/// One tile's share of the component facts, one entry per label it meets.
+/// One tile's share of the component facts, one entry per label it meets,
+/// in order of first appearance; `label_of(store index)` gives a point's
+/// component label and parity.
 fn tile_components(
     store: &PointStore,
     t: &TileEntry,
-    comps: &Components,
     normals: &Column,
     flags: &Column,
-) -> Result<Vec<(u32, Component)>, NormalsError> {
+    label_of: impl Fn(u64) -> (u64, bool),
+) -> Result<Vec<(u64, Component)>, NormalsError> {
     let (mut xyz, mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     store.read_coords(t.start, t.count, &mut xyz)?;
     store.read_indices(t.start, t.count, &mut ids)?;
     normals.read_f32(t.start, t.count, &mut nrm)?;
     flags.read_u8(t.start, t.count, &mut flg)?;
-    let mut part: Vec<(u32, Component)> = Vec::new();
+    let mut part: Vec<(u64, Component)> = Vec::new();
     // Neighbouring points nearly always share a component: the map is
     // consulted only when the label changes.
-    let mut slot_of: HashMap<u32, usize> = HashMap::new();
-    let mut last: Option<(u32, usize)> = None;
+    let mut slot_of: HashMap<u64, usize> = HashMap::new();
+    let mut last: Option<(u64, usize)> = None;
     for (i, &id) in ids.iter().enumerate() {
         if flg[i] & FLAG_DEGENERATE != 0 {
             continue;
         }
-        let (label, parity) = comps.get((t.start + i as u64) as u32);
+        let (label, parity) = label_of(t.start + i as u64);
         let slot = match last {
             Some((l, s)) if l == label => s,
             _ => *slot_of.entry(label).or_insert_with(|| {

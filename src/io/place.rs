@@ -1,0 +1,123 @@
+//! Where outputs and scratch files go: checked before any input is read, so
+//! a missing or read-only directory, or a volume too small for the run, is
+//! reported as what it is (and where), not as a failure to read the input.
+
+use super::IoError;
+use std::path::{Path, PathBuf};
+
+/// The directory a file path lands in (`.` for a bare name).
+pub fn directory_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Checks that `dir` exists, is a directory, and takes a new file; `what`
+/// names the role in the error (for example "output" or "scratch").
+pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), IoError> {
+    let fail = |reason: String| IoError::Unwritable {
+        path: dir.to_path_buf(),
+        reason: format!("{what} directory {reason}"),
+    };
+    match std::fs::metadata(dir) {
+        Err(e) => return Err(fail(format!("cannot be used: {e}"))),
+        Ok(m) if !m.is_dir() => return Err(fail("is not a directory".into())),
+        Ok(_) => {}
+    }
+    let probe = dir.join(format!(".scanmesh-probe-{}", std::process::id()));
+    match std::fs::File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(fail(format!("is not writable: {e}"))),
+    }
+}
+
+/// Checks that `output` can be created: its directory is writable and the
+/// path itself is not a directory.
+pub fn check_output(output: &Path) -> Result<(), IoError> {
+    if output.is_dir() {
+        return Err(IoError::Unwritable {
+            path: output.to_path_buf(),
+            reason: "output is a directory".into(),
+        });
+    }
+    check_writable_dir(&directory_of(output), "output")
+}
+
+/// Bytes available to this user on the file system holding `dir`.
+pub fn available_bytes(dir: &Path) -> Option<u64> {
+    let s = rustix::fs::statvfs(dir).ok()?;
+    Some(s.f_bavail.saturating_mul(s.f_frsize))
+}
+
+/// Device of the file system holding `dir` (to tell whether two
+/// directories share one).
+fn device(dir: &Path) -> Option<u64> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(dir).ok().map(|m| m.dev())
+}
+
+/// Checks the free space for `scratch` bytes in `scratch_dir` and `output`
+/// bytes in `output_dir` (summed when both share a file system).
+pub fn check_space(
+    scratch_dir: &Path,
+    scratch: u64,
+    output_dir: &Path,
+    output: u64,
+) -> Result<(), IoError> {
+    let same = device(scratch_dir).is_some() && device(scratch_dir) == device(output_dir);
+    let needs: Vec<(&Path, u64, &str)> = if same {
+        vec![(scratch_dir, scratch + output, "scratch files and output")]
+    } else {
+        vec![
+            (scratch_dir, scratch, "scratch files"),
+            (output_dir, output, "output"),
+        ]
+    };
+    for (dir, bytes, what) in needs {
+        if let Some(free) = available_bytes(dir) {
+            if free < bytes {
+                return Err(IoError::Unwritable {
+                    path: dir.to_path_buf(),
+                    reason: format!(
+                        "the {what} need about {} here but only {} is free (--scratch-dir puts the scratch files elsewhere)",
+                        crate::units::human_bytes(bytes),
+                        crate::units::human_bytes(free)
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_read_only_and_directory_outputs_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_output(&dir.path().join("out.ply")).is_ok());
+        let missing = dir.path().join("no/such/out.ply");
+        let e = check_output(&missing).unwrap_err().to_string();
+        assert!(
+            e.contains("no/such") && e.contains("output directory"),
+            "{e}"
+        );
+        assert!(!dir.path().join("no").exists(), "a directory was created");
+        assert!(check_output(dir.path()).is_err());
+        assert!(check_output(Path::new("/proc/out.ply")).is_err());
+    }
+
+    #[test]
+    fn space_is_checked_against_the_volume() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_space(dir.path(), 1, dir.path(), 1).is_ok());
+        let e = check_space(dir.path(), u64::MAX / 4, dir.path(), 0).unwrap_err();
+        assert!(e.to_string().contains("free"), "{e}");
+    }
+}

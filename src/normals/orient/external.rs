@@ -1,0 +1,306 @@
+//! Orientation by the spanning tree when its per-point union-find does not
+//! fit the memory budget: the same flips as [`super::orient_by_forest`], from
+//! the labels [`ForestLabels`] leaves on disk.
+//!
+//! The paper's root and island rules need, per component, its size and its
+//! highest point. A component labelled by a store index lies in one tile,
+//! so its facts are complete once that tile is read and nothing about it is
+//! kept: the passes below recompute them per tile. Only node components
+//! (which may span tiles) keep their facts in memory, one entry each. The
+//! island rule (orient the component of the highest point, then the others
+//! by size while at least 1/1000 of the points are left) needs only the
+//! census of sizes, and, when the cut falls inside one size class, which
+//! members of that class come first (by smallest top id).
+
+use super::{rewrite_signs, tile_components, Component, OrientStats};
+use crate::normals::labels::ForestLabels;
+use crate::normals::runs::EdgeRuns;
+use crate::normals::NormalsError;
+use crate::pipeline::Progress;
+use crate::store::{Column, PointStore, TileEntry};
+use rayon::prelude::*;
+use std::cmp::Reverse;
+use std::collections::{BTreeMap, BinaryHeap};
+
+/// Orients the store's normals by the merged tile forests in `runs`, with
+/// memory that does not grow with the points.
+pub fn orient_external(
+    store: &PointStore,
+    mut runs: EdgeRuns,
+    normals: &Column,
+    flags: &Column,
+    progress: &dyn Progress,
+) -> Result<OrientStats, NormalsError> {
+    let labels = ForestLabels::solve(store, &mut runs, &[], progress)?;
+    drop(runs);
+    let facts = TileFacts {
+        store,
+        labels: &labels,
+        normals,
+        flags,
+    };
+    progress.begin("orient: components", store.len());
+    let census = Census::take(&facts, progress)?;
+    progress.end();
+    let cut = census.cut(&facts)?;
+    progress.begin("orient: write", store.len());
+    let counts: Vec<u64> = store
+        .tiles()
+        .par_iter()
+        .map(|t| {
+            let local = facts.of(t)?;
+            let mut read = Vec::new();
+            labels.read_tile(t, &mut read)?;
+            let n = rewrite_signs(t, normals, flags, |i| {
+                let (label, parity) = split(read[(i - t.start) as usize]);
+                let c = match labels.node_component(label) {
+                    Some(k) => census.spanning[k],
+                    None => find(&local, label),
+                };
+                cut.orients(label, &c).then_some(parity ^ c.sign)
+            });
+            progress.advance(t.count);
+            n
+        })
+        .collect::<Result<_, _>>()?;
+    progress.end();
+    Ok(OrientStats {
+        components: census.components,
+        oriented_components: cut.oriented,
+        unoriented: counts.iter().sum(),
+    })
+}
+
+/// A stored label word: the label and the parity (bit 63).
+fn split(word: u64) -> (u64, bool) {
+    (word & !(1 << 63), word >> 63 == 1)
+}
+
+/// What the component facts of a tile are computed from.
+struct TileFacts<'a> {
+    store: &'a PointStore,
+    labels: &'a ForestLabels,
+    normals: &'a Column,
+    flags: &'a Column,
+}
+
+impl TileFacts<'_> {
+    /// Tile `t`'s component facts, by label, sorted by label.
+    fn of(&self, t: &TileEntry) -> Result<Vec<(u64, Component)>, NormalsError> {
+        let mut read = Vec::new();
+        self.labels.read_tile(t, &mut read)?;
+        let mut part = tile_components(self.store, t, self.normals, self.flags, |i| {
+            split(read[(i - t.start) as usize])
+        })?;
+        part.sort_unstable_by_key(|p| p.0);
+        Ok(part)
+    }
+}
+
+fn find(part: &[(u64, Component)], label: u64) -> Component {
+    part.binary_search_by_key(&label, |p| p.0)
+        .map_or(Component::default(), |i| part[i].1)
+}
+
+/// Sizes of every component, the facts of the node components, and the
+/// component of the highest point.
+struct Census {
+    /// Components by size (the first one excluded once known).
+    sizes: BTreeMap<u32, u64>,
+    spanning: Vec<Component>,
+    /// Label and facts of the component of the highest point.
+    first: Option<(u64, Component)>,
+    total: u64,
+    components: usize,
+}
+
+impl Census {
+    fn take(facts: &TileFacts, progress: &dyn Progress) -> Result<Self, NormalsError> {
+        let (store, labels) = (facts.store, facts.labels);
+        let mut census = Census {
+            sizes: BTreeMap::new(),
+            spanning: vec![Component::default(); labels.node_components],
+            first: None,
+            total: 0,
+            components: 0,
+        };
+        // Tiles in parallel, folded in tile order: a component's facts are
+        // order-free, so the fold order only has to be fixed, not special.
+        let per_tile: Vec<Vec<(u64, Component)>> = store
+            .tiles()
+            .par_iter()
+            .map(|t| {
+                let part = facts.of(t);
+                progress.advance(t.count);
+                part
+            })
+            .collect::<Result<_, _>>()?;
+        for (label, c) in per_tile.into_iter().flatten() {
+            match labels.node_component(label) {
+                Some(k) => census.spanning[k].absorb(&c),
+                None => census.add(label, c),
+            }
+        }
+        let spanning = std::mem::take(&mut census.spanning);
+        for (k, c) in spanning.iter().enumerate() {
+            census.add(store.len() + k as u64, *c);
+        }
+        census.spanning = spanning;
+        if let Some((_, c)) = census.first {
+            if let Some(n) = census.sizes.get_mut(&c.size) {
+                *n -= 1;
+            }
+        }
+        Ok(census)
+    }
+
+    fn add(&mut self, label: u64, c: Component) {
+        if c.size == 0 {
+            return;
+        }
+        *self.sizes.entry(c.size).or_default() += 1;
+        self.total += u64::from(c.size);
+        self.components += 1;
+        let higher = |o: &Component| (c.top_z, Reverse(c.top_id)) > (o.top_z, Reverse(o.top_id));
+        if self.first.as_ref().is_none_or(|(_, f)| higher(f)) {
+            self.first = Some((label, c));
+        }
+    }
+
+    /// Where the island rule stops (see the module doc).
+    fn cut(&self, facts: &TileFacts) -> Result<Cut, NormalsError> {
+        let Some((first, f)) = self.first else {
+            return Ok(Cut::none());
+        };
+        let mut left = self.total - u64::from(f.size);
+        let mut oriented = 1;
+        for (&size, &count) in self.sizes.iter().rev() {
+            // Members of this class taken while left * 1000 >= total.
+            let room = (left * 1000).saturating_sub(self.total) / 1000;
+            let taken = if left * 1000 >= self.total {
+                (room / u64::from(size) + 1).min(count)
+            } else {
+                0
+            };
+            oriented += taken;
+            left -= taken * u64::from(size);
+            if taken < count {
+                let last_id = match taken {
+                    0 => None,
+                    _ => Some(self.kth_smallest_top(facts, size, first, taken)?),
+                };
+                return Ok(Cut {
+                    first,
+                    size,
+                    last_id,
+                    oriented: oriented as usize,
+                });
+            }
+        }
+        Ok(Cut {
+            first,
+            size: 0,
+            last_id: None,
+            oriented: oriented as usize,
+        })
+    }
+
+    /// The `k`-th smallest top id among the components of `size` other
+    /// than `first`, holding only the smaller side of the split in memory.
+    fn kth_smallest_top(
+        &self,
+        facts: &TileFacts,
+        size: u32,
+        first: u64,
+        k: u64,
+    ) -> Result<u32, NormalsError> {
+        let store = facts.store;
+        let count = self.sizes.get(&size).copied().unwrap_or(0);
+        let mut keep = OrderStatistic::new(k, count);
+        let spanning = self.spanning.iter().enumerate();
+        for (label, c) in spanning.map(|(i, c)| (store.len() + i as u64, *c)) {
+            if c.size == size && label != first {
+                keep.offer(c.top_id);
+            }
+        }
+        for t in store.tiles() {
+            for (label, c) in facts.of(t)? {
+                if label < store.len() && c.size == size && label != first {
+                    keep.offer(c.top_id);
+                }
+            }
+        }
+        Ok(keep.value())
+    }
+}
+
+/// The `k`-th smallest of `count` values offered one by one, holding only
+/// the smaller side: the `k` smallest (the answer is their largest), or the
+/// `count - k + 1` largest (the answer is their smallest).
+struct OrderStatistic {
+    from_below: bool,
+    keep: usize,
+    below: BinaryHeap<u32>,
+    above: BinaryHeap<Reverse<u32>>,
+}
+
+impl OrderStatistic {
+    fn new(k: u64, count: u64) -> Self {
+        let from_below = k <= count - k;
+        OrderStatistic {
+            from_below,
+            keep: if from_below { k } else { count - k + 1 } as usize,
+            below: BinaryHeap::new(),
+            above: BinaryHeap::new(),
+        }
+    }
+
+    fn offer(&mut self, v: u32) {
+        if self.from_below {
+            self.below.push(v);
+            if self.below.len() > self.keep {
+                self.below.pop();
+            }
+        } else {
+            self.above.push(Reverse(v));
+            if self.above.len() > self.keep {
+                self.above.pop();
+            }
+        }
+    }
+
+    fn value(&self) -> u32 {
+        if self.from_below {
+            self.below.peek().copied().unwrap_or(u32::MAX)
+        } else {
+            self.above.peek().map_or(u32::MAX, |r| r.0)
+        }
+    }
+}
+
+/// The island rule's verdict: the first component, all components larger
+/// than `size`, and those of `size` whose top id is at most `last_id`.
+#[derive(Clone, Copy, Debug)]
+struct Cut {
+    first: u64,
+    size: u32,
+    last_id: Option<u32>,
+    oriented: usize,
+}
+
+impl Cut {
+    fn none() -> Self {
+        Cut {
+            first: u64::MAX,
+            size: u32::MAX,
+            last_id: None,
+            oriented: 0,
+        }
+    }
+
+    fn orients(&self, label: u64, c: &Component) -> bool {
+        label == self.first
+            || c.size > self.size
+            || (c.size == self.size && self.last_id.is_some_and(|id| c.top_id <= id))
+    }
+}

@@ -1,0 +1,292 @@
+//! The memory plan of a run: every size the run uses (tile target, histogram
+//! cells, scatter buffers, export window) derived from `--mem`, the thread
+//! count, the point count and what the kernel declares it costs, and checked
+//! against the promise before the work starts. A budget no plan fits is an
+//! error that names the smallest one that does.
+//!
+//! The model (ARCHITECTURE.md, "Memory") per stage, beside the fixed costs:
+//! - histogram: at most `histogram_cells` occupied cells, 36 bytes each at
+//!   the peak (the grid coarsens to fit, see `store::cells`);
+//! - scatter: `scatter_buffer` bytes of per-tile buffers in all;
+//! - tiles: `threads + 1` tiles in flight, each `tile_points` core points
+//!   and up to half as many again in its margin, at the kernel's bytes per
+//!   loaded point;
+//! - global pass: the kernel's per-point state when it fits half the
+//!   budget; otherwise the contracted graph of the external pass, whose
+//!   nodes are the tiles' boundary points: about [`NODES_PER_SQRT_TILE`] /
+//!   sqrt(tile points) of all points on a scanned surface, at
+//!   [`BYTES_PER_NODE`] each;
+//! - export: a window of `window_points` input-order records.
+
+use super::{MemoryBudget, RunOptions};
+
+/// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O
+/// buffers (the read chunk, the merge buffers of the edge runs).
+pub const BASE_BYTES: u64 = 48 << 20;
+/// Fewest core points a tile may hold: below this the margins (a few
+/// neighbourhood radii on every side) outweigh the core.
+pub const MIN_TILE_POINTS: u64 = 8192;
+/// Loaded points per core point the tile sizes allow for (the margin).
+pub const MARGIN_FACTOR: f64 = 1.5;
+/// Boundary nodes of the external orientation per point, times the square
+/// root of the tile size: 10.4 measured on the 10M-point noisy dragon with
+/// tiles of 17k, 77k and 312k points (k = 12); 13 allows for rougher scans.
+pub const NODES_PER_SQRT_TILE: f64 = 13.0;
+/// Bytes per node of the external orientation's global solve (the rank
+/// table, the union-find, the accepted-edge bits).
+pub const BYTES_PER_NODE: u64 = 10;
+/// Peak bytes per occupied histogram cell.
+pub const BYTES_PER_CELL: u64 = 36;
+
+/// What a tile kernel and the passes around it cost, as it declares.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KernelCost {
+    /// Peak bytes per loaded point while a tile runs.
+    pub bytes_per_point: u64,
+    /// Bytes per point a global pass keeps in memory when they fit half the
+    /// budget (0: none); otherwise the pass goes external.
+    pub global_per_point: u64,
+    /// Whether the external global pass contracts tile boundaries (its
+    /// nodes then count, see the module doc).
+    pub contracts_boundaries: bool,
+    /// Bytes per point of state that must stay in memory beside the tiles
+    /// of a later pass, with no external path (the small-piece filter's
+    /// sets beside the marching-cubes tiles); never at once with the
+    /// global pass's state.
+    pub resident_per_point: f64,
+    /// Bytes per point of an output window (0: no input-order output).
+    pub window_bytes_per_point: u64,
+    /// Scratch disk per point at the run's peak (store, columns, runs).
+    pub scratch_per_point: u64,
+    /// Output file bytes per input point, roughly.
+    pub output_per_point: u64,
+}
+
+/// Why no plan fits.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
+pub enum BudgetError {
+    #[error(
+        "--mem {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
+        budget = crate::units::human_bytes(*.budget),
+        needed = crate::units::human_bytes(*.needed),
+        for_points = if *.points > 0 { format!(" for {} points", .points) } else { String::new() }
+    )]
+    TooSmall {
+        budget: u64,
+        points: u64,
+        needed: u64,
+        reason: &'static str,
+    },
+}
+
+/// Every size a run uses, fitted to the promise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemoryPlan {
+    pub budget: MemoryBudget,
+    pub points: u64,
+    /// Core points per tile the planner aims for.
+    pub tile_points: u64,
+    /// Whether the global pass keeps its per-point state in memory.
+    pub global_in_memory: bool,
+    /// Bytes kept beside the tiles for state that grows with the points.
+    pub reserved: u64,
+    pub histogram_cells: usize,
+    pub scatter_buffer: usize,
+    pub window_points: u64,
+    /// Estimated nodes of the external global pass (0 in memory).
+    pub nodes: u64,
+}
+
+impl MemoryPlan {
+    /// The plan for `points` points under `budget`, or why none fits.
+    pub fn new(budget: MemoryBudget, points: u64, cost: &KernelCost) -> Result<Self, BudgetError> {
+        Self::assess(budget, points, cost).map_err(|reason| BudgetError::TooSmall {
+            budget: budget.bytes,
+            points,
+            needed: Self::minimum_budget(budget.threads, points, cost),
+            reason,
+        })
+    }
+
+    fn assess(budget: MemoryBudget, points: u64, cost: &KernelCost) -> Result<Self, &'static str> {
+        let free = budget.bytes.saturating_sub(BASE_BYTES);
+        let global_in_memory = budget.holds(points, cost.global_per_point);
+        let resident = (points as f64 * cost.resident_per_point) as u64;
+        if resident > free / 2 {
+            return Err("the per-vertex sets of the small-piece filter");
+        }
+        // The global pass follows the kernel pass that resident state
+        // belongs to (or precedes it): they never hold memory at once.
+        let global = if global_in_memory {
+            points * cost.global_per_point
+        } else {
+            0
+        };
+        let reserved = resident.max(global);
+        let tile_points = budget.tile_points(cost.bytes_per_point, MARGIN_FACTOR, reserved);
+        if free == 0 || tile_points < MIN_TILE_POINTS {
+            return Err("tiles of at least 8192 points beside the fixed costs");
+        }
+        let nodes = if global_in_memory || !cost.contracts_boundaries {
+            0
+        } else {
+            external_nodes(points, tile_points)
+        };
+        if nodes * BYTES_PER_NODE > free {
+            return Err("the orientation's contracted tile boundaries");
+        }
+        Ok(MemoryPlan {
+            budget,
+            points,
+            tile_points,
+            global_in_memory,
+            reserved,
+            histogram_cells: histogram_cells(budget),
+            scatter_buffer: scatter_buffer(budget),
+            window_points: (free / 4 / cost.window_bytes_per_point.max(1)).max(1 << 12),
+            nodes,
+        })
+    }
+
+    /// The smallest budget (to 1 MiB) for which [`MemoryPlan::new`] succeeds.
+    pub fn minimum_budget(threads: usize, points: u64, cost: &KernelCost) -> u64 {
+        let fits =
+            |mib: u64| Self::assess(MemoryBudget::new(mib << 20, threads), points, cost).is_ok();
+        let (mut lo, mut hi) = (BASE_BYTES >> 20, 1u64 << 24);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if fits(mid) {
+                hi = mid;
+            } else {
+                lo = mid + 1;
+            }
+        }
+        lo << 20
+    }
+
+    /// Run options for a store whose largest tile holds `largest` core
+    /// points: all workers when `threads + 1` such tiles fit the plan,
+    /// else fewer tiles in flight (a store built under a larger budget),
+    /// down to one; none fitting is an error naming the budget needed.
+    pub fn run_options(&self, cost: &KernelCost, largest: u64) -> Result<RunOptions, BudgetError> {
+        let opts = RunOptions::new(self.budget.threads).within(self.budget);
+        let reserved = self.reserved;
+        let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
+        let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
+        let fit = (free / per_tile.max(1)) as usize;
+        if fit == 0 {
+            return Err(BudgetError::TooSmall {
+                budget: self.budget.bytes,
+                points: self.points,
+                needed: (BASE_BYTES + reserved + per_tile).div_ceil(1 << 20) << 20,
+                reason: "the store's largest tile (rebuild it with `scanmesh tile --mem`)",
+            });
+        }
+        Ok(RunOptions {
+            in_flight: opts.in_flight.min(fit),
+            ..opts
+        })
+    }
+
+    /// Estimated peak of each stage beside the fixed costs, for `info --plan`.
+    pub fn stages(&self, cost: &KernelCost) -> Vec<(&'static str, u64)> {
+        let tiles = (self.budget.threads as u64 + 1) as f64
+            * self.tile_points as f64
+            * MARGIN_FACTOR
+            * cost.bytes_per_point as f64;
+        let global = if self.global_in_memory {
+            self.reserved
+        } else {
+            self.nodes * BYTES_PER_NODE
+        };
+        vec![
+            ("histogram", self.histogram_cells as u64 * BYTES_PER_CELL),
+            ("scatter", self.scatter_buffer as u64),
+            ("tiles", tiles as u64),
+            ("global pass", global),
+            (
+                "export window",
+                self.window_points * cost.window_bytes_per_point,
+            ),
+        ]
+    }
+}
+
+/// Estimated nodes of the external pass for tiles of `tile_points`.
+fn external_nodes(points: u64, tile_points: u64) -> u64 {
+    let share = (NODES_PER_SQRT_TILE / (tile_points.max(1) as f64).sqrt()).min(1.0);
+    (points as f64 * share) as u64
+}
+
+/// Histogram cells the budget holds: half of what is free.
+pub fn histogram_cells(budget: MemoryBudget) -> usize {
+    (budget.bytes.saturating_sub(BASE_BYTES) / 2 / BYTES_PER_CELL).max(1024) as usize
+}
+
+/// Scatter buffers: an eighth of the budget, at most 64 MiB (larger ones
+/// buy nothing: the writes are already long).
+pub fn scatter_buffer(budget: MemoryBudget) -> usize {
+    (budget.bytes / 8).min(64 << 20) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn normals() -> KernelCost {
+        KernelCost {
+            bytes_per_point: 360,
+            global_per_point: 6,
+            contracts_boundaries: true,
+            resident_per_point: 0.0,
+            window_bytes_per_point: 48,
+            scratch_per_point: 94,
+            output_per_point: 37,
+        }
+    }
+
+    #[test]
+    fn the_minimum_budget_is_the_smallest_that_plans() {
+        for points in [1_000u64, 10_000_000, 100_000_000, 1_000_000_000] {
+            for threads in [1, 2, 8] {
+                let min = MemoryPlan::minimum_budget(threads, points, &normals());
+                let ok = MemoryPlan::new(MemoryBudget::new(min, threads), points, &normals());
+                assert!(ok.is_ok(), "{points} points, {threads} threads: {min}");
+                let below = MemoryBudget::new(min - (1 << 20), threads);
+                let err = MemoryPlan::new(below, points, &normals());
+                assert!(
+                    matches!(err, Err(BudgetError::TooSmall { needed, .. }) if needed == min),
+                    "{points} points, {threads} threads"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn oversized_tiles_run_fewer_at_a_time() {
+        let budget = MemoryBudget::new(256 << 20, 2);
+        let plan = MemoryPlan::new(budget, 100_000_000, &normals()).unwrap();
+        let ok = plan.run_options(&normals(), plan.tile_points).unwrap();
+        assert_eq!(ok.in_flight, 3);
+        let one = plan
+            .run_options(&normals(), plan.tile_points * 5 / 2)
+            .unwrap();
+        assert_eq!(one.in_flight, 1);
+        assert!(plan.run_options(&normals(), plan.tile_points * 4).is_err());
+    }
+
+    #[test]
+    fn tiles_grow_with_the_budget_not_with_the_points() {
+        let at = |mib: u64, points: u64| {
+            MemoryPlan::new(MemoryBudget::new(mib << 20, 2), points, &normals())
+                .map(|p| p.tile_points)
+                .unwrap_or(0)
+        };
+        assert_eq!(at(512, 100_000_000), at(512, 1_000_000_000));
+        assert!(at(512, 1_000_000_000) > 0);
+        assert!(at(512, 100_000_000) > at(256, 100_000_000));
+        // In memory at 10M (its union-find reserved), external at 100M.
+        assert!(at(256, 10_000_000) < at(256, 100_000_000));
+    }
+}

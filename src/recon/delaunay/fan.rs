@@ -1,0 +1,295 @@
+//! Paper 4 section 2.2, algorithm 1 ("incremental learning"): the fan of
+//! nearly flat small triangles around each sample, read off the 3-D
+//! Delaunay triangulation.
+//!
+//! For sample `i`: (1) `x`, its nearest Delaunay neighbour (nearest-edge
+//! rule); (2) among the Delaunay triangles on edge `ix`, `ixy` with the
+//! largest angle opposite `ix` (largest-angle rule); (3) among the triangles
+//! on `iy` at an obtuse dihedral angle to `ixy` (obtuse-dihedral rule), `iyz`
+//! with the largest angle opposite `iy`; if its circumradius is below the
+//! hole radius it is selected and the walk turns on, otherwise a boundary
+//! was met (boundary rule) and the walk goes the other way from `ixy`;
+//! (4) until a selected triangle comes round again (`i` is interior) or a
+//! second boundary is met (`i` is a boundary point). Inheritance first: on
+//! an edge that already has selected triangles, choose only among them.
+//!
+//! Deviations, for results that do not depend on the order samples are
+//! visited (so tiles and threads agree exactly):
+//! - Inheritance reads the fans of a first round without it (every sample's
+//!   fan by the plain rules), not the fans of the samples visited before.
+//! - Paper 4 does not say whether `ixy` itself must be small; a sample
+//!   whose best triangle at its nearest edge spans a hole selects nothing.
+//! - The hole radius is per triangle (see [`Hole`]) unless given.
+//!
+//! Ties (equal angles) go to the smaller input id. A fan is *proven* when
+//! each of its choices is the one the whole cloud's triangulation would
+//! give ([`Region::proves`]); a tile whose core needs an unproven fan asks
+//! for a wider margin.
+
+use super::triangulation::Delaunay;
+use super::umbrella::{umbrella, Region, Wing};
+use glam::DVec3;
+
+/// The sampling-hole radius delta of paper 4 (definition 4): triangles with
+/// a larger circumradius are holes in the sampling, i.e. boundaries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Hole {
+    /// One radius everywhere (paper 4 gives it relative to the bounding
+    /// sphere; here it is absolute, in the input's units).
+    Absolute(f64),
+    /// Deviation: this multiple of the largest nearest-neighbour distance
+    /// of the triangle's corners, so the threshold follows the local
+    /// sampling density and needs no global statistic.
+    Local(f64),
+}
+
+/// Default multiple for [`Hole::Local`].
+pub const LOCAL_HOLE: f64 = 5.0;
+
+/// Whether a triangle is in the first round's fans (for inheritance).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Membership {
+    In,
+    Out,
+    /// Only a fan that could not be proven could tell.
+    Unknown,
+}
+
+/// One sample's fan.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Fan {
+    /// Selected triangles, corners sorted.
+    pub tris: Vec<[u32; 3]>,
+    /// The fan closed (paper 4: an interior point).
+    pub interior: bool,
+    pub proven: bool,
+}
+
+/// Reusable buffers of one worker.
+#[derive(Default)]
+pub struct FanScratch {
+    star: Vec<u32>,
+    wings: Vec<Wing>,
+}
+
+pub struct Selector<'a> {
+    pub d: &'a Delaunay,
+    /// Nearest-neighbour distance per vertex, and whether it is proven.
+    pub nn: &'a [f64],
+    pub nn_proven: &'a [bool],
+    pub hole: Hole,
+    pub region: Region,
+}
+
+/// Corners sorted: the triangle's identity.
+pub fn tri(a: u32, b: u32, c: u32) -> [u32; 3] {
+    let mut t = [a, b, c];
+    t.sort_unstable();
+    t
+}
+
+impl Selector<'_> {
+    fn p(&self, v: u32) -> DVec3 {
+        self.d.points()[v as usize]
+    }
+
+    /// The fan of `i`; `inherited` says which triangles the first round
+    /// selected (`None`: the first round itself).
+    pub fn fan(
+        &self,
+        i: u32,
+        inherited: Option<&dyn Fn([u32; 3]) -> Membership>,
+        s: &mut FanScratch,
+    ) -> Fan {
+        umbrella(self.d, i, &mut s.star, &mut s.wings);
+        let mut fan = Fan {
+            proven: true,
+            ..Fan::default()
+        };
+        let Some(x) = self.nearest(i, &s.wings, &mut fan.proven) else {
+            return fan;
+        };
+        let mut walk = Walk {
+            sel: self,
+            i,
+            wings: &s.wings,
+            inherited,
+            proven: &mut fan.proven,
+        };
+        let Some((y, true)) = walk.choose(x, None) else {
+            return fan;
+        };
+        let start = tri(i, x, y);
+        fan.tris.push(start);
+        let mut boundaries = 0;
+        let (mut prev, mut cur) = (x, y);
+        for _ in 0..s.wings.len() + 2 {
+            match walk.choose(cur, Some(prev)) {
+                Some((z, true)) => {
+                    let t = tri(i, cur, z);
+                    if fan.tris.contains(&t) {
+                        fan.interior = true;
+                        break;
+                    }
+                    fan.tris.push(t);
+                    (prev, cur) = (cur, z);
+                }
+                _ => {
+                    boundaries += 1;
+                    if boundaries == 2 {
+                        break;
+                    }
+                    (prev, cur) = (y, x);
+                }
+            }
+        }
+        fan
+    }
+
+    /// The nearest Delaunay neighbour of `i` (ties: smaller id).
+    fn nearest(&self, i: u32, wings: &[Wing], proven: &mut bool) -> Option<u32> {
+        let pi = self.p(i);
+        let ranks = self.d.ranks();
+        let x = wings.iter().flat_map(|w| [w.a, w.b]).min_by(|&a, &b| {
+            let (da, db) = (
+                pi.distance_squared(self.p(a)),
+                pi.distance_squared(self.p(b)),
+            );
+            da.total_cmp(&db)
+                .then(ranks[a as usize].cmp(&ranks[b as usize]))
+        })?;
+        *proven &= self.nn_proven[i as usize];
+        Some(x)
+    }
+
+    /// Whether some fan could select `t` (its circumradius is below its
+    /// hole radius, or that radius is not known for sure here).
+    pub fn selectable(&self, t: [u32; 3]) -> bool {
+        let mut known = true;
+        let delta = self.delta(t, &mut known);
+        let [a, b, c] = t.map(|v| self.p(v));
+        !known || circumradius(a, b, c) < delta
+    }
+
+    /// The hole radius for triangle `t`.
+    fn delta(&self, t: [u32; 3], proven: &mut bool) -> f64 {
+        match self.hole {
+            Hole::Absolute(d) => d,
+            Hole::Local(k) => {
+                *proven &= t.iter().all(|&v| self.nn_proven[v as usize]);
+                k * t.iter().map(|&v| self.nn[v as usize]).fold(0.0, f64::max)
+            }
+        }
+    }
+}
+
+/// The state of one fan walk.
+struct Walk<'a, 'b> {
+    sel: &'a Selector<'a>,
+    i: u32,
+    wings: &'a [Wing],
+    inherited: Option<&'b dyn Fn([u32; 3]) -> Membership>,
+    proven: &'a mut bool,
+}
+
+impl Walk<'_, '_> {
+    /// Step 2 or 3 of algorithm 1 on edge `(i, e)`: the candidate with the
+    /// largest angle opposite the edge (among those at an obtuse dihedral
+    /// angle to `(i, e, prev)` when given, and among the inherited ones if
+    /// any), and whether its circumradius is below the hole radius.
+    fn choose(&mut self, e: u32, prev: Option<u32>) -> Option<(u32, bool)> {
+        let sel = self.sel;
+        let (pi, pe) = (sel.p(self.i), sel.p(e));
+        let axis = pe - pi;
+        let across = |q: DVec3| {
+            let r = q - pi;
+            r - axis * (r.dot(axis) / axis.length_squared())
+        };
+        let back = prev.map(|v| across(sel.p(v)));
+        let candidates = self.wings.iter().filter_map(|w| {
+            let z = if w.a == e {
+                w.b
+            } else if w.b == e {
+                w.a
+            } else {
+                return None;
+            };
+            let obtuse = match back {
+                Some(u) => prev != Some(z) && u.dot(across(sel.p(z))) < 0.0,
+                None => true,
+            };
+            obtuse.then_some((z, w))
+        });
+        let mut inherit = false;
+        if let Some(f) = self.inherited {
+            let mut unknown = false;
+            for (z, _) in candidates.clone() {
+                match f(tri(self.i, e, z)) {
+                    Membership::In => inherit = true,
+                    Membership::Unknown => unknown = true,
+                    Membership::Out => {}
+                }
+            }
+            *self.proven &= !unknown;
+        }
+        let ranks = sel.d.ranks();
+        let cosine = |z: u32| {
+            let (a, b) = (pi - sel.p(z), pe - sel.p(z));
+            a.dot(b) / (a.length() * b.length())
+        };
+        let in_first = |z: u32| {
+            self.inherited
+                .is_some_and(|f| f(tri(self.i, e, z)) == Membership::In)
+        };
+        let mut ranked: Vec<(f64, u32, &Wing)> = candidates
+            .filter(|(z, _)| !inherit || in_first(*z))
+            .map(|(z, w)| (cosine(z), z, w))
+            .collect();
+        ranked.sort_by(|a, b| {
+            a.0.total_cmp(&b.0)
+                .then(ranks[a.1 as usize].cmp(&ranks[b.1 as usize]))
+        });
+        let &(_, z, _) = ranked.first()?;
+        if !sel.region.is_everything() {
+            *self.proven &= self.settled(&ranked, e);
+        }
+        let delta = sel.delta([self.i, e, z], &mut true);
+        Some((z, circumradius(pi, pe, sel.p(z)) < delta))
+    }
+
+    /// Whether the whole cloud's choice among `ranked` (best first) is
+    /// the tile's. The cloud's candidates are a subset of the tile's: the
+    /// proven ones and perhaps some others. If the best is proven it wins
+    /// there too; otherwise the cloud's winner is one of the candidates up
+    /// to the first proven one, and the outcome is still certain when none
+    /// of them could be selected (a boundary either way).
+    fn settled(&self, ranked: &[(f64, u32, &Wing)], e: u32) -> bool {
+        let sel = self.sel;
+        for (k, &(_, z, w)) in ranked.iter().enumerate() {
+            let proven = sel.region.proves(sel.d, self.i, w);
+            if proven && k == 0 {
+                // The winner is certain; so must be its hole radius.
+                let mut known = true;
+                sel.delta(tri(self.i, e, z), &mut known);
+                return known;
+            }
+            if sel.selectable(tri(self.i, e, z)) {
+                return false;
+            }
+            if proven {
+                return true;
+            }
+        }
+        true
+    }
+}
+
+/// Circumradius of a triangle (infinite when degenerate).
+pub fn circumradius(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (u, v) = (b - a, c - a);
+    let area2 = u.cross(v).length();
+    if area2 == 0.0 {
+        return f64::INFINITY;
+    }
+    u.length() * v.length() * (u - v).length() / (2.0 * area2)
+}

@@ -1,0 +1,120 @@
+//! The Delaunay-reconstruction tile kernel: paper 4 ([`super::select`]) on
+//! a tile's core and margin points, keeping the triangles the tile owns.
+//!
+//! Seam policy (ARCHITECTURE.md, interpolating meshes): vertices are the
+//! input points, addressed by store index; a triangle belongs to the tile
+//! whose core holds its corner of smallest input id, so each is written
+//! once. It is exact: every choice the kernel makes for an owned triangle
+//! is proven to be the whole cloud's (a triangle's empty sphere lies in the
+//! loaded region, see [`super::umbrella`]; doubt spreads as far as the
+//! deletion rounds can carry it, see [`super::cleanup`]); a tile with a
+//! doubtful core point asks for a wider margin.
+//!
+//! Winding is global (a component may cross many tiles), so the kernel
+//! winds its own triangles ([`super::wind`]), numbers their components, and
+//! lists its seam edges: edges of an owned triangle whose other triangle
+//! belongs to another tile. The stitcher pairs them across tiles.
+
+use super::fan::Hole;
+use super::select::{select, SelectionReport};
+use super::umbrella::Region;
+use super::wind::wind;
+use crate::pipeline::{KernelError, TileKernel};
+use crate::tiling::TilePoints;
+use glam::DVec3;
+
+/// One tile's share of the surface.
+#[derive(Debug, Default)]
+pub struct DelaunayTile {
+    /// Core points, relative to the store origin (they become the output
+    /// vertices, in store order).
+    pub core_points: Vec<DVec3>,
+    /// Owned triangles, wound, as store indices.
+    pub tris: Vec<[u64; 3]>,
+    /// Tile-local component of each triangle.
+    pub component: Vec<u32>,
+    /// Per tile-local component: it could not be wound consistently.
+    pub inconsistent: Vec<bool>,
+    /// Edges shared with another tile's triangle: `(a, b)` as wound in the
+    /// owned triangle (store indices), and its component.
+    pub seams: Vec<(u64, u64, u32)>,
+    pub report: SelectionReport,
+}
+
+pub struct DelaunayKernel {
+    pub hole: Hole,
+    pub initial_margin: f64,
+}
+
+impl TileKernel for DelaunayKernel {
+    type Output = DelaunayTile;
+
+    fn name(&self) -> &str {
+        "delaunay surface"
+    }
+
+    fn margin(&self) -> f64 {
+        self.initial_margin
+    }
+
+    fn run(&self, tile: &TilePoints) -> Result<DelaunayTile, KernelError> {
+        let region = Region {
+            loaded: tile.loaded,
+        };
+        let sel = select(&tile.points, &tile.ids, self.hole, region)
+            .map_err(|e| KernelError::Failed(e.to_string()))?;
+        if sel.doubtful[..tile.n_core].iter().any(|&d| d) {
+            return Err(KernelError::MarginTooSmall {
+                needed: tile.margin * 2.0,
+            });
+        }
+        let owner_is_core = |t: &[u32; 3]| {
+            let first = t.iter().min_by_key(|&&v| tile.ids[v as usize]);
+            first.is_some_and(|&v| (v as usize) < tile.n_core)
+        };
+        let (mut owned, others): (Vec<[u32; 3]>, Vec<[u32; 3]>) =
+            sel.tris.iter().partition(|t| owner_is_core(t));
+        let w = wind(&mut owned);
+        let seams = seam_edges(&owned, &w.component, &others, tile);
+        Ok(DelaunayTile {
+            core_points: tile.core_points().to_vec(),
+            tris: owned
+                .iter()
+                .map(|t| t.map(|v| tile.store_index(v as usize)))
+                .collect(),
+            component: w.component,
+            inconsistent: w.inconsistent,
+            seams,
+            report: sel.report,
+        })
+    }
+}
+
+/// Edges of owned triangles that a triangle of another tile shares.
+fn seam_edges(
+    owned: &[[u32; 3]],
+    component: &[u32],
+    others: &[[u32; 3]],
+    tile: &TilePoints,
+) -> Vec<(u64, u64, u32)> {
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    let mut foreign: Vec<(u32, u32)> = others
+        .iter()
+        .flat_map(|t| [key(t[0], t[1]), key(t[1], t[2]), key(t[0], t[2])])
+        .collect();
+    foreign.sort_unstable();
+    let mut out = Vec::new();
+    for (t, c) in owned.iter().zip(component) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if foreign.binary_search(&key(a, b)).is_ok() {
+                out.push((
+                    tile.store_index(a as usize),
+                    tile.store_index(b as usize),
+                    *c,
+                ));
+            }
+        }
+    }
+    out
+}

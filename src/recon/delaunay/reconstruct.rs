@@ -1,0 +1,262 @@
+//! `reconstruct --method delaunay` end to end over a store: the tile kernel
+//! ([`super::kernel`]), then the seam side: every tile's core points become
+//! the output vertices (store order), its owned triangles go to a spool
+//! with a global component number, and seam edges met from both sides join
+//! components in a parity union-find (the two triangles must run the edge
+//! in opposite directions). At the end each component's flip is known and
+//! the spool is replayed into the mesh writer; a component whose parities
+//! contradict each other is non-orientable (a Moebius band) and is counted.
+//!
+//! Memory: the seam edges waiting for their twin (about the tiles' borders),
+//! one union-find entry per tile component; the triangles wait on disk.
+
+use super::fan::{Hole, LOCAL_HOLE};
+use super::kernel::{DelaunayKernel, DelaunayTile};
+use crate::mesh::{MeshError, MeshFormat, MeshWriter};
+use crate::normals::unionfind::ParityUnionFind;
+use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
+use crate::store::PointStore;
+use std::collections::HashMap;
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::path::Path;
+
+/// Margin first loaded, in store spacings: the fans reach a few hole radii,
+/// the proofs an empty sphere, the deletions two rings a round.
+const MARGIN_SPACINGS: f64 = 40.0;
+
+/// Kernel bytes per loaded point, for tile sizing: the triangulation's
+/// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
+/// edge index, the tile's own columns.
+pub const BYTES_PER_POINT: u64 = 900;
+
+/// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
+/// per loaded point and nothing per stored point beyond the seam side's
+/// map (seam-sized) and one union-find entry per tile component.
+pub fn cost() -> KernelCost {
+    KernelCost {
+        bytes_per_point: BYTES_PER_POINT,
+        global_per_point: 0,
+        contracts_boundaries: false,
+        resident_per_point: 0.0,
+        window_bytes_per_point: 0,
+        // The store (20 B) and the mesh spool; the mesh is about two
+        // triangles per input point (vertices are the input points).
+        scratch_per_point: 20 + 2 * 12,
+        output_per_point: 24 + 2 * 13,
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DelaunayParams {
+    /// Absolute hole radius; default: [`Hole::Local`] with [`LOCAL_HOLE`].
+    pub hole: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct DelaunayReport {
+    pub vertices: u64,
+    pub triangles: u64,
+    pub components: u64,
+    pub non_orientable: u64,
+    pub duplicates: u64,
+    pub type1: u64,
+    pub type2: u64,
+    pub forced: u64,
+    pub patches: u64,
+    pub incompatible_left: u64,
+    /// Largest triangulation of a tile, bytes per loaded point.
+    pub triangulation_bytes_per_point: f64,
+    pub hole: String,
+    pub run: RunStats,
+}
+
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DelaunayReconError {
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    #[error("--hole {0} must be a positive finite number")]
+    BadHole(f64),
+    #[error("{points} points: more than the 2^31 vertices a PLY index holds")]
+    TooManyPoints { points: u64 },
+    #[error(transparent)]
+    Store(#[from] crate::store::StoreError),
+    #[error("triangle spool: {0}")]
+    Spool(#[from] std::io::Error),
+}
+
+pub fn reconstruct_delaunay(
+    store: &mut PointStore,
+    params: &DelaunayParams,
+    output: &Path,
+    format: MeshFormat,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<DelaunayReport, DelaunayReconError> {
+    let hole = match params.hole {
+        Some(h) if h.is_finite() && h > 0.0 => Hole::Absolute(h),
+        Some(h) => return Err(DelaunayReconError::BadHole(h)),
+        None => Hole::Local(LOCAL_HOLE),
+    };
+    if store.len() > i32::MAX as u64 {
+        return Err(DelaunayReconError::TooManyPoints {
+            points: store.len(),
+        });
+    }
+    // The estimate samples tiles: it sets the first margin (time), never
+    // a result (ARCHITECTURE.md).
+    let spacing = crate::store::spacing::ensure_spacing(store)?;
+    let store = &*store;
+    let kernel = DelaunayKernel {
+        hole,
+        initial_margin: MARGIN_SPACINGS * spacing,
+    };
+    let mut seam = Seams::new(MeshWriter::create(output, format)?, store)?;
+    let run = run_tiles(store, &kernel, opts, progress, |_, out| {
+        seam.add_tile(out)
+            .map_err(|e| PipelineError::Seam(e.to_string()))
+    })?;
+    let mut report = seam.finish()?;
+    report.run = run;
+    report.hole = match hole {
+        Hole::Absolute(h) => format!("{h:.4e}"),
+        Hole::Local(k) => {
+            format!("{k} x the largest nearest-neighbour distance of a triangle's corners")
+        }
+    };
+    Ok(report)
+}
+
+/// The seam side of the run (see the module doc).
+struct Seams {
+    writer: MeshWriter,
+    origin: glam::DVec3,
+    spool: BufWriter<std::fs::File>,
+    /// Edge (low, high store index) -> component and whether it runs low
+    /// to high in its triangle.
+    waiting: HashMap<(u64, u64), (u32, bool)>,
+    joins: Vec<(u32, u32, bool)>,
+    inconsistent: Vec<bool>,
+    report: DelaunayReport,
+}
+
+impl Seams {
+    fn new(writer: MeshWriter, store: &PointStore) -> Result<Self, DelaunayReconError> {
+        Ok(Seams {
+            writer,
+            origin: store.origin(),
+            spool: BufWriter::new(tempfile::tempfile()?),
+            waiting: HashMap::new(),
+            joins: Vec::new(),
+            inconsistent: Vec::new(),
+            report: DelaunayReport::default(),
+        })
+    }
+
+    fn add_tile(&mut self, tile: DelaunayTile) -> Result<(), DelaunayReconError> {
+        let vertices: Vec<glam::DVec3> =
+            tile.core_points.iter().map(|p| self.origin + *p).collect();
+        self.writer.add_vertices(&vertices)?;
+        let base = self.inconsistent.len() as u32;
+        self.inconsistent.extend_from_slice(&tile.inconsistent);
+        for (t, c) in tile.tris.iter().zip(&tile.component) {
+            for v in t {
+                self.spool.write_all(&(*v as u32).to_le_bytes())?;
+            }
+            self.spool.write_all(&(base + c).to_le_bytes())?;
+        }
+        for (a, b, c) in tile.seams {
+            let key = (a.min(b), a.max(b));
+            let forward = a < b;
+            match self.waiting.remove(&key) {
+                // Consistent when the two run the edge in opposite ways.
+                Some((other, dir)) => self.joins.push((other, base + c, dir == forward)),
+                None => {
+                    self.waiting.insert(key, (base + c, forward));
+                }
+            }
+        }
+        let r = &tile.report;
+        let rep = &mut self.report;
+        rep.triangles += tile.tris.len() as u64;
+        rep.duplicates += r.duplicates;
+        rep.type1 += r.cleanup.type1;
+        rep.type2 += r.cleanup.type2;
+        rep.forced += r.cleanup.forced;
+        rep.patches += r.patches;
+        rep.incompatible_left += r.cleanup.incompatible_left;
+        let loaded = (r.cells as f64 / 6.5).max(1.0);
+        rep.triangulation_bytes_per_point = rep
+            .triangulation_bytes_per_point
+            .max(r.triangulation_bytes as f64 / loaded);
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<DelaunayReport, DelaunayReconError> {
+        let n = self.inconsistent.len();
+        let mut uf = ParityUnionFind::new(n);
+        let mut bad = self.inconsistent.clone();
+        for &(a, b, parity) in &self.joins {
+            let ((ra, pa), (rb, pb)) = (uf.find(a), uf.find(b));
+            if ra == rb {
+                if pa ^ pb != parity {
+                    bad[ra as usize] = true;
+                }
+            } else {
+                let carried = bad[ra as usize] || bad[rb as usize];
+                uf.union(a, b, parity);
+                let root = uf.find(a).0;
+                bad[root as usize] |= carried;
+            }
+        }
+        let mut roots = vec![false; n];
+        for c in 0..n as u32 {
+            let (r, _) = uf.find(c);
+            if !roots[r as usize] {
+                roots[r as usize] = true;
+                self.report.components += 1;
+                self.report.non_orientable += bad[r as usize] as u64;
+            }
+        }
+        self.replay(&mut uf)?;
+        let (vertices, triangles) = self.writer.finish()?;
+        self.report.vertices = vertices;
+        self.report.triangles = triangles;
+        Ok(self.report)
+    }
+
+    /// Writes the spooled triangles, each component flipped as its parity
+    /// to the root says.
+    fn replay(&mut self, uf: &mut ParityUnionFind) -> Result<(), DelaunayReconError> {
+        self.spool.flush()?;
+        let mut file = self.spool.get_ref().try_clone()?;
+        file.rewind()?;
+        let mut reader = BufReader::with_capacity(1 << 20, file);
+        let mut record = [0u8; 16];
+        let mut batch = Vec::with_capacity(1 << 16);
+        for _ in 0..self.report.triangles {
+            reader.read_exact(&mut record)?;
+            let w = |k: usize| {
+                u32::from_le_bytes([
+                    record[4 * k],
+                    record[4 * k + 1],
+                    record[4 * k + 2],
+                    record[4 * k + 3],
+                ])
+            };
+            let mut t = [w(0), w(1), w(2)];
+            if uf.find(w(3)).1 {
+                t.swap(1, 2);
+            }
+            batch.push(t);
+            if batch.len() == batch.capacity() {
+                self.writer.add_triangles(&batch)?;
+                batch.clear();
+            }
+        }
+        self.writer.add_triangles(&batch)?;
+        Ok(())
+    }
+}

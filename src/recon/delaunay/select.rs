@@ -1,0 +1,213 @@
+//! Paper 4's three steps over one set of points (a tile's, or the whole
+//! cloud's): the 3-D Delaunay triangulation (section 2.1), two rounds of
+//! fans (section 2.2; the second inherits from the first, see [`super::fan`])
+//! and the deletion of incompatible triangles (section 2.3). A pure
+//! function of the points, their ids, the hole radius and the region known
+//! to hold every point of the cloud inside it.
+
+use super::cleanup::{Cleanup, CleanupReport};
+use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
+use super::holes::small_hole_patches;
+use super::triangulation::{Delaunay, DelaunayError};
+use super::umbrella::{nearest_distances, umbrella, Region};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Vertices per parallel job of the fan rounds.
+const CHUNK: usize = 2048;
+
+/// The selected surface of one point set.
+#[derive(Debug, Default)]
+pub struct Selection {
+    /// Triangles, as indices into the input points, corners sorted by
+    /// index, sorted.
+    pub tris: Vec<[u32; 3]>,
+    /// Per input point: its decisions may differ from the whole cloud's
+    /// (always false when the region is everything).
+    pub doubtful: Vec<bool>,
+    /// Per input point: its fan closed (paper 4's interior point).
+    pub interior: Vec<bool>,
+    pub report: SelectionReport,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SelectionReport {
+    pub duplicates: u64,
+    pub cells: u64,
+    pub triangulation_bytes: u64,
+    pub fan_triangles: u64,
+    pub cleanup: CleanupReport,
+    /// Triangles added to close 3- and 4-edge holes.
+    pub patches: u64,
+}
+
+/// All fans of one round, by vertex.
+struct FanSet {
+    start: Vec<u32>,
+    tris: Vec<[u32; 3]>,
+    interior: Vec<bool>,
+    proven: Vec<bool>,
+}
+
+impl FanSet {
+    fn of(&self, v: u32) -> &[[u32; 3]] {
+        &self.tris[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+
+    /// Whether a fan of one of `t`'s corners selected it.
+    fn membership(&self, t: [u32; 3], sel: &Selector) -> Membership {
+        if t.iter()
+            .any(|&v| self.proven[v as usize] && self.of(v).contains(&t))
+        {
+            Membership::In
+        } else if t.iter().all(|&v| self.proven[v as usize]) || !sel.selectable(t) {
+            Membership::Out
+        } else {
+            Membership::Unknown
+        }
+    }
+}
+
+/// Runs paper 4 on `points` (ids `ranks`).
+pub fn select(
+    points: &[DVec3],
+    ranks: &[u64],
+    hole: Hole,
+    region: Region,
+) -> Result<Selection, DelaunayError> {
+    let d = Delaunay::new(points, ranks)?;
+    let nn = nearest_distances(&d);
+    let nn_proven: Vec<bool> = d
+        .points()
+        .iter()
+        .zip(&nn)
+        .map(|(p, &r)| region.holds_reach(*p, r))
+        .collect();
+    let sel = Selector {
+        d: &d,
+        nn: &nn,
+        nn_proven: &nn_proven,
+        hole,
+        region,
+    };
+    let first = all_fans(&sel, None);
+    let inherit = |t: [u32; 3]| first.membership(t, &sel);
+    let second = all_fans(&sel, Some(&inherit));
+    drop(first);
+    let mut tris = second.tris.clone();
+    tris.sort_unstable();
+    tris.dedup();
+    let mut report = SelectionReport {
+        duplicates: d.duplicates().len() as u64,
+        cells: d.cell_count() as u64,
+        triangulation_bytes: d.heap_bytes() as u64,
+        fan_triangles: tris.len() as u64,
+        ..SelectionReport::default()
+    };
+    let mut doubt = initial_doubt(&sel, &second.proven);
+    let mut cleanup = Cleanup::new(d.points(), tris);
+    report.cleanup = cleanup.run(&second.interior, &mut doubt);
+    let mut kept: Vec<[u32; 3]> = cleanup.alive_triangles().collect();
+    let patches = small_hole_patches(d.points(), &kept);
+    report.patches = patches.len() as u64;
+    kept.extend(patches);
+    if !doubt.is_empty() {
+        // A patch reads the triangles two rings around it.
+        cleanup.dilate(&mut doubt);
+        cleanup.dilate(&mut doubt);
+    }
+    Ok(to_input(
+        &d,
+        &kept,
+        &doubt,
+        &second.interior,
+        points.len(),
+        report,
+    ))
+}
+
+/// Every fan of one round, in parallel chunks, concatenated in vertex order.
+fn all_fans(sel: &Selector, inherited: Option<&(dyn Fn([u32; 3]) -> Membership + Sync)>) -> FanSet {
+    let n = sel.d.vertex_count();
+    let parts: Vec<Vec<Fan>> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map_init(FanScratch::default, |s, c| {
+            let inherited = inherited.map(|f| f as &dyn Fn([u32; 3]) -> Membership);
+            (c * CHUNK..((c + 1) * CHUNK).min(n))
+                .map(|v| sel.fan(v as u32, inherited, s))
+                .collect()
+        })
+        .collect();
+    let mut set = FanSet {
+        start: Vec::with_capacity(n + 1),
+        tris: Vec::new(),
+        interior: Vec::with_capacity(n),
+        proven: Vec::with_capacity(n),
+    };
+    set.start.push(0);
+    for fan in parts.into_iter().flatten() {
+        set.tris.extend_from_slice(&fan.tris);
+        set.start.push(set.tris.len() as u32);
+        set.interior.push(fan.interior);
+        set.proven.push(fan.proven);
+    }
+    set
+}
+
+/// Vertices whose fan is unproven, and the corners of every triangle
+/// through one of them that a fan could select (the unproven fan may hold
+/// it or not). Only selectable triangles count: a triangle with a larger
+/// circumradius than its hole radius is in no fan, and such triangles are
+/// what joins far samples in the triangulation of a surface.
+fn initial_doubt(sel: &Selector, proven: &[bool]) -> Vec<bool> {
+    if sel.region.is_everything() {
+        return Vec::new();
+    }
+    let mut doubt: Vec<bool> = proven.iter().map(|p| !p).collect();
+    let (mut star, mut wings) = (Vec::new(), Vec::new());
+    for u in 0..proven.len() as u32 {
+        if proven[u as usize] {
+            continue;
+        }
+        umbrella(sel.d, u, &mut star, &mut wings);
+        for w in &wings {
+            if sel.selectable(tri(u, w.a, w.b)) {
+                doubt[w.a as usize] = true;
+                doubt[w.b as usize] = true;
+            }
+        }
+    }
+    doubt
+}
+
+/// The surviving triangles and the vertex flags, by input index.
+fn to_input(
+    d: &Delaunay,
+    kept: &[[u32; 3]],
+    doubt: &[bool],
+    interior: &[bool],
+    n: usize,
+    report: SelectionReport,
+) -> Selection {
+    let mut tris: Vec<[u32; 3]> = kept
+        .iter()
+        .map(|t| {
+            let mut u = t.map(|v| d.input_index(v));
+            u.sort_unstable();
+            u
+        })
+        .collect();
+    tris.sort_unstable();
+    let mut out = Selection {
+        tris,
+        doubtful: vec![false; n],
+        interior: vec![false; n],
+        report,
+    };
+    for (v, &inside) in interior.iter().enumerate() {
+        let i = d.input_index(v as u32) as usize;
+        out.doubtful[i] = doubt.get(v).copied().unwrap_or(false);
+        out.interior[i] = inside;
+    }
+    out
+}

@@ -1,0 +1,93 @@
+//! Winding the selected triangles consistently wherever the surface allows:
+//! a breadth-first walk over triangles sharing an edge of order two, each
+//! new triangle wound against its neighbour's direction on the shared edge.
+//! A component where some edge stays traversed twice the same way cannot be
+//! wound (a Moebius band): it is counted as non-orientable. Paper 4 leaves
+//! the result unoriented; this is the output convention of the mesh writer.
+//!
+//! The walk starts each component at its triangle of smallest corners and
+//! visits neighbours in sorted order, so the result depends only on the
+//! triangle set.
+
+use std::collections::VecDeque;
+
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WindReport {
+    pub components: u64,
+    pub non_orientable: u64,
+    /// Component of each triangle (numbered from 0 in the walk's order).
+    pub component: Vec<u32>,
+    /// Per component: some edge could not be wound consistently.
+    pub inconsistent: Vec<bool>,
+}
+
+/// Winds `tris` (rewritten in place; any corner order on entry).
+pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
+    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(tris.len() * 3);
+    for (t, c) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (c[k], c[(k + 1) % 3]);
+            keyed.push(((a.min(b) as u64) << 32 | a.max(b) as u64, t as u32));
+        }
+    }
+    keyed.sort_unstable();
+    let mut seen = vec![false; tris.len()];
+    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+    order.sort_unstable_by_key(|&t| {
+        let mut c = tris[t as usize];
+        c.sort_unstable();
+        c
+    });
+    let mut report = WindReport {
+        component: vec![0; tris.len()],
+        ..WindReport::default()
+    };
+    let mut queue = VecDeque::new();
+    for &root in &order {
+        if seen[root as usize] {
+            continue;
+        }
+        let id = report.components as u32;
+        report.components += 1;
+        let mut consistent = true;
+        seen[root as usize] = true;
+        queue.push_back(root);
+        while let Some(t) = queue.pop_front() {
+            report.component[t as usize] = id;
+            let c = tris[t as usize];
+            for k in 0..3 {
+                let (a, b) = (c[k], c[(k + 1) % 3]);
+                let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
+                let lo = keyed.partition_point(|e| e.0 < key);
+                let hi = keyed.partition_point(|e| e.0 <= key);
+                if hi - lo != 2 {
+                    continue;
+                }
+                let o = if keyed[lo].1 == t {
+                    keyed[lo + 1].1
+                } else {
+                    keyed[lo].1
+                };
+                let same_way = has_directed(tris[o as usize], a, b);
+                if seen[o as usize] {
+                    consistent &= !same_way;
+                    continue;
+                }
+                if same_way {
+                    tris[o as usize].swap(0, 1);
+                }
+                seen[o as usize] = true;
+                queue.push_back(o);
+            }
+        }
+        if !consistent {
+            report.non_orientable += 1;
+        }
+        report.inconsistent.push(!consistent);
+    }
+    report
+}
+
+fn has_directed(c: [u32; 3], a: u32, b: u32) -> bool {
+    (0..3).any(|k| c[k] == a && c[(k + 1) % 3] == b)
+}

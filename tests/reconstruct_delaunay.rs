@@ -1,0 +1,84 @@
+//! `reconstruct --method delaunay` end to end over a store: tiled (>= 64
+//! tiles) == untiled as exact triangle sets, 1 thread == 2 threads byte
+//! for byte, and the Moebius band reported non-orientable.
+
+mod common;
+
+use common::with_store;
+use glam::DVec3;
+use scanmesh::io::read_mesh_any;
+use scanmesh::mesh::{quality, Mesh, MeshFormat};
+use scanmesh::pipeline::{NoProgress, RunOptions};
+use scanmesh::recon::delaunay::reconstruct::{
+    reconstruct_delaunay, DelaunayParams, DelaunayReport,
+};
+use scanmesh::synth::{generate, mean_spacing_hint, Shape};
+
+fn reconstruct(points: &[DVec3], tile_points: u64, threads: usize) -> (Mesh, DelaunayReport) {
+    with_store(points, tile_points, threads, |store, dir| {
+        let out = dir.join("mesh.ply");
+        let report = reconstruct_delaunay(
+            store,
+            &DelaunayParams::default(),
+            &out,
+            MeshFormat::PlyBinary,
+            RunOptions::new(threads),
+            &NoProgress,
+        )
+        .expect("reconstruct");
+        let (v, t) = read_mesh_any(&out).expect("read mesh");
+        (Mesh::new(v, t), report)
+    })
+}
+
+/// Triangles as sorted position triples, sorted: the triangle set,
+/// whatever the vertex order and winding.
+fn triangle_set(m: &Mesh) -> Vec<[[u64; 3]; 3]> {
+    let mut tris: Vec<[[u64; 3]; 3]> = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let mut p = t.map(|i| m.vertices[i as usize].to_array().map(f64::to_bits));
+            p.sort_unstable();
+            p
+        })
+        .collect();
+    tris.sort_unstable();
+    tris
+}
+
+fn moebius(n: usize) -> Vec<DVec3> {
+    let shape = Shape::moebius(1.0, 0.5);
+    let sp = mean_spacing_hint(&shape, n).expect("spacing");
+    generate(&shape, n, 0.05 * sp, 5).expect("generate").points
+}
+
+#[test]
+fn tiled_moebius_equals_untiled() {
+    let points = moebius(2_000);
+    let (whole, wr) = reconstruct(&points, u64::MAX, 2);
+    let (tiled, tr) = reconstruct(&points, 30, 2);
+    assert!(tr.run.tiles >= 64, "{} tiles", tr.run.tiles);
+    assert_eq!(wr.run.tiles, 1);
+    assert!(whole.triangles.len() > 3_500, "{}", whole.triangles.len());
+    assert!(
+        triangle_set(&whole) == triangle_set(&tiled),
+        "tiled triangles differ"
+    );
+    let (qw, qt) = (quality(&whole), quality(&tiled));
+    assert!(
+        !qw.orientable && !qt.orientable,
+        "a Moebius band is not orientable"
+    );
+    assert_eq!((qw.non_manifold_edges, qw.components), (0, 1));
+    assert_eq!(wr.non_orientable, 1);
+    assert_eq!(tr.non_orientable, 1);
+}
+
+#[test]
+fn one_thread_equals_two_threads() {
+    let points = moebius(3_000);
+    let (one, _) = reconstruct(&points, 300, 1);
+    let (two, _) = reconstruct(&points, 300, 2);
+    assert!(one.vertices == two.vertices && one.triangles == two.triangles);
+}
