@@ -11,15 +11,17 @@ use crate::pipeline::KernelCost;
 
 /// Peak bytes per loaded point of the curvature kernel: the tile's
 /// positions, ids and normals, the radius grid, the hood answers and the
-/// per-point results. Measured with `tools/peak_rss.rs` (one tile, one
-/// thread: RSS growth from the 437,645-point dragon to a 1M-point noisy
-/// dragon, over the point difference); see ARCHITECTURE.md.
-pub const CURVATURE_BYTES_PER_POINT: u64 = 300;
+/// per-point results. Measured with `tools/peak_rss.rs`, one tile and one
+/// thread on stores with normals: peak RSS 110 MiB on the 437,645-point
+/// dragon and 234 MiB on the 1M-point noisy dragon, 231 B per point of the
+/// difference (the export's window, holding every record at that budget,
+/// included).
+pub const CURVATURE_BYTES_PER_POINT: u64 = 250;
 
-/// Peak bytes per loaded point of the feature kernel: the curvature
-/// kernel's inputs plus the candidate sets, enhanced points, smoothed
-/// points and their grids, measured as above.
-pub const FEATURES_BYTES_PER_POINT: u64 = 400;
+/// Peak bytes per loaded point of the feature kernel (curvature reused
+/// from the store): the candidate sets, enhanced and smoothed points and
+/// their grids. Measured as above: 77.6 MiB and 178 MiB, 187 B per point.
+pub const FEATURES_BYTES_PER_POINT: u64 = 210;
 
 /// Line vertices per input point allowed for: 0.026 on the dragon at the
 /// default thresholds; twice that for rougher scans.
@@ -66,5 +68,29 @@ impl FeatureParams {
             output_per_point: (LINE_VERTICES_PER_POINT * 33.0).ceil() as u64,
             ..curvature
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::plan::{MemoryPlan, MIN_TILE_POINTS};
+    use crate::pipeline::MemoryBudget;
+
+    #[test]
+    fn ten_million_points_plan_within_256_mib_on_two_threads() {
+        let budget = MemoryBudget::new(256 << 20, 2);
+        let features = FeatureParams::default().cost();
+        let curvature = CurvatureParams::default().cost();
+        for cost in [features, curvature] {
+            let plan = MemoryPlan::new(budget, 10_000_000, &cost).unwrap();
+            assert!(plan.tile_points >= MIN_TILE_POINTS, "{plan:?}");
+            // Never below what the normals pass before it needs.
+            let normals = CurvatureParams::default().normals.cost();
+            assert!(cost.bytes_per_point >= normals.bytes_per_point);
+            assert!(cost.bytes_per_point >= CURVATURE_BYTES_PER_POINT);
+        }
+        assert!(features.bytes_per_point >= FEATURES_BYTES_PER_POINT);
+        assert!(features.resident_per_point > 0.0 && curvature.window_bytes_per_point > 0);
     }
 }
