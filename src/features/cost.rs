@@ -7,6 +7,7 @@
 use super::export::RECORD;
 use super::params::FeatureParams;
 use super::CurvatureParams;
+use crate::pipeline::plan::MARGIN_FACTOR;
 use crate::pipeline::KernelCost;
 
 /// Peak bytes per loaded point of the curvature kernel: the tile's
@@ -23,13 +24,23 @@ pub const CURVATURE_BYTES_PER_POINT: u64 = 250;
 /// their grids. Measured as above: 77.6 MiB and 178 MiB, 187 B per point.
 pub const FEATURES_BYTES_PER_POINT: u64 = 210;
 
-/// Line vertices per input point allowed for: 0.026 on the dragon at the
-/// default thresholds; twice that for rougher scans.
+/// Loaded points per core point of the feature kernel at the tile sizes a
+/// small budget gives (60-80k points): its margin is a growth cell plus
+/// the stages' radius chain (~59 d at the defaults), far more than the
+/// plan's `MARGIN_FACTOR` allows for. Measured at 10M points in 256 MiB
+/// with 78k-point tiles and a 75 d margin: 175 MiB of tiles in flight,
+/// 4.0 loaded points per core point.
+const FEATURES_LOADED_PER_CORE: f64 = 3.5;
+
+/// Line vertices per input point allowed for: 0.026 on the dragon and
+/// 0.041 on the 10M noisy dragon at the default thresholds.
 const LINE_VERTICES_PER_POINT: f64 = 0.05;
 
-/// Bytes per line vertex held until the seams are joined: the position, an
-/// edge, its owner and the endpoint grid's entry.
-const BYTES_PER_LINE_VERTEX: f64 = 64.0;
+/// Bytes per line vertex while the seams are joined (all polylines, the
+/// copies' grid, the repair's graph and grid): the 10M noisy dragon's
+/// 408k vertices took the RSS from 183 to 258 MiB after the tiles, ~190 B
+/// each (with the grown copies kept through the repair).
+const BYTES_PER_LINE_VERTEX: f64 = 200.0;
 
 /// Scratch bytes per point of the passes before the export: the store
 /// (20), normals and flags (13), the orientation's forest runs (24) and
@@ -59,8 +70,10 @@ impl FeatureParams {
     pub fn cost(&self) -> KernelCost {
         let curvature = self.curvature.cost();
         let line_bytes = LINE_VERTICES_PER_POINT * BYTES_PER_LINE_VERTEX;
+        // The plan allows for MARGIN_FACTOR loaded points per core point.
+        let features = FEATURES_BYTES_PER_POINT as f64 * FEATURES_LOADED_PER_CORE / MARGIN_FACTOR;
         KernelCost {
-            bytes_per_point: curvature.bytes_per_point.max(FEATURES_BYTES_PER_POINT),
+            bytes_per_point: curvature.bytes_per_point.max(features.ceil() as u64),
             resident_per_point: line_bytes,
             window_bytes_per_point: 0,
             scratch_per_point: SCRATCH_PER_POINT,

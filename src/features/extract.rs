@@ -94,10 +94,12 @@ pub fn extract_lines(
             })
         })
         .collect();
-    let polylines: Vec<(LineKind, Vec<DVec3>)> = drop_copies(&grown, 0.5 * resolved.gamma_max)
-        .into_iter()
-        .map(|l| (l.kind, l.points))
-        .collect();
+    let kept = drop_copies(&grown, 0.5 * resolved.gamma_max);
+    // The join's peak holds every line several times over: free the
+    // grown copies before the repair builds its graph.
+    drop(grown);
+    let polylines: Vec<(LineKind, Vec<DVec3>)> =
+        kept.into_iter().map(|l| (l.kind, l.points)).collect();
     let corner_points: Vec<(LineKind, DVec3)> = corners.iter().map(|c| (c.1, c.2)).collect();
     let cone = Cone {
         length: resolved.cone_length,

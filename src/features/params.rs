@@ -61,7 +61,11 @@ impl Default for FeatureParams {
             cone_length: 3.0,
             cone_angle: PI / 6.0,
             relax_passes: 2,
-            cell: 32.0,
+            // 16 d: the tiles' margin holds a cell beyond the core, and
+            // 32 d made the margin (75 d) four times a 256 MiB plan's
+            // tile at 10M points; the synthetic figures are the same at
+            // 16 d (within 0.4 %) as at 32 d.
+            cell: 16.0,
         }
     }
 }
