@@ -20,7 +20,7 @@ pub struct CurvatureArgs {
     #[command(flatten)]
     fit: FitArgs,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 /// The curvature fit's options (shared with `features`).

@@ -26,7 +26,7 @@ pub struct FeaturesArgs {
     #[command(flatten)]
     thresholds: Thresholds,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 /// Every threshold of paper 5, lengths in mean spacings d (defaults from
