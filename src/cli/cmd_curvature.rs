@@ -123,7 +123,7 @@ fn check_ply(path: &Path) -> Result<()> {
 fn print_summary(r: &CurvatureReport, secs: f64, out: &Path) {
     let m = &r.meta;
     let [sparse, degenerate, ill, unoriented] = m.flagged;
-    println!(
+    super::report::summary(format!(
         "curvature: {} points, {} tiles ({} reloaded), d {:.4e}, {:?}, |k| median {:.4e} p90 {:.4e}, \
          residual RMS {:.4e} max {:.4e}, flagged: {} sparse, {} degenerate, {} ill-conditioned, \
          {} unoriented, {:.2} s, peak {} -> {}",
@@ -143,5 +143,5 @@ fn print_summary(r: &CurvatureReport, secs: f64, out: &Path) {
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }

@@ -169,7 +169,7 @@ fn summary(r: &FeaturesReport, secs: f64, out: &Path) -> serde_json::Value {
 
 fn print_summary(r: &FeaturesReport, secs: f64, out: &Path) {
     let c = &r.counts;
-    println!(
+    super::report::summary(format!(
         "features: {} points, {} tiles ({} reloaded), d {:.4e}, alpha {:.4e}, feature points {} ridge / {} valley \
          (of {} / {} candidates), {} polylines, {} corners, length {:.4e}, MLS residual RMS {:.4e} max {:.4e}, \
          {:.2} s (curvature {:.2} s, lines {:.2} s), peak {} -> {}",
@@ -192,5 +192,5 @@ fn print_summary(r: &FeaturesReport, secs: f64, out: &Path) {
         r.lines_secs,
         super::peak(),
         out.display()
-    );
+    ));
 }
