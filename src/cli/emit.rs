@@ -108,15 +108,16 @@ fn slurm(run: &RunDir, steps: &[Step], s: &Settings) -> String {
     for step in steps {
         match step {
             Step::Single(args) => {
-                let job = format!("$SCANMESH run-job $DIR {args}");
+                let job = format!("$SCANMESH run-job $DIR --threads {} {args}", s.threads);
                 let _ = writeln!(out, "after=$(submit --wrap=\"{}\")", job.trim_end());
             }
             Step::Array { args, tasks } => {
                 let args = args.replace("{i}", "\\$SLURM_ARRAY_TASK_ID");
                 let _ = writeln!(
                     out,
-                    "after=$(submit --array=0-{} --wrap=\"$SCANMESH run-job $DIR {args}\")",
-                    tasks - 1
+                    "after=$(submit --array=0-{} --wrap=\"$SCANMESH run-job $DIR --threads {} {args}\")",
+                    tasks - 1,
+                    s.threads
                 );
             }
         }
