@@ -9,9 +9,9 @@ use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
 use super::stitch::Stitcher;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport};
-use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
+use crate::normals::{ensure_normals, NormalParams, NormalsError, NormalsReport};
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
-use crate::store::{PointStore, StoreError, NORMAL_FILE};
+use crate::store::{PointStore, StoreError};
 use crate::tiling::load::core_box;
 use glam::DVec3;
 use std::path::Path;
@@ -119,9 +119,7 @@ pub fn reconstruct_implicit(
 ) -> Result<ImplicitReport, ReconError> {
     let min_piece = params.min_piece_share()?;
     let mut report = ImplicitReport::default();
-    if !store.has_column(NORMAL_FILE) || store.manifest.sampling.is_none() {
-        report.normals = Some(compute_normals(store, &params.normals, opts, progress)?);
-    }
+    report.normals = ensure_normals(store, &params.normals, opts, progress)?;
     let stats = store.manifest.sampling.unwrap_or_default();
     report.rho = if stats.rho > 0.0 {
         stats.rho
