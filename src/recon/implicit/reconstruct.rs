@@ -118,8 +118,10 @@ pub fn reconstruct_implicit(
     progress: &dyn Progress,
 ) -> Result<ImplicitReport, ReconError> {
     let min_piece = params.min_piece_share()?;
-    let mut report = ImplicitReport::default();
-    report.normals = ensure_normals(store, &params.normals, opts, progress)?;
+    let mut report = ImplicitReport {
+        normals: ensure_normals(store, &params.normals, opts, progress)?,
+        ..ImplicitReport::default()
+    };
     let stats = store.manifest.sampling.unwrap_or_default();
     report.rho = if stats.rho > 0.0 {
         stats.rho
