@@ -39,6 +39,9 @@ pub fn cost() -> KernelCost {
         contracts_boundaries: false,
         resident_per_point: 0.0,
         window_bytes_per_point: 0,
+        // The store and its columns; the mesh, about two triangles a point.
+        scratch_per_point: 64,
+        output_per_point: 60,
     }
 }
 
