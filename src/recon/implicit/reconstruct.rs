@@ -147,7 +147,7 @@ pub fn reconstruct_implicit(
         )),
         false,
     )?;
-    let band = band_cubes(params.field, params.closed, spacing, report.cell);
+    let band = band_cubes(params.field, spacing, report.cell);
     let lattice = Lattice::new(DVec3::ZERO, report.cell)?;
     let reach = report.rho + report.delta;
     let kernel = ImplicitKernel {
@@ -201,29 +201,25 @@ fn default_cell(field: Field, spacing: f64, paper: f64) -> f64 {
     }
 }
 
-/// Half-width of the band of cubes around the samples, in spacings, open
-/// and closed. The band is where the surface can appear: a closed surface
-/// must also span the places the scan missed (the dragon's 1M samples
-/// leave a patch 30 spacings across), where the least-area patch of
-/// [`super::holes`] cannot follow the shape. 1M dragon, `--closed`, cell
+/// Half-width of the band of cubes around the samples, in spacings. The
+/// band is where the surface can appear, so it must reach across the
+/// sparsest sampling (terrain far from the scanner: the test terrain at a
+/// cell of 3 spacings has 34 holes with a band of 1 cube, 0 with 2), and
+/// with `--closed` across the places the scan missed (the dragon's 1M
+/// samples leave a patch 30 spacings across), where the least-area patch
+/// of [`super::holes`] cannot follow the shape. 1M dragon, `--closed`, cell
 /// 2.9 spacings: a band of 1 / 2 / 3 cubes leaves 5 / 0 / 0 boundary loops
 /// (mean distance 0.062 / 0.063 / 0.065 spacings).
-const OPEN_BAND_SPACINGS: f64 = 2.0;
-const CLOSED_BAND_SPACINGS: f64 = 4.0;
+const BAND_SPACINGS: f64 = 4.0;
 
 /// The band's reach in cubes: one for paper 1's field (its cell is
 /// `rho + delta`), else at least one, the half-width above when the cell
 /// is finer.
-fn band_cubes(field: Field, closed: bool, spacing: f64, cell: f64) -> i64 {
+fn band_cubes(field: Field, spacing: f64, cell: f64) -> i64 {
     if field == Field::Paper1 {
         return 1;
     }
-    let width = if closed {
-        CLOSED_BAND_SPACINGS
-    } else {
-        OPEN_BAND_SPACINGS
-    };
-    ((width * spacing / cell).ceil() as i64).clamp(1, 8)
+    ((BAND_SPACINGS * spacing / cell).ceil() as i64).clamp(1, 8)
 }
 
 fn positive(what: &'static str, value: f64, zero_ok: bool) -> Result<f64, ReconError> {
