@@ -20,7 +20,7 @@
 //! the same in every tiling; a kNN that reaches beyond the loaded region
 //! reports the shortfall instead.
 
-use super::sdf::{complete, projection_on_data, signed_distance, Corner, Samples};
+use super::sdf::{complete, projection_on_data, Corner, Samples};
 use crate::spatial::{KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use glam::DVec3;
@@ -154,11 +154,7 @@ pub fn mls_corner(
     }
     match projection_on_data(s, tile, z, v.nearest, limit, nbr) {
         Ok(true) => Corner::Value(Some(v.f)),
-        // Beside a sharp edge (a wall meeting a roof) the fitted surface
-        // rounds the edge and its projection can leave the data; paper 1's
-        // planes of the nearest samples, one of which lies on each face,
-        // tell an edge (some plane projects onto data) from a boundary.
-        Ok(false) => signed_distance(s, tile, p, limit, nbr),
+        Ok(false) => Corner::Value(None),
         Err(short) => Corner::Short(short),
     }
 }
