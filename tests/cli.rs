@@ -260,3 +260,49 @@ fn a_store_in_use_is_refused_not_corrupted() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn report_records_stages_and_outcome() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "in.xyz", GOOD_XYZ);
+    let out = dir.path().join("n.ply").display().to_string();
+    let report = dir.path().join("run.json");
+    let r = report.to_str().unwrap_or("");
+    let o = scanmesh(&[
+        "normals", &input, "-o", &out, "-q", "--k", "6", "--report", r,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("json");
+    assert_eq!(json["outcome"], "ok");
+    assert!(json["summary"]
+        .as_str()
+        .unwrap_or("")
+        .starts_with("normals: 15 points"));
+    let stages: Vec<&str> = json["stages"]
+        .as_array()
+        .expect("stages")
+        .iter()
+        .filter_map(|s| s["name"].as_str())
+        .collect();
+    for want in ["read", "scatter", "normals", "write"] {
+        assert!(stages.contains(&want), "no {want} in {stages:?}");
+    }
+    assert!(json["total"]["peak_rss_bytes"].as_u64().unwrap_or(0) > 0);
+    // A failed run is reported as such, and still fails.
+    let o = scanmesh(&[
+        "normals",
+        "/nonexistent/scan.ply",
+        "-o",
+        &out,
+        "--report",
+        r,
+    ]);
+    assert_fails_naming(&o, "/nonexistent/scan.ply");
+    let text = std::fs::read_to_string(&report).expect("report");
+    assert!(
+        text.contains("\"outcome\": \"error: reading /nonexistent/scan.ply"),
+        "{text}"
+    );
+    no_output_left(dir.path(), ".run.json.tmp");
+}

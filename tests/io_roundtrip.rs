@@ -99,6 +99,7 @@ fn exact_formats_round_trip() {
         (Format::PlyBinaryBe, "b.ply"),
         (Format::PlyAscii, "c.ply"),
         (Format::Xyz, "d.xyz"),
+        (Format::Pcd, "e.pcd"),
     ];
     for (format, name) in cases {
         for with_flags in [false, true] {

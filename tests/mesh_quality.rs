@@ -400,3 +400,5 @@ fn report_serialises_and_prints() {
 
 #[path = "mesh_quality/distance.rs"]
 mod distance;
+#[path = "mesh_quality/triangles.rs"]
+mod triangles;

@@ -13,7 +13,7 @@ pub struct ConvertArgs {
     /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz).
     output: PathBuf,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 pub fn run(a: ConvertArgs) -> Result<()> {
@@ -22,13 +22,13 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let stats = convert(&a.input, &a.output, s.policy, progress.as_ref())?;
-    println!(
+    super::report::summary(format!(
         "convert: {} points ({} skipped) in {:.2} s, peak {} -> {}",
         stats.points,
         stats.skipped,
         t0.elapsed().as_secs_f64(),
         super::peak(),
         a.output.display()
-    );
+    ));
     Ok(())
 }

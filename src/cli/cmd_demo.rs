@@ -1,15 +1,18 @@
 //! `scanmesh demo`: the main job on the embedded sample: points sampled from
 //! the Stanford dragon with noise, reconstructed into a mesh (normals on the
-//! way), then checked against the dragon's own triangles.
+//! way; or, with `--method projection`, paper 2's triangulation of the
+//! points themselves), then checked against the dragon's own triangles.
 
 use anyhow::Result;
 use clap::Args;
 use scanmesh::demo::dragon_scan;
 use scanmesh::io::memory::MemoryReader;
 use scanmesh::mesh::distance::{compare, Reference};
+use scanmesh::mesh::{angle_report, self_intersections};
 use scanmesh::mesh::{quality, Mesh, MeshFormat};
 use scanmesh::normals::evaluate::{accuracy, normals_in_input_order};
 use scanmesh::recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
+use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams};
 use scanmesh::store::{build::scratch_store_dir, build_store};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -22,8 +25,19 @@ pub struct DemoArgs {
     /// Points to sample from the embedded dragon.
     #[arg(short, default_value_t = 200_000)]
     n: usize,
+    /// Reconstruction method.
+    #[arg(long, value_enum, default_value_t = DemoMethod::Implicit)]
+    method: DemoMethod,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum DemoMethod {
+    /// Signed distance + marching cubes (paper 1).
+    Implicit,
+    /// Local-projection triangulation of the points (paper 2).
+    Projection,
 }
 
 pub fn run(a: DemoArgs) -> Result<()> {
@@ -45,36 +59,60 @@ pub fn run(a: DemoArgs) -> Result<()> {
     };
     let dir = scratch_store_dir(&a.output);
     let mut reader = MemoryReader::new("embedded dragon sample", scan.points.clone(), None);
-    let cost = params.cost();
+    let projection = ProjectionParams::default();
+    let cost = match a.method {
+        DemoMethod::Implicit => params.cost(),
+        DemoMethod::Projection => projection.cost(),
+    };
     s.check_floor(&cost)?;
     let opts = s.build_options(cost);
     let result = (|| -> Result<()> {
         let mut store = build_store(&mut reader, &dir, &opts, progress.as_ref())?;
         let (_, run_options) = s.plan_for(&store, cost)?;
-        let r = reconstruct_implicit(
-            &mut store,
-            &params,
-            &a.output,
-            MeshFormat::PlyBinary,
-            run_options,
-            progress.as_ref(),
-        )?;
-        super::cmd_reconstruct::print_summary(
-            &r,
-            store.len(),
-            store.tiles().len(),
-            t0.elapsed().as_secs_f64(),
-            &a.output,
-        );
-        let acc = accuracy(&normals_in_input_order(&store)?, &scan.normals);
-        println!(
-            "demo: normals vs the dragon's faces: median angle {:.2} deg, {:.2} % oriented outward",
-            acc.median_angle_deg,
-            100.0 * acc.oriented_fraction
-        );
+        if a.method == DemoMethod::Projection {
+            let r = reconstruct_projection(
+                &mut store,
+                &projection,
+                &a.output,
+                MeshFormat::PlyBinary,
+                run_options,
+                progress.as_ref(),
+            )?;
+            let secs = t0.elapsed().as_secs_f64();
+            super::cmd_reconstruct_projection::print_summary(
+                &r,
+                store.tiles().len(),
+                secs,
+                &a.output,
+            );
+        } else {
+            let r = reconstruct_implicit(
+                &mut store,
+                &params,
+                &a.output,
+                MeshFormat::PlyBinary,
+                run_options,
+                progress.as_ref(),
+            )?;
+            super::cmd_reconstruct::print_summary(
+                &r,
+                store.len(),
+                store.tiles().len(),
+                t0.elapsed().as_secs_f64(),
+                &a.output,
+            );
+            let acc = accuracy(&normals_in_input_order(&store)?, &scan.normals);
+            println!(
+                "demo: normals vs the dragon's faces: median angle {:.2} deg, {:.2} % oriented outward",
+                acc.median_angle_deg,
+                100.0 * acc.oriented_fraction
+            );
+        }
         let (v, t) = scanmesh::io::read_mesh_any(&a.output)?;
         let mesh = Mesh::new(v, t);
         println!("{}", quality(&mesh));
+        println!("{}", angle_report(&mesh));
+        println!("{}", self_intersections(&mesh));
         let truth = Mesh::new(dragon.vertices.clone(), dragon.faces.clone());
         let d = compare(&mesh, Reference::Mesh(&truth));
         // One unit throughout: the sample's spacing (`eval`'s own report

@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::Args;
 use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
 use scanmesh::mesh::distance::{compare, Reference};
-use scanmesh::mesh::{quality, Mesh};
+use scanmesh::mesh::{angle_report, quality, self_intersections, Mesh};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -25,6 +25,8 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let mesh = Mesh::new(vertices, triangles);
     mesh.validate()?;
     let q = quality(&mesh);
+    let angles = angle_report(&mesh);
+    let crossings = self_intersections(&mesh);
     let d = match &a.reference {
         Some(r) => Some(compare_to(&mesh, r)?),
         None => None,
@@ -32,10 +34,17 @@ pub fn run(a: EvalArgs) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&json!({ "quality": q, "distance": d }))?
+            serde_json::to_string_pretty(&json!({
+                "quality": q,
+                "angles": angles,
+                "self_intersections": crossings,
+                "distance": d
+            }))?
         );
     } else {
         println!("{q}");
+        println!("{angles}");
+        println!("{crossings}");
         if let Some(d) = d {
             println!("{d}");
         }

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// A point file (PLY, XYZ/CSV, LAS/LAZ, optionally .gz) or a store directory.
+    /// A point file (PLY, XYZ/CSV, LAS/LAZ, PCD, optionally .gz) or a store directory.
     input: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]

@@ -36,7 +36,7 @@ pub struct NeighborsArgs {
     #[arg(long, default_value_t = 10)]
     max_iterations: usize,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -131,7 +131,7 @@ fn print_summary(r: &NeighboursReport, params: &NeighbourParams, secs: f64, out:
         Some(m) => format!(", iterations median {m} ({} hit the cap)", st.hit_cap()),
         None => String::new(),
     };
-    println!(
+    super::report::summary(format!(
         "neighbors: {} points, {} tiles ({} reloaded with a wider margin), {} k {}, size min/median/mean/max {}{}, {:.2} s, peak {} -> {}",
         r.points,
         r.tiles,
@@ -143,5 +143,5 @@ fn print_summary(r: &NeighboursReport, params: &NeighbourParams, secs: f64, out:
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }

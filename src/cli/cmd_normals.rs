@@ -49,7 +49,7 @@ pub struct NormalsArgs {
     #[arg(long)]
     ascii: bool,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
@@ -204,7 +204,7 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
         with_normals: true,
         with_flags: matches!(
             format,
-            Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe
+            Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd
         ),
         bounds: None,
         las_transform: None,
@@ -212,7 +212,7 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
 }
 
 pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {
-    println!(
+    super::report::summary(format!(
         "normals: {} points, {} tiles ({} reloaded with a wider margin), {} degenerate, {} unoriented, {} components, {:.2} s, peak {} -> {}",
         r.points,
         r.tiles,
@@ -223,5 +223,5 @@ pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }

@@ -1,5 +1,6 @@
 //! `scanmesh reconstruct`: a mesh from a point cloud (paper 1's implicit
-//! method), streaming, seam-exact in tiles.
+//! method, seam-exact in tiles; or paper 2's local projection, whose seams
+//! are re-grown), streaming.
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
@@ -9,6 +10,7 @@ use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
 use scanmesh::recon::implicit::sdf::Field;
+use scanmesh::recon::projection::ProjectionParams;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -54,22 +56,33 @@ pub struct ReconstructArgs {
     /// largest piece's (default 0.01 with --closed, else 0: keep all).
     #[arg(long, value_name = "SHARE")]
     min_piece: Option<f64>,
-    /// Neighbours per point for the normals (per query when topological).
+    /// Neighbours per point for the normals (per query when topological);
+    /// for --method projection, each vertex's neighbourhood (paper 2: 6..15).
     #[arg(long, default_value_t = 12)]
     k: usize,
+    /// --method projection: leave out a point closer than this many local
+    /// spacings to a point of smaller input id (0 keeps every point).
+    #[arg(long, default_value_t = ProjectionParams::default().thin)]
+    thin: f64,
+    /// --method projection: longest edge, in local spacings.
+    #[arg(long, default_value_t = ProjectionParams::default().max_edge)]
+    max_edge: f64,
     #[command(flatten)]
     hood: super::cmd_normals::HoodArgs,
     /// Write PLY as ASCII instead of binary.
     #[arg(long)]
     ascii: bool,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
 enum Method {
     /// Signed distance to tangent planes + marching cubes (paper 1).
     Implicit,
+    /// Greedy local-projection Delaunay triangulation (paper 2): the
+    /// input points are the vertices.
+    Projection,
     /// 3-D Delaunay triangulation and local flatness (paper 4): the
     /// input points are the vertices; open, multi-sheet and non-orientable
     /// surfaces.
@@ -104,6 +117,16 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     let format = mesh_format(&a.output, a.ascii)?;
     if let Method::Delaunay = a.method {
         return super::cmd_reconstruct_delaunay::run(&s, &a.input, &a.output, format, a.hole);
+    }
+    if let Method::Projection = a.method {
+        let params = ProjectionParams {
+            k: a.k,
+            neighbourhood: a.hood.hood(),
+            thin: a.thin,
+            max_edge: a.max_edge,
+            ..ProjectionParams::default()
+        };
+        return super::cmd_reconstruct_projection::run(&s, &a.input, &a.output, format, &params);
     }
     if a.k < 3 {
         bail!("--k must be at least 3 for a tangent plane");
@@ -145,7 +168,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
 }
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {
-    println!(
+    super::report::summary(format!(
         "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles{}, {:.2} s, peak {} -> {}",
         points,
         tiles,
@@ -160,7 +183,7 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }
 
 /// " (N holes closed, M left open; P small pieces dropped)", the parts

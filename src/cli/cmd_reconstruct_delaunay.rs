@@ -44,7 +44,7 @@ pub fn run(
 }
 
 fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: &Path) {
-    println!(
+    super::report::summary(format!(
         "reconstruct (delaunay): {points} points, {tiles} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left; triangulation {:.0} B/point; {secs:.2} s, peak {} -> {}",
         r.run.retries,
         r.run.largest_margin,
@@ -62,5 +62,5 @@ fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: 
         r.triangulation_bytes_per_point,
         super::peak(),
         out.display()
-    );
+    ));
 }

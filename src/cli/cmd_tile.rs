@@ -17,7 +17,7 @@ pub struct TileArgs {
     #[arg(short, long)]
     output: PathBuf,
     #[command(flatten)]
-    common: super::CommonArgs,
+    pub common: super::CommonArgs,
 }
 
 pub fn run(a: TileArgs) -> Result<()> {
@@ -46,7 +46,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let spacing = ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest;
-    println!(
+    super::report::summary(format!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
         m.count,
         m.skipped_invalid,
@@ -56,6 +56,6 @@ pub fn run(a: TileArgs) -> Result<()> {
         t0.elapsed().as_secs_f64(),
         super::peak(),
         a.output.display()
-    );
+    ));
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Command-line arguments (raw, as clap parses them) and their validation
 //! into [`Settings`], then dispatch to one module per command.
 
+mod clock;
 mod cmd_convert;
 mod cmd_demo;
 mod cmd_eval;
@@ -9,8 +10,10 @@ mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
 mod cmd_reconstruct_delaunay;
+mod cmd_reconstruct_projection;
 mod cmd_tile;
 mod progress;
+mod report;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -27,7 +30,7 @@ use std::path::{Path, PathBuf};
     version,
     about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core",
     long_about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core.\n\n\
-        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, or a point store \
+        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, or a point store \
         built by `scanmesh tile`. Memory stays within --mem whatever the input size."
 )]
 struct Cli {
@@ -39,7 +42,7 @@ struct Cli {
 enum Command {
     /// Format, point count, bounding box and spacing of a file or store.
     Info(cmd_info::InfoArgs),
-    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ).
+    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ, PCD).
     Convert(cmd_convert::ConvertArgs),
     /// Build a tiled point store (a directory) for repeated runs.
     Tile(cmd_tile::TileArgs),
@@ -78,6 +81,10 @@ pub struct CommonArgs {
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
     scratch_dir: Option<PathBuf>,
+    /// Write a JSON report of the run here: per stage wall and CPU time,
+    /// peak RSS and disk traffic, the summary, the outcome, the version.
+    #[arg(long, value_name = "FILE.json")]
+    report: Option<PathBuf>,
 }
 
 /// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
@@ -245,7 +252,12 @@ impl Settings {
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    match cli.command {
+    let start = clock::Mark::now();
+    let report = cli.command.common().and_then(|c| c.report.clone());
+    if let Some(path) = &report {
+        place::check_output(path)?;
+    }
+    let outcome = match cli.command {
         Command::Info(a) => cmd_info::run(a),
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
@@ -254,6 +266,25 @@ pub fn run() -> Result<()> {
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
+    };
+    if let Some(path) = &report {
+        report::write(path, &start, &outcome)?;
+    }
+    outcome
+}
+
+impl Command {
+    /// The options every processing command takes, if this is one.
+    fn common(&self) -> Option<&CommonArgs> {
+        match self {
+            Command::Info(_) | Command::Eval(_) => None,
+            Command::Convert(a) => Some(&a.common),
+            Command::Tile(a) => Some(&a.common),
+            Command::Normals(a) => Some(&a.common),
+            Command::Neighbors(a) => Some(&a.common),
+            Command::Reconstruct(a) => Some(&a.common),
+            Command::Demo(a) => Some(&a.common),
+        }
     }
 }
 

@@ -1,6 +1,7 @@
 //! The terminal side of [`scanmesh::pipeline::Progress`]: one indicatif bar
 //! per stage with rate and ETA, on stderr, only when stderr is a terminal.
 
+use super::clock::Mark;
 use indicatif::{ProgressBar, ProgressStyle};
 use scanmesh::pipeline::{NoProgress, Progress};
 use std::io::IsTerminal;
@@ -56,66 +57,18 @@ impl Progress for Bars {
 /// scratch data) is printed as `(between stages)` so no cost hides. Each
 /// line gives the wall time, the process CPU time (all threads; steadier
 /// than wall time on a shared machine), the RSS at the end and the peak RSS
-/// so far, to see which stage sets it.
+/// so far, to see which stage sets it, and the bytes read from and written
+/// to storage.
 struct Timings {
     start: Mutex<Option<(String, Mark)>>,
     last_end: Mutex<Mark>,
 }
 
-/// A point in wall time and process CPU time.
-#[derive(Clone, Copy)]
-struct Mark {
-    wall: std::time::Instant,
-    cpu: f64,
-}
-
-impl Mark {
-    fn now() -> Self {
-        Mark {
-            wall: std::time::Instant::now(),
-            cpu: cpu_seconds().unwrap_or(0.0),
-        }
-    }
-
-    fn report(&self, name: &str) {
-        let now = Mark::now();
-        eprintln!(
-            "{:>24}: {:.3} s (cpu {:.2} s, rss {}, peak {})",
-            name,
-            now.wall.duration_since(self.wall).as_secs_f64(),
-            now.cpu - self.cpu,
-            rss(),
-            super::peak()
-        );
-    }
-}
-
-/// User + system CPU time of the whole process (Linux; 10 ms ticks).
-fn cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    let fields: Vec<&str> = stat
-        .get(stat.rfind(')')? + 1..)?
-        .split_whitespace()
-        .collect();
-    let ticks = |i: usize| fields.get(i)?.parse::<f64>().ok();
-    // Fields 14 and 15 of stat(5), counted after the command name.
-    Some((ticks(11)? + ticks(12)?) / 100.0)
-}
-
-fn rss() -> String {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let kib = status
-        .lines()
-        .find(|l| l.starts_with("VmRSS:"))
-        .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok());
-    kib.map_or("?".into(), |k| scanmesh::units::human_bytes(k * 1024))
-}
-
 impl Timings {
     fn gap(&self) {
         if let Ok(mut last) = self.last_end.lock() {
-            if last.wall.elapsed().as_secs_f64() >= 0.005 {
-                last.report("(between stages)");
+            if last.elapsed().as_secs_f64() >= 0.005 {
+                eprintln!("{:>24}: {}", "(between stages)", last.span());
             }
             *last = Mark::now();
         }
@@ -141,7 +94,7 @@ impl Progress for Timings {
     fn end(&self) {
         if let Ok(mut s) = self.start.lock() {
             if let Some((stage, t0)) = s.take() {
-                t0.report(&stage);
+                eprintln!("{stage:>24}: {}", t0.span());
                 if let Ok(mut last) = self.last_end.lock() {
                     *last = Mark::now();
                 }
@@ -150,19 +103,20 @@ impl Progress for Timings {
     }
 }
 
-/// Bars on a terminal, nothing otherwise or when `quiet`.
+/// Bars on a terminal, nothing otherwise or when `quiet`; every stage is
+/// timed for `--report` either way.
 pub fn progress(quiet: bool) -> Box<dyn Progress> {
-    if std::env::var_os("SCANMESH_TIMINGS").is_some() {
-        return Box::new(Timings {
+    let shown: Box<dyn Progress> = if std::env::var_os("SCANMESH_TIMINGS").is_some() {
+        Box::new(Timings {
             start: Mutex::new(None),
             last_end: Mutex::new(Mark::now()),
-        });
-    }
-    if quiet || !std::io::stderr().is_terminal() {
+        })
+    } else if quiet || !std::io::stderr().is_terminal() {
         Box::new(NoProgress)
     } else {
         Box::new(Bars {
             bar: Mutex::new(None),
         })
-    }
+    };
+    Box::new(super::report::Recorder::new(shown))
 }

@@ -14,6 +14,7 @@ pub mod las;
 pub mod memory;
 pub mod obj;
 pub mod open;
+pub mod pcd;
 pub mod place;
 pub mod ply;
 mod policy;
@@ -46,6 +47,9 @@ pub enum Format {
     Xyz,
     Las,
     Laz,
+    /// PCL's Point Cloud Data: read as ASCII, binary or binary_compressed,
+    /// written binary.
+    Pcd,
 }
 
 /// A bounded batch of consecutive input records.
@@ -130,6 +134,13 @@ pub trait PointReader: Send {
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError>;
     /// Records dropped under [`InvalidPolicy::Skip`] so far.
     fn skipped(&self) -> u64;
+    /// A new reader over the same points from the first, when reading the
+    /// source again costs no more than reading a copy of it (an uncompressed
+    /// binary file of fixed-size records): a store build then reads the
+    /// input again instead of spilling a copy to disk. `None` otherwise.
+    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
+        None
+    }
 }
 
 /// What a point writer is asked to produce.
@@ -168,7 +179,7 @@ pub trait PointWriter: Send {
 }
 
 /// Format implied by a file name (`.ply`, `.xyz`, `.txt`, `.csv`, `.las`,
-/// `.laz`, each optionally followed by `.gz` for text and PLY).
+/// `.laz`, `.pcd`, each optionally followed by `.gz` for text, PLY and PCD).
 pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
     let name = path.file_name()?.to_str()?.to_ascii_lowercase();
     let (stem, gz) = match name.strip_suffix(".gz") {
@@ -181,6 +192,7 @@ pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
         "xyz" | "txt" | "csv" | "pts" => Format::Xyz,
         "las" => Format::Las,
         "laz" => Format::Laz,
+        "pcd" => Format::Pcd,
         _ => return None,
     };
     Some((f, gz))

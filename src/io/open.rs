@@ -3,6 +3,7 @@
 
 use super::las::LasReader;
 use super::obj::read_obj;
+use super::pcd::{is_pcd_magic, PcdReader};
 use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
 use super::source::open_input;
 use super::xyz::XyzReader;
@@ -15,13 +16,18 @@ const LAS_MAGIC: &[u8] = b"LASF";
 /// Opens a point file of any supported format for streaming.
 ///
 /// gzip (`1f 8b`) is decompressed transparently and the inner content
-/// sniffed; `ply\n` means PLY, `LASF` LAS/LAZ; anything else is read as
+/// sniffed; `ply\n` means PLY, `LASF` LAS/LAZ, a PCD header line PCD;
+/// anything else is read as
 /// XYZ/CSV text if its name says so (`.xyz`, `.txt`, `.csv`, `.pts`, each
 /// optionally `.gz`), else it is [`IoError::UnknownFormat`].
 pub fn open_reader(path: &Path, policy: InvalidPolicy) -> Result<Box<dyn PointReader>, IoError> {
     let opened = open_input(path)?;
     if is_ply_magic(&opened.magic) {
         let r = PlyPointReader::open(path, opened.input, opened.gzip, policy)?;
+        return Ok(Box::new(r));
+    }
+    if is_pcd_magic(&opened.magic) {
+        let r = PcdReader::open(path, opened.input, opened.gzip, policy)?;
         return Ok(Box::new(r));
     }
     if opened.magic.starts_with(LAS_MAGIC) {
@@ -48,6 +54,7 @@ pub fn open_reader(path: &Path, policy: InvalidPolicy) -> Result<Box<dyn PointRe
             policy,
         )?)),
         Some((Format::Las | Format::Laz, _)) => Err(bad("LASF")),
+        Some((Format::Pcd, _)) => Err(bad("# .PCD, VERSION or FIELDS")),
         Some(_) => Err(bad("ply")),
         None => Err(IoError::UnknownFormat {
             path: path.to_path_buf(),

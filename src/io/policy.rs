@@ -25,6 +25,10 @@ impl Admitter {
         self.skipped
     }
 
+    pub fn policy(&self) -> InvalidPolicy {
+        self.policy
+    }
+
     /// Clears `chunk` for records starting at input index `first`, keeping
     /// its allocations.
     pub fn begin(&self, chunk: &mut PointChunk, first: u64, with_normals: bool) {

@@ -138,6 +138,37 @@ impl<P: Primitive> Bvh<P> {
         }
         best
     }
+
+    /// Calls `visit(id, prim)` for every primitive whose box meets the
+    /// closed box `[lo, hi]`, in leaf order.
+    pub fn for_each_overlapping(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(u32, &P)) {
+        let meets = |min: DVec3, max: DVec3| min.cmple(hi).all() && lo.cmple(max).all();
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = [0u32; STACK];
+        let mut len = 1;
+        while len > 0 {
+            len -= 1;
+            let node = &self.nodes[stack[len] as usize];
+            if !meets(node.min, node.max) {
+                continue;
+            }
+            if node.count == 0 {
+                stack[len] = node.first;
+                stack[len + 1] = node.first + 1;
+                len += 2;
+                continue;
+            }
+            let range = node.first as usize..(node.first + node.count) as usize;
+            for (prim, &id) in self.prims[range.clone()].iter().zip(&self.ids[range]) {
+                let (min, max) = prim.bounds();
+                if meets(min, max) {
+                    visit(id, prim);
+                }
+            }
+        }
+    }
 }
 
 /// Splits every node larger than [`LEAF`] at the median of its centres

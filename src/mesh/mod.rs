@@ -1,5 +1,6 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
-//! topology metrics ([`quality`]), distances to a reference ([`distance`]),
+//! topology metrics ([`quality`]), smallest angles ([`angles`]),
+//! self-intersecting pairs ([`self_intersect`]), distances to a reference ([`distance`]),
 //! streaming PLY/OBJ output ([`write`]) and procedural shapes for tests and
 //! benches ([`shapes`]).
 //!
@@ -9,26 +10,31 @@
 //! of `/work/shared/papers/README.md` (conventions): the mean
 //! nearest-neighbour distance.
 
+pub mod angles;
 pub mod distance;
 pub mod error;
 pub mod pieces;
 pub mod quality;
+pub mod self_intersect;
 pub mod shapes;
 pub mod write;
 
 mod bvh;
 mod closest;
+pub mod intersect;
 mod nearest;
 mod sampling;
 mod topology;
 mod union_find;
 
+pub use angles::{angle_report, AngleReport};
 pub use distance::{
     compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
 };
 pub use error::MeshError;
 pub use pieces::{PieceFilter, PieceReport};
 pub use quality::{quality, ComponentQuality, QualityReport};
+pub use self_intersect::{self_intersections, SelfIntersectionReport};
 pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions};
 
 use error::non_finite_coordinate;

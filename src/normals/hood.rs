@@ -33,7 +33,7 @@ use rayon::prelude::*;
 const CHUNK: usize = 1024;
 
 /// The neighbour lists (local indices) of a sequence of loaded points.
-pub(super) struct Hoods {
+pub(crate) struct Hoods {
     chunks: Vec<HoodChunk>,
     /// How much wider the margin must be for every list to be certainly
     /// complete (0 when it is).
@@ -69,7 +69,7 @@ impl Hoods {
 }
 
 /// An index over one tile's loaded points, answering neighbourhoods.
-pub(super) enum HoodIndex<'a> {
+pub(crate) enum HoodIndex<'a> {
     Knn {
         index: Box<dyn KnnIndex + 'a>,
         k: usize,
@@ -104,6 +104,15 @@ impl<'a> HoodIndex<'a> {
                 params,
             },
         })
+    }
+
+    /// The index itself, for plain kNN queries (the R*-tree answers them
+    /// too).
+    pub fn as_knn(&self) -> &dyn KnnIndex {
+        match self {
+            HoodIndex::Knn { index, .. } => index.as_ref(),
+            HoodIndex::Topological { index, .. } => index,
+        }
     }
 
     /// The usual list length: k for kNN; about 2k for the reverse shift

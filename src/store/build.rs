@@ -1,7 +1,8 @@
 //! Building a store from any point source in streaming passes whose memory
 //! does not grow with the number of points:
-//! 1. read: parse the input once, validate, spill f64 points to a scratch
-//!    file, accumulate the bounding box;
+//! 1. read: parse the input once, validate, accumulate the bounding box,
+//!    spill f64 points to a scratch file unless the input can be read again
+//!    as cheaply ([`super::replay`]);
 //! 2. histogram: count points per coarse grid cell;
 //! 3. plan: kd-split the histogram into tiles of at most the target size;
 //! 4. scatter: write each point into its tile's slot range, through small
@@ -11,19 +12,17 @@
 
 use super::cells::CellCounts;
 use super::manifest::{GridSpec, Manifest, STORE_VERSION};
+use super::replay::{first_pass, Replay};
 use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
 use crate::geom::Aabb;
-use crate::io::{PointChunk, PointReader, DEFAULT_CHUNK};
+use crate::io::PointReader;
 use crate::pipeline::{BudgetError, KernelCost, MemoryBudget, MemoryPlan, Progress};
 use crate::tiling::{plan_tiles, CellCount, TilePlan};
 use glam::DVec3;
-use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
-/// Point ids are u32 in the orientation pass's union-find.
-pub const MAX_POINTS: u64 = u32::MAX as u64 - 1;
+pub use super::replay::MAX_POINTS;
 
 const SPILL_FILE: &str = ".ingest.spill";
 
@@ -109,7 +108,7 @@ fn build_with_spill(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Manifest, StoreError> {
-    let (count, bounds) = spill(reader, spill_path, progress)?;
+    let (count, bounds, again) = first_pass(reader, spill_path, progress)?;
     if count == 0 {
         return Err(StoreError::Empty {
             path: reader.info().path.clone(),
@@ -118,13 +117,16 @@ fn build_with_spill(
     // Checked once the count is known, before the input is read again.
     let target = opts.tiles.points(count)?;
     let fine = grid_for(&bounds, count);
-    let (cells, grid) = histogram(spill_path, &fine, count, opts.histogram_cells, progress)?;
+    let points = Points {
+        reader,
+        again: &again,
+        count,
+    };
+    let (cells, grid) = histogram(&points, &fine, opts.histogram_cells, progress)?;
     let plan = plan_tiles(cells, grid.dims, target);
     let origin = bounds.center();
     let mut tiles = tile_entries(&plan);
-    scatter(
-        spill_path, dir, &grid, &plan, &tiles, origin, count, opts, progress,
-    )?;
+    scatter(&points, dir, &grid, &plan, &tiles, origin, opts, progress)?;
     let duplicates = sort::sort_tiles(dir, &mut tiles, progress)?;
     Ok(Manifest {
         version: STORE_VERSION,
@@ -144,42 +146,20 @@ fn build_with_spill(
     })
 }
 
-fn spill(
-    reader: &mut dyn PointReader,
-    path: &Path,
-    progress: &dyn Progress,
-) -> Result<(u64, Aabb), StoreError> {
-    let file = File::create(path).map_err(|e| StoreError::os(path, e))?;
-    let mut out = BufWriter::with_capacity(1 << 20, file);
-    let mut chunk = PointChunk::default();
-    let mut bounds = Aabb::EMPTY;
-    let mut count = 0u64;
-    progress.begin("read", reader.info().declared_count.unwrap_or(0));
-    loop {
-        let n = reader.read_chunk(&mut chunk, DEFAULT_CHUNK)?;
-        if n == 0 {
-            break;
-        }
-        for p in &chunk.xyz {
-            bounds.add(*p);
-            for v in p.to_array() {
-                out.write_all(&v.to_le_bytes())
-                    .map_err(|e| StoreError::os(path, e))?;
-            }
-        }
-        count += n as u64;
-        if count > MAX_POINTS {
-            return Err(StoreError::TooMany {
-                path: reader.info().path.clone(),
-                count,
-                max: MAX_POINTS,
-            });
-        }
-        progress.advance(n as u64);
+/// The input's points for the passes after the first.
+struct Points<'a> {
+    reader: &'a dyn PointReader,
+    again: &'a Replay,
+    count: u64,
+}
+
+impl Points<'_> {
+    fn for_each(
+        &self,
+        f: impl FnMut(u64, &[DVec3]) -> Result<(), StoreError>,
+    ) -> Result<(), StoreError> {
+        self.again.for_each(self.reader, self.count, f)
     }
-    out.flush().map_err(|e| StoreError::os(path, e))?;
-    progress.end();
-    Ok((count, bounds))
 }
 
 /// Histogram grid: cubic cells, about `sqrt(n / 16)` cells along the longest
@@ -214,45 +194,17 @@ fn cell_of(grid: &GridSpec, p: DVec3) -> [u32; 3] {
     c
 }
 
-/// Reads the spill back in chunks of points.
-fn for_each_spilled(
-    path: &Path,
-    count: u64,
-    mut f: impl FnMut(u64, &[DVec3]) -> Result<(), StoreError>,
-) -> Result<(), StoreError> {
-    let file = File::open(path).map_err(|e| StoreError::os(path, e))?;
-    let mut input = BufReader::with_capacity(1 << 20, file);
-    let mut buf = vec![0u8; DEFAULT_CHUNK * 24];
-    let mut pts = Vec::with_capacity(DEFAULT_CHUNK);
-    let mut done = 0u64;
-    while done < count {
-        let n = (count - done).min(DEFAULT_CHUNK as u64) as usize;
-        input
-            .read_exact(&mut buf[..n * 24])
-            .map_err(|e| StoreError::os(path, e))?;
-        pts.clear();
-        pts.extend(buf[..n * 24].chunks_exact(24).map(|r| {
-            let v = |o: usize| f64::from_le_bytes(r[o..o + 8].try_into().unwrap_or([0; 8]));
-            DVec3::new(v(0), v(8), v(16))
-        }));
-        f(done, &pts)?;
-        done += n as u64;
-    }
-    Ok(())
-}
-
 /// Points per occupied cell of `grid`, or of a coarser grid if more than
 /// `cap` cells are occupied; returns the cells and the grid they are of.
 fn histogram(
-    path: &Path,
+    points: &Points,
     grid: &GridSpec,
-    count: u64,
     cap: usize,
     progress: &dyn Progress,
 ) -> Result<(Vec<CellCount>, GridSpec), StoreError> {
     let mut cells = CellCounts::new(grid.dims, cap);
-    progress.begin("histogram", count);
-    for_each_spilled(path, count, |_, pts| {
+    progress.begin("histogram", points.count);
+    points.for_each(|_, pts| {
         for p in pts {
             cells.add(cell_of(grid, *p));
         }
@@ -308,16 +260,16 @@ const BUFFERED_BYTES: usize = 20;
 
 #[allow(clippy::too_many_arguments)]
 fn scatter(
-    spill_path: &Path,
+    points: &Points,
     dir: &Path,
     grid: &GridSpec,
     plan: &TilePlan,
     tiles: &[TileEntry],
     origin: DVec3,
-    count: u64,
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<(), StoreError> {
+    let count = points.count;
     let xyz = Column::create(&dir.join(XYZ_FILE), 12, count)?;
     let index = Column::create(&dir.join(INDEX_FILE), 8, count)?;
     let nblocks: u64 = tiles.iter().map(|t| t.count.div_ceil(BLOCK)).sum();
@@ -341,7 +293,7 @@ fn scatter(
                 index: Vec::new(),
             })
             .collect();
-        for_each_spilled(spill_path, count, |first, pts| {
+        points.for_each(|first, pts| {
             for (i, p) in pts.iter().enumerate() {
                 let t = plan.tile_of(cell_of(grid, *p)) as usize;
                 let Some(b) = t.checked_sub(first_tile).and_then(|k| bufs.get_mut(k)) else {

@@ -17,8 +17,9 @@
 
 use super::reorder::Reorder;
 use super::{Column, PointStore, StoreError, TileEntry, FLAGS_FILE, NORMAL_FILE};
-use crate::io::{create_writer, PointChunk, WriterSpec};
+use crate::io::{create_writer, PointChunk, PointWriter, WriterSpec};
 use crate::pipeline::Progress;
+use crossbeam::channel::{bounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -50,50 +51,120 @@ pub fn export_points(
             DVec3::from_array(store.manifest.bounds_max),
         ));
     }
-    let mut writer = create_writer(path, &spec)?;
+    let writer = create_writer(path, &spec)?;
     let n = store.len();
-    let window = window_points.clamp(1, n.max(1));
-    let mut chunk = PointChunk {
-        first_index: 0,
-        xyz: Vec::new(),
-        normals: cols.normals.as_ref().map(|_| Vec::new()),
-        indices: None,
-    };
-    let mut chunk_flags = Vec::new();
+    // Two windows of half the size: one filled while the other is written.
+    let window = (window_points / 2).clamp(1, n.max(1));
     progress.begin("write", n);
     let buckets = if window < n {
         Some(Reorder::build(store, &cols, window)?)
     } else {
         None
     };
+    let (full_tx, full_rx) = bounded::<Window>(1);
+    let (empty_tx, empty_rx) = bounded::<Window>(2);
+    for _ in 0..2 {
+        let _ = empty_tx.send(Window::default());
+    }
+    let (filled, writer) = std::thread::scope(|s| {
+        let with_flags = cols.flags.is_some();
+        let writing =
+            s.spawn(move || write_windows(writer, with_flags, full_rx, empty_tx, progress));
+        let filled = fill_windows(store, &cols, buckets.as_ref(), window, empty_rx, full_tx);
+        (filled, writing.join())
+    });
+    progress.end();
+    // A writer's error explains a fill that stopped because it hung up.
+    let writer = match writer {
+        Ok(w) => w?,
+        Err(panic) => std::panic::resume_unwind(panic),
+    };
+    filled?;
+    Ok(writer.finish()?)
+}
+
+/// One window of output points and their flags.
+#[derive(Default)]
+struct Window {
+    chunk: PointChunk,
+    flags: Vec<u8>,
+}
+
+/// Fills consecutive windows of `window` input ids, each in a buffer that
+/// comes back on `empty`, and sends it on `full` to be written.
+fn fill_windows(
+    store: &PointStore,
+    cols: &Columns,
+    buckets: Option<&Reorder>,
+    window: u64,
+    empty: Receiver<Window>,
+    full: Sender<Window>,
+) -> Result<(), StoreError> {
+    let n = store.len();
     let mut w0 = 0;
     while w0 < n {
+        let Ok(mut win) = empty.recv() else {
+            return Err(writer_gone());
+        };
         let len = ((w0 + window).min(n) - w0) as usize;
+        let chunk = &mut win.chunk;
         chunk.first_index = w0;
         chunk.xyz.clear();
         chunk.xyz.resize(len, DVec3::ZERO);
-        if let Some(ns) = &mut chunk.normals {
-            ns.clear();
-            ns.resize(len, Vec3::ZERO);
+        match (&cols.normals, &mut chunk.normals) {
+            (Some(_), Some(ns)) => {
+                ns.clear();
+                ns.resize(len, Vec3::ZERO);
+            }
+            (Some(_), None) => chunk.normals = Some(vec![Vec3::ZERO; len]),
+            (None, _) => chunk.normals = None,
         }
-        chunk_flags.clear();
-        chunk_flags.resize(if cols.flags.is_some() { len } else { 0 }, 0);
+        win.flags.clear();
+        win.flags
+            .resize(if cols.flags.is_some() { len } else { 0 }, 0);
         let slots = Slots {
             first: w0,
             xyz: &mut chunk.xyz,
             normals: chunk.normals.as_deref_mut(),
-            flags: cols.flags.as_ref().map(|_| chunk_flags.as_mut_slice()),
+            flags: cols.flags.as_ref().map(|_| win.flags.as_mut_slice()),
         };
-        match &buckets {
+        match buckets {
             Some(b) => b.fill(store.origin(), slots)?,
-            None => fill_window(store, &cols, slots)?,
+            None => fill_window(store, cols, slots)?,
         }
-        writer.write_chunk(&chunk, cols.flags.as_ref().map(|_| chunk_flags.as_slice()))?;
-        progress.advance(len as u64);
+        if full.send(win).is_err() {
+            return Err(writer_gone());
+        }
         w0 += len as u64;
     }
-    progress.end();
-    Ok(writer.finish()?)
+    Ok(())
+}
+
+/// Writes the windows arriving on `full` in order, handing each buffer
+/// back on `empty`; returns the writer to be finished once every window
+/// was filled.
+fn write_windows(
+    mut writer: Box<dyn PointWriter>,
+    with_flags: bool,
+    full: Receiver<Window>,
+    empty: Sender<Window>,
+    progress: &dyn Progress,
+) -> Result<Box<dyn PointWriter>, StoreError> {
+    for win in full.iter() {
+        let flags = with_flags.then_some(win.flags.as_slice());
+        writer.write_chunk(&win.chunk, flags)?;
+        progress.advance(win.chunk.len() as u64);
+        // The filler may have stopped (an error); it reports why.
+        let _ = empty.send(win);
+    }
+    Ok(writer)
+}
+
+fn writer_gone() -> StoreError {
+    StoreError::Corrupt {
+        path: "output".into(),
+        reason: "the output writer stopped".into(),
+    }
 }
 
 /// The attribute columns the output carries.

@@ -14,6 +14,7 @@ pub mod export;
 mod lock;
 pub mod manifest;
 mod reorder;
+mod replay;
 mod sort;
 pub mod source;
 pub mod spacing;

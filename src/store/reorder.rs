@@ -148,53 +148,50 @@ impl Reorder {
     }
 
     /// Fills the slots of one window (starting at a multiple of the window)
-    /// from its region: one id range per thread, each reading the region.
+    /// from its region, read once: each block of records is placed by all
+    /// threads at once, each into the slots of its own id range.
     pub(super) fn fill(&self, origin: DVec3, slots: Slots) -> Result<(), StoreError> {
         let first = slots.first;
         let len = slots.xyz.len() as u64;
         if !first.is_multiple_of(self.window) || first + len > self.count {
             return Err(self.corrupt(format!("window at {first} of {len} points")));
         }
-        slots
-            .split(rayon::current_num_threads())
-            .into_par_iter()
-            .try_for_each(|part| self.fill_part(origin, first, len, part))
-    }
-
-    /// Places the records of the region `[first, first + len)` whose slots
-    /// fall in `part`.
-    fn fill_part(
-        &self,
-        origin: DVec3,
-        first: u64,
-        len: u64,
-        mut part: Slots,
-    ) -> Result<(), StoreError> {
         let rec = self.layout.bytes();
-        let range = part.range();
+        let mut parts = slots.split(rayon::current_num_threads());
         let mut buf = vec![0u8; READ_RECORDS.min(len as usize) * rec];
-        let mut normal = [0f32; 3];
         let mut done = 0;
         while done < len {
             let n = (len - done).min(READ_RECORDS as u64) as usize;
             self.scratch
                 .read_at(&mut buf[..n * rec], (first + done) * rec as u64)?;
-            for r in buf[..n * rec].chunks_exact(rec) {
-                let id = first + u64::from(u32::from_le_bytes([r[0], r[1], r[2], r[3]]));
-                if !range.contains(&id) {
-                    continue;
-                }
-                let f32_at = |o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]);
-                let xyz = [f32_at(4), f32_at(8), f32_at(12)];
-                if self.layout.normals {
-                    normal = [f32_at(16), f32_at(20), f32_at(24)];
-                }
-                let flags = if self.layout.flags { r[rec - 1] } else { 0 };
-                part.place((id - range.start) as usize, origin, &xyz, &normal, flags);
-            }
+            let records = &buf[..n * rec];
+            parts
+                .par_iter_mut()
+                .for_each(|part| self.place(origin, first, records, part));
             done += n as u64;
         }
         Ok(())
+    }
+
+    /// Places those of `records` (of the window starting at `first`) whose
+    /// slots fall in `part`.
+    fn place(&self, origin: DVec3, first: u64, records: &[u8], part: &mut Slots) {
+        let rec = self.layout.bytes();
+        let range = part.range();
+        let mut normal = [0f32; 3];
+        for r in records.chunks_exact(rec) {
+            let id = first + u64::from(u32::from_le_bytes([r[0], r[1], r[2], r[3]]));
+            if !range.contains(&id) {
+                continue;
+            }
+            let f32_at = |o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]);
+            let xyz = [f32_at(4), f32_at(8), f32_at(12)];
+            if self.layout.normals {
+                normal = [f32_at(16), f32_at(20), f32_at(24)];
+            }
+            let flags = if self.layout.flags { r[rec - 1] } else { 0 };
+            part.place((id - range.start) as usize, origin, &xyz, &normal, flags);
+        }
     }
 
     fn corrupt(&self, reason: String) -> StoreError {

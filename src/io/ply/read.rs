@@ -206,6 +206,16 @@ impl PointReader for PlyPointReader {
     fn skipped(&self) -> u64 {
         self.admit.skipped()
     }
+
+    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
+        if self.info.gzip || !matches!(self.body, Body::Fixed { .. }) {
+            return None;
+        }
+        let path = &self.info.path;
+        let again = crate::io::source::open_input(path)
+            .and_then(|o| PlyPointReader::open(path, o.input, o.gzip, self.admit.policy()));
+        Some(again.map(|r| Box::new(r) as Box<dyn PointReader>))
+    }
 }
 
 fn decode_all<'a, B: ByteOrder>(

@@ -29,7 +29,7 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
         });
     }
     Ok(match spec.format {
-        Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe => {
+        Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd => {
             Box::new(ply::PlyWriter::create(path, spec)?)
         }
         Format::Xyz => Box::new(xyz::XyzWriter::create(path, spec)?),

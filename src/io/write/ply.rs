@@ -2,6 +2,10 @@
 //! double, `nx ny nz` as float, `flags` as uchar. The vertex count is written
 //! as a fixed-width placeholder and patched in `finish`, so the points
 //! stream straight to disk.
+//!
+//! Binary PCD (PCL's format) has the same records under another header
+//! (`FIELDS x y z normal_x normal_y normal_z flags`, `DATA binary`, counts
+//! in `WIDTH` and `POINTS`), so this writer writes it too.
 
 use super::{check_chunk, open_output, Checked};
 use crate::io::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
@@ -21,15 +25,18 @@ pub(crate) struct PlyWriter {
     // Declared before `atomic`: dropped (flushed into the temp) first.
     out: BufWriter<File>,
     atomic: AtomicFile,
-    /// Byte offset of the count placeholder.
-    count_at: u64,
+    /// Byte offsets of the count placeholders.
+    count_at: Vec<u64>,
     count: u64,
     /// Encoded parts of the current chunk.
     bufs: Vec<Vec<u8>>,
 }
 
-/// The header text and the byte offset of its count digits.
-fn header(spec: &WriterSpec) -> (String, u64) {
+/// The header text and the byte offsets of its count digits.
+fn header(spec: &WriterSpec) -> (String, Vec<u64>) {
+    if spec.format == Format::Pcd {
+        return pcd_header(spec);
+    }
     let format = match spec.format {
         Format::PlyAscii => "ascii",
         Format::PlyBinaryBe => "binary_big_endian",
@@ -46,8 +53,47 @@ fn header(spec: &WriterSpec) -> (String, u64) {
         h += "property uchar flags\n";
     }
     h += "end_header\n";
-    (h, count_at)
+    (h, vec![count_at])
 }
+
+fn pcd_header(spec: &WriterSpec) -> (String, Vec<u64>) {
+    let (mut fields, mut size, mut kind) = (
+        "x y z".to_string(),
+        "8 8 8".to_string(),
+        "F F F".to_string(),
+    );
+    let mut count = "1 1 1".to_string();
+    let mut add = |name: &str, s: &str, t: &str| {
+        fields += &format!(" {name}");
+        size += &format!(" {s}");
+        kind += &format!(" {t}");
+        count += " 1";
+    };
+    if spec.with_normals {
+        for n in ["normal_x", "normal_y", "normal_z"] {
+            add(n, "4", "F");
+        }
+    }
+    if spec.with_flags {
+        add("flags", "1", "U");
+    }
+    let mut h = format!(
+        "# .PCD v0.7 - Point Cloud Data file format (written by scanmesh)\nVERSION 0.7\n\
+         FIELDS {fields}\nSIZE {size}\nTYPE {kind}\nCOUNT {count}\nWIDTH "
+    );
+    let width_at = h.len() as u64;
+    h += &format!(
+        "{:0w$}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS ",
+        0,
+        w = PCD_COUNT_WIDTH
+    );
+    let points_at = h.len() as u64;
+    h += &format!("{:0w$}\nDATA binary\n", 0, w = PCD_COUNT_WIDTH);
+    (h, vec![width_at, points_at])
+}
+
+/// Digits of PCD's counts: PCL reads them as 32-bit integers.
+const PCD_COUNT_WIDTH: usize = 10;
 
 impl PlyWriter {
     pub fn create(path: &Path, spec: &WriterSpec) -> Result<Self, IoError> {
@@ -147,6 +193,7 @@ impl PointWriter for PlyWriter {
     fn finish(self: Box<Self>) -> Result<u64, IoError> {
         let PlyWriter {
             path,
+            spec,
             out,
             atomic,
             count_at,
@@ -154,10 +201,23 @@ impl PointWriter for PlyWriter {
             ..
         } = *self;
         let os = |e| IoError::os(&path, e);
+        let width = if spec.format == Format::Pcd {
+            if count > u64::from(u32::MAX >> 1) {
+                return Err(IoError::Unsupported {
+                    path,
+                    reason: format!("{count} points are more than PCD's 32-bit counts hold"),
+                });
+            }
+            PCD_COUNT_WIDTH
+        } else {
+            COUNT_WIDTH
+        };
         let mut file = out.into_inner().map_err(|e| os(e.into_error()))?;
-        file.seek(SeekFrom::Start(count_at)).map_err(os)?;
-        file.write_all(format!("{count:0w$}", w = COUNT_WIDTH).as_bytes())
-            .map_err(os)?;
+        for at in count_at {
+            file.seek(SeekFrom::Start(at)).map_err(os)?;
+            file.write_all(format!("{count:0width$}").as_bytes())
+                .map_err(os)?;
+        }
         drop(file);
         atomic.commit()?;
         Ok(count)

@@ -39,9 +39,10 @@ pub fn cost() -> KernelCost {
         contracts_boundaries: false,
         resident_per_point: 0.0,
         window_bytes_per_point: 0,
-        // The store and its columns; the mesh, about two triangles a point.
-        scratch_per_point: 64,
-        output_per_point: 60,
+        // The store (20 B) and the mesh spool; the mesh is about two
+        // triangles per input point (vertices are the input points).
+        scratch_per_point: 20 + 2 * 12,
+        output_per_point: 24 + 2 * 13,
     }
 }
 

@@ -1,0 +1,291 @@
+//! The streaming PCD point reader: `x y z` (and `normal_x normal_y
+//! normal_z` when present) out of ASCII lines, binary records, or the
+//! columns of a `binary_compressed` body.
+//!
+//! A compressed body is one LZF block of whole columns (all x, then all y,
+//! ...), so no point can be decoded before the block ends. It is
+//! decompressed, streaming, into an unnamed temporary file (removed by the
+//! system when the reader is dropped, even on a kill) and the columns are
+//! read from there side by side: memory stays a chunk's worth whatever the
+//! cloud's size, disk is the uncompressed size. PCD's `VIEWPOINT` is not
+//! applied to the points, as PCL does not apply it when loading.
+
+use super::header::{parse_header, Data, PcdHeader, Scalar};
+use super::lzf;
+use crate::io::policy::Admitter;
+use crate::io::source::{read_full, Input};
+use crate::io::text::{self, Line};
+use crate::io::{Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo};
+use byteorder::{ByteOrder, LittleEndian};
+use glam::{DVec3, Vec3};
+use std::fs::File;
+use std::io::{BufRead, Read};
+use std::os::unix::fs::FileExt;
+use std::path::Path;
+
+/// Raw bytes read per binary block.
+const BLOCK_BYTES: usize = 1 << 20;
+
+/// Where the fields of interest sit: `[x, y, z, nx, ny, nz]`, as field
+/// indices into the header.
+type Wanted = [Option<usize>; 6];
+
+enum Body {
+    Ascii { line: Vec<u8>, line_no: u64 },
+    Binary { buf: Vec<u8> },
+    Columns { file: File, buf: Vec<u8> },
+}
+
+pub struct PcdReader {
+    info: SourceInfo,
+    input: Input,
+    admit: Admitter,
+    header: PcdHeader,
+    wanted: Wanted,
+    body: Body,
+    /// Records consumed so far (kept or skipped).
+    next: u64,
+}
+
+impl PcdReader {
+    pub(crate) fn open(
+        path: &Path,
+        mut input: Input,
+        gzip: bool,
+        policy: InvalidPolicy,
+    ) -> Result<Self, IoError> {
+        let bad = |reason: String| IoError::BadHeader {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let header = parse_header(&mut input).map_err(bad)?;
+        let wanted = wanted_fields(&header).map_err(bad)?;
+        let body = match header.data {
+            Data::Ascii => Body::Ascii {
+                line: Vec::new(),
+                line_no: header.lines,
+            },
+            Data::Binary => Body::Binary { buf: Vec::new() },
+            Data::Compressed => Body::Columns {
+                file: decompress_body(path, &mut input, &header)?,
+                buf: Vec::new(),
+            },
+        };
+        let info = SourceInfo {
+            path: path.to_path_buf(),
+            format: Format::Pcd,
+            gzip,
+            declared_count: Some(header.points),
+            has_normals: wanted[3].is_some(),
+            header_bounds: None,
+            las_transform: None,
+        };
+        Ok(PcdReader {
+            info,
+            input,
+            admit: Admitter::new(path.to_path_buf(), policy),
+            header,
+            wanted,
+            body,
+            next: 0,
+        })
+    }
+
+    fn truncated(&self, found: u64) -> IoError {
+        IoError::Truncated {
+            path: self.info.path.clone(),
+            declared: self.header.points,
+            found,
+        }
+    }
+
+    fn read_ascii(&mut self, chunk: &mut PointChunk, want: u64) -> Result<(), IoError> {
+        let Body::Ascii { line, line_no } = &mut self.body else {
+            return Ok(());
+        };
+        let cols = self.wanted.map(|f| f.map(|i| self.header.column(i)));
+        for _ in 0..want {
+            let got = text::read_line(&mut self.input, line)
+                .map_err(|e| IoError::os(&self.info.path, e))?;
+            *line_no += 1;
+            let bad = |reason: String| IoError::BadRecord {
+                path: self.info.path.clone(),
+                record: self.next,
+                reason: format!("line {line_no}: {reason}"),
+            };
+            match got {
+                Line::Eof => return Err(self.truncated(self.next)),
+                Line::TooLong => return Err(bad(format!("longer than {} bytes", text::MAX_LINE))),
+                Line::Read => {}
+            }
+            let s = text::as_text(line).map_err(bad)?;
+            let tokens: Vec<&str> = s.split_ascii_whitespace().collect();
+            let mut v = [0.0f64; 6];
+            for (k, col) in cols.iter().enumerate() {
+                let Some(c) = col else { continue };
+                let tok = tokens
+                    .get(*c)
+                    .ok_or_else(|| bad(format!("{} values, expected more", tokens.len())))?;
+                v[k] = text::parse_f64(tok, FIELD_NAMES[k]).map_err(bad)?;
+            }
+            let (p, n) = point(&v);
+            self.admit.push(chunk, self.next, p, n)?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+
+    fn read_binary(&mut self, chunk: &mut PointChunk, want: u64) -> Result<(), IoError> {
+        let Body::Binary { buf } = &mut self.body else {
+            return Ok(());
+        };
+        let size = self.header.record_bytes().max(1);
+        let n = want.min((BLOCK_BYTES / size).max(1) as u64) as usize;
+        buf.resize(n * size, 0);
+        let got = read_full(&mut self.input, buf).map_err(|e| IoError::os(&self.info.path, e))?;
+        let complete = got / size;
+        let at = self
+            .wanted
+            .map(|f| f.map(|i| (self.header.offset(i), self.header.fields[i].scalar)));
+        for (k, rec) in buf[..complete * size].chunks_exact(size).enumerate() {
+            let v = at.map(|f| f.map_or(0.0, |(o, s)| value(&rec[o..], s)));
+            let (p, nrm) = point(&v);
+            self.admit.push(chunk, self.next + k as u64, p, nrm)?;
+        }
+        self.next += complete as u64;
+        if complete < n {
+            return Err(self.truncated(self.next));
+        }
+        Ok(())
+    }
+
+    fn read_columns(&mut self, chunk: &mut PointChunk, want: u64) -> Result<(), IoError> {
+        let Body::Columns { file, buf } = &mut self.body else {
+            return Ok(());
+        };
+        let n = want.min(BLOCK_BYTES as u64 / 8) as usize;
+        let mut v = vec![[0.0f64; 6]; n];
+        let os = |e| IoError::os(&self.info.path, e);
+        for (k, field) in self.wanted.iter().enumerate() {
+            let Some(i) = *field else { continue };
+            let f = &self.header.fields[i];
+            // Column i starts after the earlier columns, for every point.
+            let start = self.header.offset(i) as u64 * self.header.points;
+            let size = f.scalar.size();
+            buf.resize(n * size, 0);
+            file.read_exact_at(buf, start + self.next * size as u64)
+                .map_err(os)?;
+            for (slot, b) in v.iter_mut().zip(buf.chunks_exact(size)) {
+                slot[k] = value(b, f.scalar);
+            }
+        }
+        for (k, vals) in v.iter().enumerate() {
+            let (p, nrm) = point(vals);
+            self.admit.push(chunk, self.next + k as u64, p, nrm)?;
+        }
+        self.next += n as u64;
+        Ok(())
+    }
+}
+
+const FIELD_NAMES: [&str; 6] = ["x", "y", "z", "normal_x", "normal_y", "normal_z"];
+
+fn wanted_fields(h: &PcdHeader) -> Result<Wanted, String> {
+    let mut w: Wanted = FIELD_NAMES.map(|n| h.scalar_field(n));
+    if w[..3].iter().any(Option::is_none) {
+        return Err("no x, y and z fields of one value each".into());
+    }
+    if w[3..].iter().any(Option::is_none) {
+        w[3..].fill(None);
+    }
+    Ok(w)
+}
+
+fn point(v: &[f64; 6]) -> (DVec3, Vec3) {
+    (
+        DVec3::new(v[0], v[1], v[2]),
+        Vec3::new(v[3] as f32, v[4] as f32, v[5] as f32),
+    )
+}
+
+/// The first value of type `s` at the start of `b` (little-endian, as PCL
+/// writes on every platform it runs on).
+fn value(b: &[u8], s: Scalar) -> f64 {
+    match s {
+        Scalar::F(4) => f64::from(LittleEndian::read_f32(b)),
+        Scalar::F(_) => LittleEndian::read_f64(b),
+        Scalar::I(1) => f64::from(b[0] as i8),
+        Scalar::I(2) => f64::from(LittleEndian::read_i16(b)),
+        Scalar::I(4) => f64::from(LittleEndian::read_i32(b)),
+        Scalar::I(_) => LittleEndian::read_i64(b) as f64,
+        Scalar::U(1) => f64::from(b[0]),
+        Scalar::U(2) => f64::from(LittleEndian::read_u16(b)),
+        Scalar::U(4) => f64::from(LittleEndian::read_u32(b)),
+        Scalar::U(_) => LittleEndian::read_u64(b) as f64,
+    }
+}
+
+/// Reads the compressed body's sizes and decompresses it into an unnamed
+/// temporary file.
+fn decompress_body(path: &Path, input: &mut Input, h: &PcdHeader) -> Result<File, IoError> {
+    let bad = |reason: String| IoError::BadRecord {
+        path: path.to_path_buf(),
+        record: 0,
+        reason: format!("binary_compressed body: {reason}"),
+    };
+    let mut sizes = [0u8; 8];
+    input
+        .read_exact(&mut sizes)
+        .map_err(|_| bad("no sizes".into()))?;
+    let packed = u64::from(LittleEndian::read_u32(&sizes[..4]));
+    let unpacked = u64::from(LittleEndian::read_u32(&sizes[4..]));
+    let expected = (h.record_bytes() as u64).checked_mul(h.points);
+    if expected != Some(unpacked) {
+        return Err(bad(format!(
+            "{unpacked} bytes uncompressed, but {} points of {} bytes are declared",
+            h.points,
+            h.record_bytes()
+        )));
+    }
+    let file = tempfile::tempfile().map_err(|e| IoError::os(std::env::temp_dir(), e))?;
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, &file);
+    lzf::decompress(&mut *input as &mut dyn BufRead, packed, &mut out, unpacked).map_err(bad)?;
+    std::io::Write::flush(&mut out).map_err(|e| IoError::os(std::env::temp_dir(), e))?;
+    drop(out);
+    Ok(file)
+}
+
+impl PointReader for PcdReader {
+    fn info(&self) -> &SourceInfo {
+        &self.info
+    }
+
+    /// `max` of 0 is taken as 1, since 0 points read means end of input.
+    fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
+        let max = max.max(1);
+        self.admit.begin(chunk, self.next, self.info.has_normals);
+        while chunk.len() < max && self.next < self.header.points {
+            let want = ((max - chunk.len()) as u64).min(self.header.points - self.next);
+            match self.body {
+                Body::Ascii { .. } => self.read_ascii(chunk, want)?,
+                Body::Binary { .. } => self.read_binary(chunk, want)?,
+                Body::Columns { .. } => self.read_columns(chunk, want)?,
+            }
+        }
+        Ok(self.admit.end(chunk))
+    }
+
+    fn skipped(&self) -> u64 {
+        self.admit.skipped()
+    }
+
+    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
+        if self.info.gzip || !matches!(self.body, Body::Binary { .. }) {
+            return None;
+        }
+        let path = &self.info.path;
+        let again = crate::io::source::open_input(path)
+            .and_then(|o| PcdReader::open(path, o.input, o.gzip, self.admit.policy()));
+        Some(again.map(|r| Box::new(r) as Box<dyn PointReader>))
+    }
+}

@@ -1,0 +1,59 @@
+//! What the growth reads about the points (plain data, no tiles): positions,
+//! PCA normals, local spacings, neighbour lists, and which points may be
+//! processed as centres.
+
+use crate::normals::hood::Hoods;
+use crate::spatial::KnnIndex;
+use glam::DVec3;
+
+/// Neighbour lists by point (local indices, nearest first).
+pub trait Neighbourhoods: Sync {
+    fn get(&self, i: u32) -> &[u32];
+}
+
+impl Neighbourhoods for Hoods {
+    fn get(&self, i: u32) -> &[u32] {
+        Hoods::get(self, i as usize)
+    }
+}
+
+/// Lists end to end: `ends[i]` is where point i's list ends.
+#[derive(Clone, Debug, Default)]
+pub struct Csr {
+    pub ends: Vec<u32>,
+    pub items: Vec<u32>,
+}
+
+impl Neighbourhoods for Csr {
+    fn get(&self, i: u32) -> &[u32] {
+        let i = i as usize;
+        let start = if i == 0 { 0 } else { self.ends[i - 1] as usize };
+        &self.items[start..self.ends[i] as usize]
+    }
+}
+
+pub struct Cloud<'a, H: Neighbourhoods> {
+    pub points: &'a [DVec3],
+    /// Unit PCA normal, unoriented (zero when the plane is undetermined).
+    pub normals: &'a [DVec3],
+    /// Local spacing (`thin.rs`).
+    pub spacing: &'a [f64],
+    pub hoods: &'a H,
+    /// Whether a point may be processed as a centre (its neighbourhood is
+    /// complete); others can still be connected to.
+    pub centre: &'a [bool],
+    /// Input ids: the growth order and every tie.
+    pub ids: &'a [u64],
+    /// Exact kNN over `points`, for checks beyond a neighbour list.
+    pub index: &'a dyn KnnIndex,
+}
+
+impl<H: Neighbourhoods> Cloud<'_, H> {
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}

@@ -1,0 +1,96 @@
+//! Per-point inputs of the growth for one tile's loaded points: the
+//! neighbour lists (paper 2 section 2.4: exact kNN, or paper 3's
+//! topological neighbours), the PCA normal through the neighbourhood's
+//! centroid (section 2.5), the local spacing and the thinning (`thin.rs`),
+//! all computed in one parallel pass while each list's distances are at
+//! hand.
+//!
+//! Deviation: section 2.4 finds neighbours in a grid of cells
+//! `cbrt(volume / n)` searched over 27 cells, which is not exact (the
+//! k-th neighbour can lie beyond; PITFALLS.md). The exact kNN of
+//! `crate::spatial` gives the same lists in every tile.
+
+use super::cloud::Neighbourhoods;
+use super::params::ProjectionParams;
+use super::thin::{local_spacing, thinned};
+use crate::normals::hood::{HoodIndex, Hoods};
+use crate::normals::pca::fit_plane;
+use crate::pipeline::KernelError;
+use crate::spatial::Neighbour;
+use crate::tiling::TilePoints;
+use glam::DVec3;
+
+/// What one point contributes beside its list.
+#[derive(Clone, Copy, Debug)]
+pub struct PointInfo {
+    pub normal: DVec3,
+    pub spacing: f64,
+    pub thinned: bool,
+    /// Its neighbour list is certainly complete within the loaded region.
+    pub complete: bool,
+}
+
+/// The lists of the core points, then those of the margin points.
+pub struct TileHoods {
+    core: Hoods,
+    margin: Hoods,
+    n_core: u32,
+}
+
+impl Neighbourhoods for TileHoods {
+    fn get(&self, i: u32) -> &[u32] {
+        if i < self.n_core {
+            self.core.get(i as usize)
+        } else {
+            self.margin.get((i - self.n_core) as usize)
+        }
+    }
+}
+
+/// The index over the loaded points, their neighbour lists and point
+/// data. Fails with `MarginTooSmall` when a core point's list may reach
+/// beyond the loaded region.
+pub(crate) fn local_data<'a>(
+    tile: &'a TilePoints,
+    params: &ProjectionParams,
+) -> Result<(HoodIndex<'a>, TileHoods, Vec<PointInfo>), KernelError> {
+    let index = HoodIndex::build(tile, &params.hood())?;
+    let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
+    let n_core = tile.n_core;
+    let (core, mut info) = index.hoods(tile, n_core, |i| i, visit)?;
+    if core.short_by > 0.0 {
+        return Err(KernelError::MarginTooSmall {
+            needed: (tile.margin + core.short_by) * 1.0001 + 1e-12,
+        });
+    }
+    let margin_count = tile.points.len() - n_core;
+    let (margin, margin_info) = index.hoods(tile, margin_count, |i| n_core + i, visit)?;
+    info.extend(margin_info);
+    let n_core = u32::try_from(n_core).map_err(|e| KernelError::Failed(e.to_string()))?;
+    Ok((
+        index,
+        TileHoods {
+            core,
+            margin,
+            n_core,
+        },
+        info,
+    ))
+}
+
+fn point_info(
+    tile: &TilePoints,
+    params: &ProjectionParams,
+    i: usize,
+    nbrs: &[Neighbour],
+) -> PointInfo {
+    let normal = fit_plane(&tile.points, i, nbrs).map_or(DVec3::ZERO, |f| f.normal);
+    let spacing = local_spacing(nbrs, params.k).unwrap_or(0.0);
+    let reach = nbrs.last().map_or(f64::INFINITY, |n| n.dist2.sqrt());
+    PointInfo {
+        normal,
+        spacing,
+        thinned: spacing > 0.0 && thinned(tile.ids[i], nbrs, &tile.ids, spacing, params.thin),
+        complete: nbrs.len() >= params.k && reach <= tile.room(tile.points[i]),
+    }
+}

@@ -1,0 +1,148 @@
+//! Parameters of the local-projection triangulation, with defaults that need
+//! no tuning: every length is relative to the *local* spacing of the points
+//! involved, so one setting serves a uniform scan, a 20:1 density step and
+//! terrain.
+
+use crate::normals::{NormalHood, NormalParams};
+use crate::pipeline::plan::KernelCost;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectionParams {
+    /// Neighbourhood of each vertex: the k nearest (paper 2 section 2.4,
+    /// k in 6..15) or paper 3's topological neighbours.
+    pub k: usize,
+    pub neighbourhood: NormalHood,
+    /// A point closer than this many local spacings to a point of smaller
+    /// input id is left out (0 keeps every point); see `thin.rs`.
+    pub thin: f64,
+    /// Longest edge, in local spacings (the larger of its ends').
+    pub max_edge: f64,
+    /// Neighbours higher over the tangent plane than this angle, seen from
+    /// the vertex, are not connected (another sheet, or a fold).
+    pub max_elevation_deg: f64,
+    /// Largest corner angle of a triangle.
+    pub max_angle_deg: f64,
+}
+
+/// Default k: the middle of the paper's range. Measured on the 1M noisy
+/// dragon (see the module docs of `recon::projection`).
+pub const DEFAULT_K: usize = 12;
+
+/// Default thinning, in local spacings (`thin.rs`). Measured on the 1M
+/// noisy dragon, the same store of 6 tiles: 0.6 left 1.24 % of the
+/// triangles under 10 degrees, 0.7 left 0.96 %, with the same 62 boundary
+/// loops, 0 non-manifold, inconsistent or self-intersecting, and the same
+/// mean distances to the dragon mesh (0.046 / 0.052 of the reference's
+/// spacing, mesh to dragon / dragon to mesh).
+pub const DEFAULT_THIN: f64 = 0.7;
+
+impl Default for ProjectionParams {
+    fn default() -> Self {
+        ProjectionParams {
+            k: DEFAULT_K,
+            neighbourhood: NormalHood::Knn,
+            thin: DEFAULT_THIN,
+            max_edge: 8.0,
+            max_elevation_deg: 45.0,
+            max_angle_deg: 170.0,
+        }
+    }
+}
+
+/// A parameter outside its range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("--{name} {value}: {why}")]
+pub struct BadParameter {
+    pub name: &'static str,
+    pub value: f64,
+    pub why: &'static str,
+}
+
+impl ProjectionParams {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), BadParameter> {
+        let bad = |name, value, why| Err(BadParameter { name, value, why });
+        if !(3..=64).contains(&self.k) {
+            return bad("k", self.k as f64, "must be between 3 and 64");
+        }
+        if !(0.0..1.0).contains(&self.thin) {
+            return bad("thin", self.thin, "must be in [0, 1) local spacings");
+        }
+        if !(self.max_edge.is_finite() && self.max_edge >= 1.0) {
+            return bad(
+                "max-edge",
+                self.max_edge,
+                "must be at least 1 local spacing",
+            );
+        }
+        if !(0.0 < self.max_elevation_deg && self.max_elevation_deg < 90.0) {
+            return bad(
+                "max-elevation",
+                self.max_elevation_deg,
+                "must be in (0, 90) degrees",
+            );
+        }
+        if !(60.0 < self.max_angle_deg && self.max_angle_deg < 180.0) {
+            return bad(
+                "max-angle",
+                self.max_angle_deg,
+                "must be in (60, 180) degrees",
+            );
+        }
+        Ok(())
+    }
+
+    /// The neighbourhood as the normals module's parameters (same index).
+    pub fn hood(&self) -> NormalParams {
+        NormalParams {
+            k: self.k,
+            neighbourhood: self.neighbourhood,
+            ..NormalParams::default()
+        }
+    }
+
+    /// What a run costs, for the memory plan (measured, see
+    /// [`BYTES_PER_POINT_BASE`] and [`SEAM_BYTES_PER_POINT`]): the kernel's
+    /// bytes per loaded point, and the seam pass's frames, gathered beside
+    /// the tiles and grown after them, as resident state.
+    pub fn cost(&self) -> KernelCost {
+        let k = self.k as u64;
+        let per_k = match self.neighbourhood {
+            NormalHood::Knn => BYTES_PER_POINT_PER_K,
+            NormalHood::Topological { .. } => 2 * BYTES_PER_POINT_PER_K,
+        };
+        KernelCost {
+            bytes_per_point: BYTES_PER_POINT_BASE + per_k * k,
+            global_per_point: 0,
+            contracts_boundaries: false,
+            resident_per_point: SEAM_BYTES_PER_POINT,
+            window_bytes_per_point: 0,
+            // The store (20) and the triangle spool (16 B, two per point).
+            scratch_per_point: 20 + 2 * 16,
+            // Vertices (3 f64) and faces (13 B, two per point).
+            output_per_point: 24 + 2 * 13,
+        }
+    }
+}
+
+/// Kernel bytes per loaded point beside the neighbour lists. Measured with
+/// `peak-rss` on the 1M dragon as one tile, one thread (the tile's points,
+/// kNN index, planes, spacings, states, directed edges, fixed triangles):
+/// 326 MiB at k = 12, 372 MiB at k = 24, so ~4 B per neighbour and ~270 B
+/// beside them once the binary and the mapped store are taken off; a
+/// tenth more for denser or noisier tiles.
+pub const BYTES_PER_POINT_BASE: u64 = 300;
+/// Kernel bytes per loaded point per neighbour (the list's id and the
+/// search's scratch).
+pub const BYTES_PER_POINT_PER_K: u64 = 6;
+
+/// The seam pass's memory per stored point: the frames the tiles hand
+/// over (points within the band and two list reaches of a face, with their
+/// planes, lists and the fixed triangles there, ~150 B each) and the
+/// growth over them at the end (surface, index, states). Measured with
+/// `peak-rss`: the 10M dragon at `--mem 512MiB` planned with no reserve
+/// (64 tiles of ~156k points) peaked at 590 MiB, ~50 B per stored point
+/// above the tiles' share. The frame's share of the points falls as
+/// 1/sqrt(tile points), so this is an upper bound for larger tiles; the
+/// plan has no per-tile-size term for it.
+pub const SEAM_BYTES_PER_POINT: f64 = 50.0;

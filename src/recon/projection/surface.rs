@@ -1,0 +1,303 @@
+//! The mesh under construction (paper 2 section 2.3): vertex states,
+//! triangles, the triangles around each vertex, and the orientation pieces.
+//!
+//! Invariant kept by [`Surface::try_add`]: every directed edge is used by at
+//! most one triangle, in the triangles' *effective* orientation. That one
+//! rule gives both properties the output promises: no edge has more than
+//! two triangles (two would need the same direction twice), and the two
+//! triangles of an edge traverse it in opposite directions (consistent
+//! winding).
+//!
+//! Orientation without a Riemannian graph (section 2.6) is local, so two
+//! fronts grown from different seeds may meet with opposite windings. Each
+//! triangle therefore belongs to a *piece*, an element of a parity
+//! union-find: its effective winding is its stored one, flipped when its
+//! piece's parity to the root is odd. A triangle joining two pieces
+//! records how they relate; a triangle that would contradict a relation
+//! already known (an inconsistent edge, or a Moebius band closing) is
+//! refused. The pieces are settled at the end (`orient.rs`).
+//!
+//! Storage: triangles in an array, and for each vertex a linked list of its
+//! corners (4 B per corner, 4 B per vertex): about 28 B per vertex for a
+//! mesh of two triangles per vertex.
+
+use crate::normals::unionfind::ParityUnionFind;
+
+/// "No entry" in the corner lists.
+pub const NONE: u32 = u32::MAX;
+
+/// Vertex states of section 2.3, and `Unused` for points that are never
+/// vertices (left out by the thinning, or without a tangent plane).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum State {
+    /// No triangle yet.
+    Free,
+    /// Has triangles and waits in the front to be processed.
+    Fringe,
+    /// Processed; its triangles do not close around it.
+    Boundary,
+    /// Its triangles close around it: nothing can be added.
+    Completed,
+    Unused,
+}
+
+/// One triangle around a vertex `v`: the triangle is `(v, a, b)` in its
+/// stored order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Wedge {
+    pub a: u32,
+    pub b: u32,
+    pub tri: u32,
+}
+
+pub struct Surface {
+    pub tris: Vec<[u32; 3]>,
+    /// Orientation piece of each triangle (an element of `pieces`).
+    pub piece: Vec<u32>,
+    /// Next corner (`3 * tri + i`) at the same vertex, or [`NONE`].
+    next: Vec<u32>,
+    /// First corner at each vertex, or [`NONE`].
+    head: Vec<u32>,
+    pub state: Vec<State>,
+    /// Pieces: pieces handed in first (`seed_base` of them), then one
+    /// element per vertex (a new piece is named by its seed).
+    pub pieces: ParityUnionFind,
+    seed_base: u32,
+}
+
+/// Why a triangle was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refusal {
+    /// A directed edge is taken (a third triangle, or opposite windings).
+    Edge,
+    /// Joining the pieces would contradict an earlier relation.
+    Orientation,
+}
+
+impl Surface {
+    pub fn new(n: usize) -> Self {
+        Self::with_pieces(n, 0)
+    }
+
+    /// A surface over `n` vertices that will also hold triangles of
+    /// `given` pieces named `0..given` (the seam pass's fixed triangles).
+    pub fn with_pieces(n: usize, given: u32) -> Self {
+        Surface {
+            tris: Vec::with_capacity(2 * n),
+            piece: Vec::with_capacity(2 * n),
+            next: Vec::with_capacity(6 * n),
+            head: vec![NONE; n],
+            state: vec![State::Free; n],
+            pieces: ParityUnionFind::new(given as usize + n),
+            seed_base: given,
+        }
+    }
+
+    /// The piece a growth seeded at `v` starts.
+    pub fn seed_piece(&self, v: u32) -> u32 {
+        self.seed_base + v
+    }
+
+    /// The triangles around `v`, most recent first.
+    pub fn wedges(&self, v: u32) -> Wedges<'_> {
+        Wedges {
+            s: self,
+            corner: self.head[v as usize],
+        }
+    }
+
+    pub fn has_triangles(&self, v: u32) -> bool {
+        self.head[v as usize] != NONE
+    }
+
+    /// Root of `tri`'s piece and whether its stored winding is flipped
+    /// relative to the root.
+    pub fn orientation(&mut self, tri: u32) -> (u32, bool) {
+        self.pieces.find(self.piece[tri as usize])
+    }
+
+    /// Whether `tri` runs `x -> y` in its stored order.
+    fn runs(&self, tri: u32, x: u32, y: u32) -> bool {
+        let t = self.tris[tri as usize];
+        (0..3).any(|i| t[i] == x && t[(i + 1) % 3] == y)
+    }
+
+    /// The triangles on the undirected edge `x`-`y` (at most two while the
+    /// invariant holds; more are ignored).
+    pub fn edge_triangles(&self, x: u32, y: u32) -> ([u32; 2], usize) {
+        let mut out = [NONE; 2];
+        let mut n = 0;
+        for w in self.wedges(x) {
+            if (w.a == y || w.b == y) && n < 2 {
+                out[n] = w.tri;
+                n += 1;
+            }
+        }
+        (out, n)
+    }
+
+    /// Adds triangle `t` (stored winding as given) to the piece `piece`,
+    /// whose root frame the winding is expressed in, if the invariant
+    /// allows; joins the pieces it meets across its edges.
+    pub fn try_add(&mut self, t: [u32; 3], piece: u32) -> Result<u32, Refusal> {
+        let (root, flip) = self.pieces.find(piece);
+        // The relations this triangle imposes: (other piece, its parity to
+        // the new triangle's frame).
+        let mut joins: [(u32, bool); 3] = [(NONE, false); 3];
+        for (i, join) in joins.iter_mut().enumerate() {
+            let (x, y) = (t[i], t[(i + 1) % 3]);
+            let (tris, n) = self.edge_triangles(x, y);
+            match n {
+                0 => {}
+                1 => {
+                    let other = tris[0];
+                    let (r, f) = self.orientation(other);
+                    // The neighbour must run y -> x in the new frame: its
+                    // stored direction x -> y needs an odd relation.
+                    let stored_same = self.runs(other, x, y);
+                    let need = stored_same ^ f ^ flip;
+                    if r == root {
+                        if need {
+                            return Err(Refusal::Edge);
+                        }
+                    } else {
+                        *join = (r, need);
+                    }
+                }
+                _ => return Err(Refusal::Edge),
+            }
+        }
+        // Relations between pieces not yet joined must agree with each other.
+        for i in 0..3 {
+            for j in 0..i {
+                if joins[i].0 != NONE && joins[i].0 == joins[j].0 && joins[i].1 != joins[j].1 {
+                    return Err(Refusal::Orientation);
+                }
+            }
+        }
+        for &(r, need) in &joins {
+            if r != NONE {
+                // `need`: r's stored frame is flipped relative to `root`'s.
+                self.pieces.union(r, root, need);
+            }
+        }
+        Ok(self.push(t, piece))
+    }
+
+    /// Appends a triangle without checks (fixed triangles handed in, which
+    /// met the invariant when they were made).
+    pub fn push(&mut self, t: [u32; 3], piece: u32) -> u32 {
+        let tri = self.tris.len() as u32;
+        self.tris.push(t);
+        self.piece.push(piece);
+        for (i, &v) in t.iter().enumerate() {
+            self.next.push(self.head[v as usize]);
+            self.head[v as usize] = 3 * tri + i as u32;
+        }
+        tri
+    }
+
+    /// Whether the triangles around `v` close around it: at least three,
+    /// and every triangle edge at `v` shared by two of them (each far end
+    /// appears twice). With the directed-edge rule that is one closed fan,
+    /// or, rarely, two fans pinched at `v`; either way nothing more can be
+    /// added at `v`.
+    pub fn is_closed(&self, v: u32) -> bool {
+        let mut ends = [0u32; 2 * MAX_CLOSED];
+        let mut n = 0;
+        for w in self.wedges(v) {
+            if n == ends.len() {
+                return false;
+            }
+            ends[n] = w.a;
+            ends[n + 1] = w.b;
+            n += 2;
+        }
+        if n < 6 {
+            return false;
+        }
+        let ends = &mut ends[..n];
+        ends.sort_unstable();
+        ends.chunks(2).all(|pair| pair[0] == pair[1])
+    }
+
+    fn wedge_at(&self, corner: u32) -> Wedge {
+        let t = self.tris[(corner / 3) as usize];
+        let i = (corner % 3) as usize;
+        Wedge {
+            a: t[(i + 1) % 3],
+            b: t[(i + 2) % 3],
+            tri: corner / 3,
+        }
+    }
+}
+
+/// Fans longer than this are not checked for closure (never closed); a
+/// vertex of a sane surface mesh has about six triangles.
+const MAX_CLOSED: usize = 24;
+
+pub struct Wedges<'a> {
+    s: &'a Surface,
+    corner: u32,
+}
+
+impl Iterator for Wedges<'_> {
+    type Item = Wedge;
+    fn next(&mut self) -> Option<Wedge> {
+        if self.corner == NONE {
+            return None;
+        }
+        let w = self.s.wedge_at(self.corner);
+        self.corner = self.s.next[self.corner as usize];
+        Some(w)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invariant_refuses_third_triangles_and_opposite_windings() {
+        let mut s = Surface::new(6);
+        let t0 = s.try_add([0, 1, 2], 0).unwrap();
+        assert_eq!(t0, 0);
+        // Consistent neighbour across 1-2 (runs 2 -> 1).
+        assert!(s.try_add([2, 1, 3], 0).is_ok());
+        // Same winding across 0-1 in the same piece: an inconsistent edge.
+        assert_eq!(s.try_add([0, 1, 4], 0), Err(Refusal::Edge));
+        // A third triangle on 1-2.
+        assert_eq!(s.try_add([1, 5, 2], 0), Err(Refusal::Edge));
+        assert_eq!(s.edge_triangles(1, 2).1, 2);
+    }
+
+    #[test]
+    fn pieces_join_with_the_parity_their_shared_edge_needs() {
+        let mut s = Surface::new(8);
+        s.try_add([0, 1, 2], 0).unwrap();
+        // Another seed's piece, wound the same way on edge 1-2: it must be
+        // flipped relative to piece 0 to share the edge.
+        s.try_add([1, 2, 3], 3).unwrap();
+        let (r0, f0) = s.orientation(0);
+        let (r1, f1) = s.orientation(1);
+        assert_eq!(r0, r1);
+        assert_ne!(f0, f1);
+        // In piece 0's frame [1, 2, 3] is wound [3, 2, 1] and runs 3 -> 2,
+        // so a triangle of piece 0 must run 2 -> 3.
+        assert_eq!(s.try_add([3, 2, 4], 0), Err(Refusal::Edge));
+        assert!(s.try_add([2, 3, 4], 0).is_ok());
+    }
+
+    #[test]
+    fn closure_follows_the_effective_winding() {
+        let mut s = Surface::new(8);
+        for (i, t) in [[0, 1, 2], [0, 2, 3], [0, 3, 4]].iter().enumerate() {
+            s.try_add(*t, i as u32 % 2).unwrap();
+        }
+        assert!(!s.is_closed(0));
+        s.try_add([0, 4, 1], 0).unwrap();
+        assert!(s.is_closed(0));
+        assert!(!s.is_closed(1));
+    }
+}

@@ -1,0 +1,86 @@
+//! Paper 2 over one tile's loaded points, start to end: neighbourhoods and
+//! planes (`local.rs`), then the growth (`grow.rs`) from the core points in
+//! input-id order. A pure function of the points.
+
+use super::cloud::Cloud;
+use super::grow::Grower;
+use super::local::{local_data, PointInfo, TileHoods};
+use super::orient::settle;
+use super::params::ProjectionParams;
+use super::surface::{State, Surface};
+use crate::geom::Aabb;
+use crate::pipeline::KernelError;
+use crate::tiling::TilePoints;
+use glam::DVec3;
+
+/// The grown surface of a tile, over its loaded points.
+pub struct TileSurface {
+    pub surface: Surface,
+    pub info: Vec<PointInfo>,
+    pub hoods: TileHoods,
+    pub processed: u64,
+}
+
+pub fn triangulate_tile(
+    tile: &TilePoints,
+    params: &ProjectionParams,
+) -> Result<TileSurface, KernelError> {
+    let (index, hoods, info) = local_data(tile, params)?;
+    let normals: Vec<DVec3> = info.iter().map(|p| p.normal).collect();
+    let spacing: Vec<f64> = info.iter().map(|p| p.spacing).collect();
+    let centre: Vec<bool> = info.iter().map(|p| p.complete).collect();
+    let cloud = Cloud {
+        points: &tile.points,
+        normals: &normals,
+        spacing: &spacing,
+        hoods: &hoods,
+        centre: &centre,
+        ids: &tile.ids,
+        index: index.as_knn(),
+    };
+    let mut surface = Surface::new(tile.points.len());
+    for (state, p) in surface.state.iter_mut().zip(&info) {
+        if p.thinned || p.spacing == 0.0 {
+            *state = State::Unused;
+        }
+    }
+    let mut seeds: Vec<u32> = (0..tile.n_core as u32).collect();
+    seeds.sort_unstable_by_key(|&i| tile.ids[i as usize]);
+    let mut grower = Grower::new(params, tile.points.len());
+    grower.grow(&cloud, &mut surface, &seeds);
+    let processed = grower.processed;
+    drop(index);
+    Ok(TileSurface {
+        surface,
+        info,
+        hoods,
+        processed,
+    })
+}
+
+/// Paper 2 over points in memory (one tile holding everything): the
+/// triangles, indexing `points`, wound consistently and outward (see
+/// `orient.rs`), and how many points were left unused.
+pub fn triangulate_points(
+    points: &[DVec3],
+    params: &ProjectionParams,
+) -> Result<(Vec<[u32; 3]>, TileSurface), KernelError> {
+    let everywhere = Aabb::new(DVec3::NEG_INFINITY, DVec3::INFINITY);
+    let tile = TilePoints {
+        tile: 0,
+        points: points.to_vec(),
+        ids: (0..points.len() as u64).collect(),
+        store_first: 0,
+        margin_store: Vec::new(),
+        n_core: points.len(),
+        core: everywhere,
+        loaded: everywhere,
+        margin: f64::INFINITY,
+        normals: Vec::new(),
+        flags: Vec::new(),
+    };
+    let mut grown = triangulate_tile(&tile, params)?;
+    let low = points.iter().fold(DVec3::INFINITY, |m, p| m.min(*p));
+    let triangles = settle(&mut grown.surface, points, low);
+    Ok((triangles, grown))
+}
