@@ -8,6 +8,7 @@
 #![deny(unsafe_code)]
 
 pub mod demo;
+pub mod features;
 pub mod geom;
 pub mod io;
 pub mod mesh;
@@ -15,6 +16,7 @@ pub mod neighbours;
 pub mod normals;
 pub mod pipeline;
 pub mod recon;
+pub mod render;
 pub mod spatial;
 pub mod store;
 pub mod synth;

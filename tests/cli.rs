@@ -306,3 +306,29 @@ fn report_records_stages_and_outcome() {
     );
     no_output_left(dir.path(), ".run.json.tmp");
 }
+
+#[test]
+fn a_store_whose_manifest_disagrees_with_its_columns_is_refused() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "in.xyz", GOOD_XYZ);
+    let store = dir.path().join("s");
+    let s = store.to_str().unwrap_or("");
+    assert!(scanmesh(&["tile", &input, "-o", s, "-q"]).status.success());
+    let manifest = store.join("manifest.json");
+    let text = std::fs::read_to_string(&manifest).expect("manifest");
+    for (from, to, says) in [
+        // The store's count and its one tile's, both.
+        ("\"count\": 15", "\"count\": 16", "the manifest says 16"),
+        (
+            "\"count\": 15",
+            "\"count\": 18446744073709551615",
+            "holds 15 points",
+        ),
+    ] {
+        std::fs::write(&manifest, text.replace(from, to)).expect("edit");
+        let out = dir.path().join("n.ply").display().to_string();
+        let o = scanmesh(&["normals", s, "-o", &out, "--k", "6"]);
+        assert_fails_naming(&o, says);
+        no_output_left(dir.path(), "n.ply");
+    }
+}

@@ -19,7 +19,8 @@ use std::path::PathBuf;
     about = "Seeded synthetic laser scans with known truth"
 )]
 struct Args {
-    /// sphere, torus, hole-plane, two-sheets, terrain, moebius, density-step, mesh.
+    /// sphere, torus, hole-plane, two-sheets, terrain, moebius, density-step, mesh,
+    /// stepped-block, notched-box, wavy-sheet.
     shape: String,
     /// Number of points.
     #[arg(short, default_value_t = 100_000)]
@@ -42,6 +43,10 @@ struct Args {
     /// Output point file (.ply, .xyz, .csv, .las, .laz).
     #[arg(short, long)]
     output: PathBuf,
+    /// Also write the shape's true feature lines (stepped-block,
+    /// notched-box, wavy-sheet) to this PLY, in `scanmesh features`' format.
+    #[arg(long)]
+    truth: Option<PathBuf>,
 }
 
 fn main() -> Result<()> {
@@ -92,6 +97,16 @@ fn main() -> Result<()> {
         writer.write_chunk(&chunk, None)?;
     }
     let n = writer.finish()?;
+    if let Some(path) = &a.truth {
+        let Some(lines) = shape.feature_lines() else {
+            bail!("{}: has no known feature lines", shape.name());
+        };
+        scanmesh::features::lines::LineGraph::from_segments(&lines).write(
+            path,
+            glam::DVec3::ZERO,
+            false,
+        )?;
+    }
     eprintln!(
         "scangen: {} {} points, noise {:.3e} -> {}",
         n,

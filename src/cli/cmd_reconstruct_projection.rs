@@ -39,7 +39,7 @@ pub fn run(
 
 pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
     let st = &r.stitch;
-    println!(
+    super::report::summary(format!(
         "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e} -> {} triangles ({} grown on seams), {:.2} s, peak {} -> {}",
         st.vertices,
         tiles,
@@ -50,5 +50,5 @@ pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) 
         secs,
         super::peak(),
         out.display()
-    );
+    ));
 }

@@ -3,14 +3,17 @@
 
 mod clock;
 mod cmd_convert;
+mod cmd_curvature;
 mod cmd_demo;
 mod cmd_eval;
+mod cmd_features;
 mod cmd_info;
 mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_reconstruct;
 mod cmd_reconstruct_delaunay;
 mod cmd_reconstruct_projection;
+mod cmd_render;
 mod cmd_tile;
 mod progress;
 mod report;
@@ -48,11 +51,17 @@ enum Command {
     Tile(cmd_tile::TileArgs),
     /// Oriented normals for every point, written in input order.
     Normals(cmd_normals::NormalsArgs),
+    /// Per-point principal, mean and Gaussian curvature (paper 5), in input order.
+    Curvature(cmd_curvature::CurvatureArgs),
+    /// Valley-ridge feature lines (paper 5) as polylines (.ply edges or .obj lines).
+    Features(cmd_features::FeaturesArgs),
     /// Topological (paper 3) or k nearest neighbours of every point, in input order.
     #[command(visible_alias = "neighbours")]
     Neighbors(cmd_neighbors::NeighborsArgs),
     /// A triangle mesh from a point cloud (implicit: paper 1).
     Reconstruct(cmd_reconstruct::ReconstructArgs),
+    /// A PNG of points, feature lines and meshes (the project's own rasteriser).
+    Render(cmd_render::RenderArgs),
     /// Mesh quality, and distances to a reference mesh or point set.
     Eval(cmd_eval::EvalArgs),
     /// Run the main job on a sample embedded in the binary.
@@ -262,8 +271,11 @@ pub fn run() -> Result<()> {
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
         Command::Normals(a) => cmd_normals::run(a),
+        Command::Curvature(a) => cmd_curvature::run(a),
+        Command::Features(a) => cmd_features::run(a),
         Command::Neighbors(a) => cmd_neighbors::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
+        Command::Render(a) => cmd_render::run(a),
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
     };
@@ -277,10 +289,12 @@ impl Command {
     /// The options every processing command takes, if this is one.
     fn common(&self) -> Option<&CommonArgs> {
         match self {
-            Command::Info(_) | Command::Eval(_) => None,
+            Command::Info(_) | Command::Eval(_) | Command::Render(_) => None,
             Command::Convert(a) => Some(&a.common),
             Command::Tile(a) => Some(&a.common),
             Command::Normals(a) => Some(&a.common),
+            Command::Curvature(a) => Some(&a.common),
+            Command::Features(a) => Some(&a.common),
             Command::Neighbors(a) => Some(&a.common),
             Command::Reconstruct(a) => Some(&a.common),
             Command::Demo(a) => Some(&a.common),

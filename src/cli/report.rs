@@ -8,6 +8,7 @@
 use super::clock::{Mark, Span};
 use scanmesh::pipeline::Progress;
 use serde::Serialize;
+use std::io::Write;
 use std::path::Path;
 use std::sync::Mutex;
 
@@ -98,7 +99,8 @@ impl Drop for Recorder {
 
 /// Prints a command's closing summary line and keeps it for the report.
 pub fn summary(line: String) {
-    println!("{line}");
+    // A closed pipe (`| head`) is the reader's choice, not an error of ours.
+    let _ = writeln!(std::io::stdout(), "{line}");
     if let Ok(mut log) = LOG.lock() {
         log.summary = Some(line);
     }

@@ -51,8 +51,8 @@ pub struct KernelCost {
     pub contracts_boundaries: bool,
     /// Bytes per point of state that must stay in memory beside the tiles
     /// of a later pass, with no external path (the small-piece filter's
-    /// sets beside the marching-cubes tiles); never at once with the
-    /// global pass's state.
+    /// sets beside the marching-cubes tiles, the projection's seam frames
+    /// until its seam pass); never at once with the global pass's state.
     pub resident_per_point: f64,
     /// Bytes per point of an output window (0: no input-order output).
     pub window_bytes_per_point: u64,
@@ -114,7 +114,7 @@ impl MemoryPlan {
         let global_in_memory = budget.holds(points, cost.global_per_point);
         let resident = (points as f64 * cost.resident_per_point) as u64;
         if resident > free / 2 {
-            return Err("the per-vertex sets of the small-piece filter");
+            return Err("state the kernel keeps for the whole run (the piece filter's sets, the seam frames)");
         }
         // The global pass follows the kernel pass that resident state
         // belongs to (or precedes it): they never hold memory at once.

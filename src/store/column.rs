@@ -55,6 +55,15 @@ impl Column {
         &self.path
     }
 
+    /// Whole items the file holds.
+    pub fn items(&self) -> Result<u64, StoreError> {
+        let meta = self
+            .file
+            .metadata()
+            .map_err(|e| StoreError::os(&self.path, e))?;
+        Ok(meta.len() / self.item_bytes.max(1) as u64)
+    }
+
     /// Calls `f` with the raw bytes of items `[first, first + count)`.
     pub fn with_bytes<R>(
         &self,
@@ -62,32 +71,45 @@ impl Column {
         count: u64,
         f: impl FnOnce(&[u8]) -> R,
     ) -> Result<R, StoreError> {
-        let len = count as usize * self.item_bytes;
+        let item = self.item_bytes as u64;
+        // A corrupt manifest may ask for any range: checked, not wrapped.
+        let range = count
+            .checked_mul(item)
+            .and_then(|len| Some((first.checked_mul(item)?, len)))
+            .and_then(|(offset, len)| Some((offset, len, offset.checked_add(len)?)));
+        let Some((offset, len, end)) = range else {
+            return Err(StoreError::Corrupt {
+                path: self.path.clone(),
+                reason: format!("range of {count} items from {first} asked"),
+            });
+        };
         if len == 0 {
             return Ok(f(&[]));
         }
-        let offset = first * self.item_bytes as u64;
         let file_len = self
             .file
             .metadata()
             .map_err(|e| StoreError::os(&self.path, e))?
             .len();
-        if offset + len as u64 > file_len {
+        if end > file_len {
             return Err(StoreError::Corrupt {
                 path: self.path.clone(),
                 reason: format!(
                     "column holds {} bytes, range {}..{} asked",
-                    file_len,
-                    offset,
-                    offset + len as u64
+                    file_len, offset, end
                 ),
             });
         }
         // SAFETY: the store's column files are private to scanmesh and are not
         // truncated while a store is open; the range was checked against the
         // file length above. The map lives only inside this call.
-        let map = unsafe { MmapOptions::new().offset(offset).len(len).map(&self.file) }
-            .map_err(|e| StoreError::os(&self.path, e))?;
+        let map = unsafe {
+            MmapOptions::new()
+                .offset(offset)
+                .len(len as usize)
+                .map(&self.file)
+        }
+        .map_err(|e| StoreError::os(&self.path, e))?;
         Ok(f(&map))
     }
 

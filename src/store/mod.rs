@@ -129,6 +129,17 @@ impl PointStore {
             _lock: lock,
         };
         store.validate()?;
+        // Later passes size their state by the count: it must be the data's.
+        for column in [&store.xyz, &store.index] {
+            if column.items()? != store.manifest.count {
+                return Err(store.corrupt(format!(
+                    "{} holds {} points, the manifest says {}",
+                    column.path().display(),
+                    column.items()?,
+                    store.manifest.count
+                )));
+            }
+        }
         Ok(store)
     }
 
@@ -139,7 +150,9 @@ impl PointStore {
             if t.start != next {
                 return Err(self.corrupt(format!("tile {i} starts at {} not {next}", t.start)));
             }
-            next += t.count;
+            next = next
+                .checked_add(t.count)
+                .ok_or_else(|| self.corrupt(format!("tile {i} holds {} points", t.count)))?;
         }
         if next != self.manifest.count {
             return Err(self.corrupt(format!(

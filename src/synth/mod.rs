@@ -1,7 +1,8 @@
 //! Seeded synthetic scans of surfaces with known truth (position and normal),
 //! for tests and benches: sphere, torus, plane with a hole, two close sheets,
-//! terrain with buildings, Moebius strip, a 20:1 density step, and any
-//! triangle mesh.
+//! terrain with buildings, Moebius strip, a 20:1 density step, any
+//! triangle mesh, and shapes with known feature lines (stepped prisms, a
+//! wavy sheet: [`creased`]).
 //!
 //! Everything streams: [`stream`] yields one [`Sample`] at a time (or fills
 //! bounded chunks), so 10^7 points never need to be in memory at once;
@@ -13,6 +14,7 @@
 //! holds the exact surface points of the noisy one.
 
 pub mod closed;
+pub mod creased;
 pub mod error;
 pub mod fibonacci;
 pub mod mesh;
@@ -21,6 +23,7 @@ pub mod sheets;
 mod stream;
 pub mod terrain;
 
+pub use creased::{LineKind, StepProfile, TrueSegment, WavySheet};
 pub use error::SynthError;
 pub use fibonacci::{fibonacci_direction, fibonacci_sphere};
 pub use mesh::TriMesh;
@@ -89,6 +92,10 @@ pub enum Shape {
         sag: f64,
     },
     Mesh(TriMesh),
+    /// A step profile extruded into a closed prism (known creases).
+    Steps(StepProfile),
+    /// A sinusoidal sheet (known crest and trough lines).
+    WavySheet(WavySheet),
 }
 
 impl Shape {
@@ -137,6 +144,8 @@ impl Shape {
             Shape::Moebius { .. } => "moebius",
             Shape::DensityStep { .. } => "density-step",
             Shape::Mesh(_) => "mesh",
+            Shape::Steps(_) => "steps",
+            Shape::WavySheet(_) => "wavy-sheet",
         }
     }
 
@@ -152,11 +161,40 @@ impl Shape {
             Shape::moebius(1.0, 0.5),
             Shape::density_step(2.0, 20.0),
             Shape::mesh(TriMesh::icosahedron(1.0)),
+            Shape::Steps(StepProfile::stepped_block()),
+            Shape::wavy_sheet(),
         ]
+    }
+
+    /// A 4 x 4 sheet with crests and troughs every 0.35 (amplitude 0.07:
+    /// slopes up to 52 degrees, crest radius of curvature 0.044, about 6
+    /// mean spacings at 100,000 points).
+    pub fn wavy_sheet() -> Self {
+        Shape::WavySheet(WavySheet {
+            side: 4.0,
+            amplitude: 0.07,
+            wavelength: 0.35,
+        })
+    }
+
+    /// The true feature lines of the shapes that have them (ridges convex
+    /// seen from the normals' side, valleys concave).
+    pub fn feature_lines(&self) -> Option<Vec<TrueSegment>> {
+        match self {
+            Shape::Steps(p) => Some(p.truth()),
+            Shape::WavySheet(w) => Some(w.truth()),
+            _ => None,
+        }
     }
 
     /// The preset of kind `name` (see [`Shape::presets`]).
     pub fn preset(name: &str) -> Option<Shape> {
+        // Two presets of the step kind, by their own names.
+        match name {
+            "stepped-block" => return Some(Shape::Steps(StepProfile::stepped_block())),
+            "notched-box" => return Some(Shape::Steps(StepProfile::notched_box())),
+            _ => {}
+        }
         Shape::presets().into_iter().find(|s| s.name() == name)
     }
 }

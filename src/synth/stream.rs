@@ -2,6 +2,7 @@
 //! noise, and chunked output.
 
 use super::closed::{MoebiusSampler, SphereSampler, TorusSampler};
+use super::creased::{StepSampler, WavySampler};
 use super::error::SynthError;
 use super::mesh::MeshSampler;
 use super::rng::Rng;
@@ -26,6 +27,8 @@ pub enum ShapeSampler<'a> {
     Moebius(MoebiusSampler),
     DensityStep(DensityStepSampler),
     Mesh(MeshSampler<'a>),
+    Steps(StepSampler),
+    Wavy(WavySampler),
 }
 
 impl<'a> ShapeSampler<'a> {
@@ -52,6 +55,8 @@ impl<'a> ShapeSampler<'a> {
                 ShapeSampler::DensityStep(DensityStepSampler::new(*side, *ratio, *sag)?)
             }
             Shape::Mesh(m) => ShapeSampler::Mesh(MeshSampler::new(m)?),
+            Shape::Steps(p) => ShapeSampler::Steps(StepSampler::new(p)?),
+            Shape::WavySheet(w) => ShapeSampler::Wavy(WavySampler::new(*w)?),
         })
     }
 
@@ -65,6 +70,8 @@ impl<'a> ShapeSampler<'a> {
             ShapeSampler::Moebius(s) => s,
             ShapeSampler::DensityStep(s) => s,
             ShapeSampler::Mesh(s) => s,
+            ShapeSampler::Steps(s) => s,
+            ShapeSampler::Wavy(s) => s,
         }
     }
 }

@@ -283,9 +283,9 @@ impl PointReader for PcdReader {
         if self.info.gzip || !matches!(self.body, Body::Binary { .. }) {
             return None;
         }
-        let path = &self.info.path;
-        let again = crate::io::source::open_input(path)
-            .and_then(|o| PcdReader::open(path, o.input, o.gzip, self.admit.policy()));
-        Some(again.map(|r| Box::new(r) as Box<dyn PointReader>))
+        let (path, policy) = (&self.info.path, self.admit.policy());
+        crate::io::source::reopen_with(path, |input, gzip| {
+            PcdReader::open(path, input, gzip, policy)
+        })
     }
 }

@@ -211,10 +211,10 @@ impl PointReader for PlyPointReader {
         if self.info.gzip || !matches!(self.body, Body::Fixed { .. }) {
             return None;
         }
-        let path = &self.info.path;
-        let again = crate::io::source::open_input(path)
-            .and_then(|o| PlyPointReader::open(path, o.input, o.gzip, self.admit.policy()));
-        Some(again.map(|r| Box::new(r) as Box<dyn PointReader>))
+        let (path, policy) = (&self.info.path, self.admit.policy());
+        crate::io::source::reopen_with(path, |input, gzip| {
+            PlyPointReader::open(path, input, gzip, policy)
+        })
     }
 }
 

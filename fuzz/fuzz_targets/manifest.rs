@@ -1,0 +1,25 @@
+//! A store whose manifest is arbitrary text beside small, valid columns:
+//! opening it and reading every tile must end in data or an error, never a
+//! panic or an allocation sized by the manifest's counts.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use scanmesh::store::PointStore;
+
+fuzz_target!(|data: &[u8]| {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // Columns of 60 points (xyz f32 x3, index u64, one block of bounds), as
+    // in the seed manifest.
+    std::fs::write(dir.path().join("xyz.f32"), vec![0u8; 720]).expect("xyz");
+    std::fs::write(dir.path().join("index.u64"), vec![0u8; 480]).expect("index");
+    std::fs::write(dir.path().join("blocks.f32"), vec![0u8; 24]).expect("blocks");
+    std::fs::write(dir.path().join("manifest.json"), data).expect("manifest");
+    let Ok(store) = PointStore::open_shared(dir.path()) else {
+        return;
+    };
+    let (mut xyz, mut ids) = (Vec::new(), Vec::new());
+    for t in store.tiles() {
+        let _ = store.read_coords(t.start, t.count, &mut xyz);
+        let _ = store.read_indices(t.start, t.count, &mut ids);
+    }
+});

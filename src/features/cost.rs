@@ -1,0 +1,111 @@
+//! What `curvature` and `features` runs cost, for the memory plan
+//! (`pipeline::plan`): the largest of the passes they chain (normals when
+//! the store has none, the curvature kernel, the feature kernel), the
+//! normals' orientation state, the input-order export and the lines kept
+//! until the seams are joined. Checked on the 10M-point noisy dragon:
+//! `features --mem 256MiB` peaks at 231 MiB (peak-rss; 258 MiB before the
+//! margin and the join were declared, 276 MiB with 32 d growth cells).
+
+use super::export::RECORD;
+use super::params::FeatureParams;
+use super::CurvatureParams;
+use crate::pipeline::plan::MARGIN_FACTOR;
+use crate::pipeline::KernelCost;
+
+/// Peak bytes per loaded point of the curvature kernel: the tile's
+/// positions, ids and normals, the radius grid, the hood answers and the
+/// per-point results. Measured with `tools/peak_rss.rs`, one tile and one
+/// thread on stores with normals: peak RSS 110 MiB on the 437,645-point
+/// dragon and 234 MiB on the 1M-point noisy dragon, 231 B per point of the
+/// difference (the export's window, holding every record at that budget,
+/// included).
+pub const CURVATURE_BYTES_PER_POINT: u64 = 250;
+
+/// Peak bytes per loaded point of the feature kernel (curvature reused
+/// from the store): the candidate sets, enhanced and smoothed points and
+/// their grids. Measured as above: 77.6 MiB and 178 MiB, 187 B per point.
+pub const FEATURES_BYTES_PER_POINT: u64 = 210;
+
+/// Loaded points per core point of the feature kernel at the tile sizes a
+/// small budget gives (60-80k points): its margin is a growth cell plus
+/// the stages' radius chain (~59 d at the defaults), far more than the
+/// plan's `MARGIN_FACTOR` allows for. Measured at 10M points in 256 MiB
+/// with 78k-point tiles and a 75 d margin: 175 MiB of tiles in flight,
+/// 4.0 loaded points per core point.
+const FEATURES_LOADED_PER_CORE: f64 = 3.5;
+
+/// Line vertices per input point allowed for: 0.026 on the dragon and
+/// 0.041 on the 10M noisy dragon at the default thresholds.
+const LINE_VERTICES_PER_POINT: f64 = 0.05;
+
+/// Bytes per line vertex while the seams are joined (all polylines, the
+/// copies' grid, the repair's graph and grid): the 10M noisy dragon's
+/// 408k vertices took the RSS from 183 to 258 MiB after the tiles, ~190 B
+/// each (with the grown copies kept through the repair).
+const BYTES_PER_LINE_VERTEX: f64 = 200.0;
+
+/// Scratch bytes per point of the passes before the export: the store
+/// (20), normals and flags (13), the orientation's forest runs (24) and
+/// labels (8), the curvature columns (4 per value, and the flags).
+const SCRATCH_PER_POINT: u64 = 65 + 4 * super::curvature::VALUES as u64 + 1;
+
+impl CurvatureParams {
+    /// A `curvature` run: normals when needed, the kernel, the export in
+    /// input order (a bucket and a write buffer of slot records per window
+    /// point, and the reorder file on disk).
+    pub fn cost(&self) -> KernelCost {
+        let normals = self.normals.cost();
+        let slot = RECORD as u64 + 4;
+        KernelCost {
+            bytes_per_point: normals.bytes_per_point.max(CURVATURE_BYTES_PER_POINT),
+            window_bytes_per_point: 2 * slot,
+            scratch_per_point: SCRATCH_PER_POINT + slot,
+            output_per_point: RECORD as u64,
+            ..normals
+        }
+    }
+}
+
+impl FeatureParams {
+    /// A `features` run: the curvature run's passes (no export), the
+    /// feature kernel, and the lines kept in memory until the seams join.
+    pub fn cost(&self) -> KernelCost {
+        let curvature = self.curvature.cost();
+        let line_bytes = LINE_VERTICES_PER_POINT * BYTES_PER_LINE_VERTEX;
+        // The plan allows for MARGIN_FACTOR loaded points per core point.
+        let features = FEATURES_BYTES_PER_POINT as f64 * FEATURES_LOADED_PER_CORE / MARGIN_FACTOR;
+        KernelCost {
+            bytes_per_point: curvature.bytes_per_point.max(features.ceil() as u64),
+            resident_per_point: line_bytes,
+            window_bytes_per_point: 0,
+            scratch_per_point: SCRATCH_PER_POINT,
+            // Vertices (24 B) and edges (9 B) of the PLY.
+            output_per_point: (LINE_VERTICES_PER_POINT * 33.0).ceil() as u64,
+            ..curvature
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::plan::{MemoryPlan, MIN_TILE_POINTS};
+    use crate::pipeline::MemoryBudget;
+
+    #[test]
+    fn ten_million_points_plan_within_256_mib_on_two_threads() {
+        let budget = MemoryBudget::new(256 << 20, 2);
+        let features = FeatureParams::default().cost();
+        let curvature = CurvatureParams::default().cost();
+        for cost in [features, curvature] {
+            let plan = MemoryPlan::new(budget, 10_000_000, &cost).unwrap();
+            assert!(plan.tile_points >= MIN_TILE_POINTS, "{plan:?}");
+            // Never below what the normals pass before it needs.
+            let normals = CurvatureParams::default().normals.cost();
+            assert!(cost.bytes_per_point >= normals.bytes_per_point);
+            assert!(cost.bytes_per_point >= CURVATURE_BYTES_PER_POINT);
+        }
+        assert!(features.bytes_per_point >= FEATURES_BYTES_PER_POINT);
+        assert!(features.resident_per_point > 0.0 && curvature.window_bytes_per_point > 0);
+    }
+}

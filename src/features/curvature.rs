@@ -1,0 +1,340 @@
+//! The curvature pass (paper 5 section 2): per point, the quadric of its
+//! neighbourhood in the PCA frame oriented by the store's normals
+//! ([`super::quadric`]), and at the point `k1 >= k2`, `H`, `K` and the fit's
+//! RMS residual, into the store columns [`super::CURVATURE_FILE`] and
+//! [`super::CURVATURE_FLAGS_FILE`].
+//!
+//! Seam policy: per-point local. A core point's value depends on its
+//! neighbourhood only, found exactly (ties by input id) and checked to lie
+//! inside the loaded region, so every tiling gives the same bits.
+
+use super::hood::{HoodIndex, HoodScratch};
+use super::quadric::{fit_quadric, pca_frame, Curvature, Quadric};
+use super::stats::CurvatureStats;
+use super::{
+    CurvatureHood, CurvatureParams, FeaturesError, HoodChoice, CURVATURE_FILE,
+    CURVATURE_FLAGS_FILE, CURVATURE_META_FILE, FLAG_UNORIENTED,
+};
+use crate::normals::{
+    compute_normals, FLAG_DEGENERATE as N_DEGENERATE, FLAG_UNORIENTED as N_UNORIENTED,
+};
+use crate::pipeline::{run_tiles, KernelError, Progress, RunOptions, RunStats, TileKernel};
+use crate::spatial::Neighbour;
+use crate::store::{spacing::ensure_spacing, PointStore, NORMAL_FILE};
+use crate::tiling::TilePoints;
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// f32 values per point in the curvature column.
+pub const VALUES: usize = 5;
+
+/// One tile's curvature of its core points.
+pub struct CurvatureTile {
+    /// `k1, k2, H, K, residual` per core point.
+    pub values: Vec<f32>,
+    pub flags: Vec<u8>,
+    pub stats: CurvatureStats,
+}
+
+pub struct CurvatureKernel {
+    pub hood: CurvatureHood,
+    pub margin: f64,
+    /// Mean spacing `d` (the statistics' scale).
+    pub spacing: f64,
+}
+
+/// The oriented normal of loaded point `i`, if the normals pass gave one.
+pub(crate) fn oriented_normal(tile: &TilePoints, i: usize) -> Option<DVec3> {
+    let n = *tile.normals.get(i)?;
+    let f = tile.flags.get(i).copied().unwrap_or(N_DEGENERATE);
+    let ok = f & (N_DEGENERATE | N_UNORIENTED) == 0 && n.is_finite() && n != DVec3::ZERO;
+    ok.then_some(n)
+}
+
+/// The quadric of point `i` and its neighbours `nbrs` (the point first,
+/// then neighbours in their order), its frame's normal turned toward
+/// `toward` (canonical PCA sign when `None`).
+pub fn point_quadric(
+    points: &[DVec3],
+    i: usize,
+    nbrs: &[Neighbour],
+    toward: Option<DVec3>,
+    buf: &mut Vec<DVec3>,
+) -> Result<Quadric, u8> {
+    buf.clear();
+    buf.push(points[i]);
+    buf.extend(nbrs.iter().map(|n| points[n.index as usize]));
+    let frame = pca_frame(buf, toward.unwrap_or(DVec3::ZERO))?;
+    fit_quadric(buf, frame)
+}
+
+/// The curvatures of a fitted quadric at the point it was fitted for.
+pub fn curvature_of(q: &Quadric, p: DVec3) -> Curvature {
+    let l = q.frame.local(p);
+    q.curvature_at(l.x, l.y)
+}
+
+impl CurvatureKernel {
+    /// Values and flags of loaded point `i`, and how far its
+    /// neighbourhood reaches beyond the loaded region.
+    fn point(
+        &self,
+        tile: &TilePoints,
+        index: &HoodIndex,
+        i: usize,
+        s: &mut (HoodScratch, Vec<DVec3>),
+    ) -> Result<([f32; VALUES], u8, f64, Option<Quadric>), KernelError> {
+        let reach = index.query(tile, i, &mut s.0)?;
+        let short = reach - tile.room(tile.points[i]);
+        let toward = oriented_normal(tile, i);
+        let nan = f32::NAN;
+        Ok(
+            match point_quadric(&tile.points, i, &s.0.nbrs, toward, &mut s.1) {
+                Err(flag) => ([nan; VALUES], flag, short, None),
+                Ok(q) => {
+                    let c = curvature_of(&q, tile.points[i]);
+                    let k = [c.k1, c.k2, c.mean, c.gauss, q.rms].map(|v| v as f32);
+                    match toward {
+                        Some(_) => (k, 0, short, Some(q)),
+                        None => ([nan, nan, nan, k[3], k[4]], FLAG_UNORIENTED, short, Some(q)),
+                    }
+                }
+            },
+        )
+    }
+}
+
+impl TileKernel for CurvatureKernel {
+    type Output = CurvatureTile;
+
+    fn name(&self) -> &str {
+        "features: curvature"
+    }
+
+    fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    fn needs_normals(&self) -> bool {
+        true
+    }
+
+    fn run(&self, tile: &TilePoints) -> Result<CurvatureTile, KernelError> {
+        let index = HoodIndex::build(tile, self.hood)?;
+        let parts: Vec<(CurvatureTile, f64)> = (0..tile.n_core.div_ceil(CHUNK))
+            .into_par_iter()
+            .map_init(
+                || (HoodScratch::default(), Vec::new()),
+                |s, c| self.chunk(tile, &index, c * CHUNK..tile.n_core.min((c + 1) * CHUNK), s),
+            )
+            .collect::<Result<_, _>>()?;
+        let mut out = CurvatureTile {
+            values: Vec::with_capacity(tile.n_core * VALUES),
+            flags: Vec::with_capacity(tile.n_core),
+            stats: CurvatureStats::new(self.spacing),
+        };
+        let mut short = 0.0f64;
+        for (part, sh) in parts {
+            out.values.extend(part.values);
+            out.flags.extend(part.flags);
+            out.stats.merge(&part.stats);
+            short = short.max(sh);
+        }
+        check_room(short, tile.margin)?;
+        Ok(out)
+    }
+}
+
+/// Points per parallel task.
+const CHUNK: usize = 2048;
+
+impl CurvatureKernel {
+    fn chunk(
+        &self,
+        tile: &TilePoints,
+        index: &HoodIndex,
+        range: std::ops::Range<usize>,
+        s: &mut (HoodScratch, Vec<DVec3>),
+    ) -> Result<(CurvatureTile, f64), KernelError> {
+        let mut out = CurvatureTile {
+            values: Vec::with_capacity(range.len() * VALUES),
+            flags: Vec::with_capacity(range.len()),
+            stats: CurvatureStats::new(self.spacing),
+        };
+        let mut short = 0.0f64;
+        for i in range {
+            let (values, flags, sh, q) = self.point(tile, index, i, s)?;
+            short = short.max(sh);
+            out.values.extend(values);
+            out.flags.push(flags);
+            out.stats.count_flags(flags);
+            if let Some(q) = q {
+                out.stats.residual2.add(q.rms * q.rms);
+                out.stats.residual.add(q.rms);
+                out.stats.max_error = out.stats.max_error.max(q.max_error);
+            }
+            if flags == 0 {
+                let dominant = if values[0].abs() >= values[1].abs() {
+                    values[0]
+                } else {
+                    values[1]
+                };
+                out.stats.dominant.add(f64::from(dominant.abs()));
+            }
+        }
+        Ok((out, short))
+    }
+}
+
+/// Fails with the margin that would make every neighbourhood complete,
+/// given the largest shortfall (as the normals kernel does).
+pub(crate) fn check_room(short: f64, margin: f64) -> Result<(), KernelError> {
+    if short > 0.0 {
+        // A little extra so rounding at the region's edge cannot loop.
+        let needed = if short.is_finite() {
+            (margin + short) * 1.0001 + 1e-12
+        } else {
+            0.0
+        };
+        return Err(KernelError::MarginTooSmall {
+            needed: needed.max(margin * 2.0),
+        });
+    }
+    Ok(())
+}
+
+/// What produced a store's curvature column and what it measured, saved
+/// beside it ([`CURVATURE_META_FILE`]) so `features` reuses it only when it
+/// was made with the same neighbourhood.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurvatureMeta {
+    pub hood: HoodChoice,
+    /// Paper's mean spacing `d`.
+    pub spacing: f64,
+    pub resolved: CurvatureHood,
+    pub points: u64,
+    /// Points per flag bit: sparse, degenerate, ill-conditioned, unoriented.
+    pub flagged: [u64; 4],
+    /// RMS of the fits' residuals, and the largest `|E_j|`.
+    pub rms: f64,
+    /// Median of the points' RMS residuals (log-histogram bin edge).
+    pub median_residual: f64,
+    pub max_error: f64,
+    /// Percentiles 0..=100 of `|k_i|` (larger-magnitude principal curvature)
+    /// over the oriented points (log-histogram bin edges: at most 1.1 % high).
+    pub dominant_percentiles: Vec<f64>,
+}
+
+impl CurvatureMeta {
+    /// The `q`-quantile (0..1) of `|k_i|`, interpolated between percentiles.
+    pub fn dominant_quantile(&self, q: f64) -> f64 {
+        let p = &self.dominant_percentiles;
+        if p.is_empty() {
+            return 0.0;
+        }
+        let x = q.clamp(0.0, 1.0) * (p.len() - 1) as f64;
+        let (lo, t) = (x.floor() as usize, x.fract());
+        let hi = (lo + 1).min(p.len() - 1);
+        p[lo] * (1.0 - t) + p[hi] * t
+    }
+
+    pub fn load(store: &PointStore) -> Option<CurvatureMeta> {
+        let text = std::fs::read_to_string(store.dir.join(CURVATURE_META_FILE)).ok()?;
+        serde_json::from_str(&text).ok()
+    }
+
+    fn save(&self, store: &PointStore) -> Result<(), FeaturesError> {
+        let path = store.dir.join(CURVATURE_META_FILE);
+        let text = serde_json::to_string_pretty(self).map_err(|e| FeaturesError::Meta {
+            path: path.clone(),
+            reason: e.to_string(),
+        })?;
+        std::fs::write(&path, text).map_err(|e| FeaturesError::Meta {
+            path,
+            reason: e.to_string(),
+        })
+    }
+}
+
+/// The curvature pass's outcome.
+#[derive(Clone, Debug)]
+pub struct CurvatureReport {
+    pub meta: CurvatureMeta,
+    pub tiles: usize,
+    pub run: RunStats,
+    /// Whether the normals were computed first (the store had none).
+    pub computed_normals: bool,
+}
+
+/// Computes the curvature of every point of `store` into its columns,
+/// computing normals first if the store has none.
+pub fn compute_curvature(
+    store: &mut PointStore,
+    params: &CurvatureParams,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<CurvatureReport, FeaturesError> {
+    params.hood.validate()?;
+    let computed_normals = !store.has_column(NORMAL_FILE);
+    if computed_normals {
+        compute_normals(store, &params.normals, opts, progress)?;
+    }
+    let estimate = ensure_spacing(store)?;
+    let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;
+    if !(d > 0.0 && d.is_finite()) {
+        return Err(FeaturesError::BadParameter(format!(
+            "{}: every point coincides with its neighbours (mean spacing {d}): no curvature",
+            store.dir.display()
+        )));
+    }
+    // The tangent-plane noise in nearest-neighbour distances, when the
+    // normals pass measured it (exact sums: the same for any tiling).
+    let noise_ratio = store
+        .manifest
+        .sampling
+        .filter(|s| s.mean_nn > 0.0)
+        .map_or(0.0, |s| s.noise / s.mean_nn);
+    let hood = params.hood.resolve(d, noise_ratio);
+    let kernel = CurvatureKernel {
+        hood,
+        margin: match hood {
+            CurvatureHood::Radius(r) => r * 1.0001 + 1e-12,
+            CurvatureHood::Knn(k) => 3.0 * estimate * (k as f64).sqrt(),
+            CurvatureHood::Topological { k, .. } => 6.0 * estimate * (k as f64).sqrt(),
+        },
+        spacing: d,
+    };
+    let values = store.create_attribute(CURVATURE_FILE, 4 * VALUES)?;
+    let flags = store.create_attribute(CURVATURE_FLAGS_FILE, 1)?;
+    let mut stats = CurvatureStats::new(d);
+    let run = run_tiles(store, &kernel, opts, progress, |t, out: CurvatureTile| {
+        let start = store.tiles()[t].start;
+        values.write_f32(start, &out.values)?;
+        flags.write_bytes(start, &out.flags)?;
+        stats.merge(&out.stats);
+        Ok(())
+    })?;
+    store.sync_column(&values)?;
+    store.sync_column(&flags)?;
+    let meta = CurvatureMeta {
+        hood: params.hood,
+        spacing: d,
+        resolved: hood,
+        points: store.len(),
+        flagged: stats.flagged,
+        rms: stats.rms(),
+        median_residual: stats.residual.quantile(0.5),
+        max_error: stats.max_error,
+        dominant_percentiles: (0..=100)
+            .map(|p| stats.dominant.quantile(p as f64 / 100.0))
+            .collect(),
+    };
+    meta.save(store)?;
+    Ok(CurvatureReport {
+        meta,
+        tiles: store.tiles().len(),
+        run,
+        computed_normals,
+    })
+}

@@ -1,0 +1,386 @@
+//! The feature-line graph (vertices, edges with a kind, corner marks), its
+//! relaxation (paper 5 section 5, Fig. 10), its measures, and its files:
+//! PLY with `element vertex` (x, y, z double) and `element edge` (vertex1,
+//! vertex2 int, kind uchar: 1 ridge, 2 valley), or OBJ with `l` records.
+
+use crate::io::{AtomicFile, IoError};
+use crate::synth::LineKind;
+use glam::DVec3;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+/// Polylines as a graph.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LineGraph {
+    pub vertices: Vec<DVec3>,
+    pub edges: Vec<(u32, u32, LineKind)>,
+    /// Per vertex: a corner (lines meet there).
+    pub corners: Vec<bool>,
+}
+
+impl LineGraph {
+    fn degrees(&self) -> Vec<u32> {
+        let mut deg = vec![0u32; self.vertices.len()];
+        for &(a, b, _) in &self.edges {
+            deg[a as usize] += 1;
+            deg[b as usize] += 1;
+        }
+        deg
+    }
+
+    /// Removes vertices no edge uses (renumbering the rest in order).
+    pub fn drop_isolated(&mut self) {
+        let deg = self.degrees();
+        let mut map = vec![u32::MAX; self.vertices.len()];
+        let mut next = 0u32;
+        let mut vertices = Vec::new();
+        let mut corners = Vec::new();
+        for (i, d) in deg.iter().enumerate() {
+            if *d > 0 {
+                map[i] = next;
+                next += 1;
+                vertices.push(self.vertices[i]);
+                corners.push(self.corners.get(i).copied().unwrap_or(false));
+            }
+        }
+        for e in &mut self.edges {
+            e.0 = map[e.0 as usize];
+            e.1 = map[e.1 as usize];
+        }
+        self.vertices = vertices;
+        self.corners = corners;
+    }
+
+    /// The chains between fixed vertices (degree other than 2, or
+    /// corners), and cycles, as vertex sequences.
+    pub fn chains(&self) -> Vec<Vec<u32>> {
+        let n = self.vertices.len();
+        let mut adj: Vec<Vec<(u32, usize)>> = vec![Vec::new(); n];
+        for (e, &(a, b, _)) in self.edges.iter().enumerate() {
+            adj[a as usize].push((b, e));
+            adj[b as usize].push((a, e));
+        }
+        let fixed = |v: usize| adj[v].len() != 2 || self.corners.get(v).copied().unwrap_or(false);
+        let mut used = vec![false; self.edges.len()];
+        let mut chains = Vec::new();
+        let walk = |start: usize, first: (u32, usize), used: &mut Vec<bool>| {
+            let mut chain = vec![start as u32];
+            let (mut v, mut e) = first;
+            loop {
+                used[e] = true;
+                chain.push(v);
+                if fixed(v as usize) || v as usize == start {
+                    return chain;
+                }
+                match adj[v as usize].iter().find(|(_, f)| !used[*f]) {
+                    Some(&next) => (v, e) = next,
+                    None => return chain,
+                }
+            }
+        };
+        for s in (0..n).filter(|&v| fixed(v)) {
+            for &first in &adj[s] {
+                if !used[first.1] {
+                    chains.push(walk(s, first, &mut used));
+                }
+            }
+        }
+        // What is left are cycles of degree-2 vertices.
+        for (s, around) in adj.iter().enumerate() {
+            if let Some(&first) = around.iter().find(|(_, e)| !used[*e]) {
+                chains.push(walk(s, first, &mut used));
+            }
+        }
+        chains
+    }
+
+    /// `passes` relaxation passes (Fig. 10): along each chain, each
+    /// interior vertex in turn moves onto the perpendicular bisector of its
+    /// two neighbours (the earlier one already moved) in their plane,
+    /// keeping the triangle's area; chain ends stay.
+    pub fn relax(&mut self, passes: usize) {
+        let chains = self.chains();
+        for _ in 0..passes {
+            for c in &chains {
+                for w in 0..c.len().saturating_sub(2) {
+                    let (a, b, m) = (c[w] as usize, c[w + 2] as usize, c[w + 1] as usize);
+                    self.vertices[m] =
+                        bisected(self.vertices[a], self.vertices[m], self.vertices[b]);
+                }
+            }
+        }
+    }
+
+    /// Total length of the edges.
+    pub fn length(&self) -> f64 {
+        self.edges
+            .iter()
+            .map(|&(a, b, _)| self.vertices[a as usize].distance(self.vertices[b as usize]))
+            .sum()
+    }
+
+    /// Connected components with at least one edge (the polylines).
+    pub fn components(&self) -> usize {
+        let mut uf: Vec<u32> = (0..self.vertices.len() as u32).collect();
+        fn find(uf: &mut [u32], mut v: u32) -> u32 {
+            while uf[v as usize] != v {
+                uf[v as usize] = uf[uf[v as usize] as usize];
+                v = uf[v as usize];
+            }
+            v
+        }
+        let mut count = self.vertices.len();
+        for &(a, b, _) in &self.edges {
+            let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
+            if ra != rb {
+                uf[ra as usize] = rb;
+                count -= 1;
+            }
+        }
+        count - self.degrees().iter().filter(|d| **d == 0).count()
+    }
+
+    pub fn corner_count(&self) -> usize {
+        self.corners.iter().filter(|c| **c).count()
+    }
+
+    /// Writes PLY (binary little-endian, or ASCII) or OBJ by the
+    /// extension, vertices offset by `origin`.
+    pub fn write(&self, path: &Path, origin: DVec3, ascii: bool) -> Result<(), IoError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let mut file = AtomicFile::create(path)?;
+        {
+            let mut out = BufWriter::with_capacity(1 << 20, file.file());
+            let os = |e| IoError::os(path, e);
+            match ext.as_deref() {
+                Some("obj") => self.obj(&mut out, origin).map_err(os)?,
+                Some("ply") => self.ply(&mut out, origin, ascii).map_err(os)?,
+                _ => {
+                    return Err(IoError::Unsupported {
+                        path: path.to_path_buf(),
+                        reason: "feature lines are written as .ply or .obj".into(),
+                    })
+                }
+            }
+            out.flush().map_err(os)?;
+        }
+        file.commit()
+    }
+
+    fn ply(&self, out: &mut impl Write, origin: DVec3, ascii: bool) -> std::io::Result<()> {
+        let format = if ascii {
+            "ascii"
+        } else {
+            "binary_little_endian"
+        };
+        write!(
+            out,
+            "ply\nformat {format} 1.0\ncomment scanmesh features (paper 5): edge kind 1 ridge, 2 valley\n\
+             element vertex {}\nproperty double x\nproperty double y\nproperty double z\n\
+             element edge {}\nproperty int vertex1\nproperty int vertex2\nproperty uchar kind\nend_header\n",
+            self.vertices.len(),
+            self.edges.len()
+        )?;
+        for v in &self.vertices {
+            let p = *v + origin;
+            if ascii {
+                writeln!(out, "{} {} {}", p.x, p.y, p.z)?;
+            } else {
+                for c in p.to_array() {
+                    out.write_all(&c.to_le_bytes())?;
+                }
+            }
+        }
+        for &(a, b, k) in &self.edges {
+            if ascii {
+                writeln!(out, "{a} {b} {}", k as u8)?;
+            } else {
+                out.write_all(&(a as i32).to_le_bytes())?;
+                out.write_all(&(b as i32).to_le_bytes())?;
+                out.write_all(&[k as u8])?;
+            }
+        }
+        Ok(())
+    }
+
+    fn obj(&self, out: &mut impl Write, origin: DVec3) -> std::io::Result<()> {
+        writeln!(
+            out,
+            "# scanmesh features (paper 5): groups ridge and valley"
+        )?;
+        for v in &self.vertices {
+            let p = *v + origin;
+            writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
+        }
+        for kind in [LineKind::Ridge, LineKind::Valley] {
+            let name = if kind == LineKind::Ridge {
+                "ridge"
+            } else {
+                "valley"
+            };
+            writeln!(out, "g {name}")?;
+            for &(a, b, _) in self.edges.iter().filter(|e| e.2 == kind) {
+                writeln!(out, "l {} {}", a + 1, b + 1)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl LineGraph {
+    /// Reads a line file as [`LineGraph::write`] writes it (PLY binary
+    /// little-endian or ASCII with `x y z` double and `vertex1 vertex2`
+    /// int, `kind` uchar); anything else is an error naming the file.
+    pub fn read(path: &Path) -> Result<LineGraph, IoError> {
+        let bytes = std::fs::read(path).map_err(|e| IoError::os(path, e))?;
+        let bad = |reason: &str| IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!("not a scanmesh feature-line PLY: {reason}"),
+        };
+        let end = bytes
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .ok_or_else(|| bad("no end_header"))?;
+        let header = std::str::from_utf8(&bytes[..end]).map_err(|_| bad("header not text"))?;
+        let count = |name: &str| -> Result<usize, IoError> {
+            header
+                .lines()
+                .find_map(|l| l.strip_prefix(&format!("element {name} ")))
+                .and_then(|n| n.trim().parse().ok())
+                .ok_or_else(|| bad(&format!("no element {name}")))
+        };
+        let (nv, ne) = (count("vertex")?, count("edge")?);
+        let ascii = header.contains("format ascii");
+        if !ascii && !header.contains("format binary_little_endian") {
+            return Err(bad("format must be ascii or binary_little_endian"));
+        }
+        let body = &bytes[end + 11..];
+        let mut g = LineGraph {
+            corners: vec![false; nv],
+            ..LineGraph::default()
+        };
+        let kind_of = |k: u8| match k {
+            1 => Ok(LineKind::Ridge),
+            2 => Ok(LineKind::Valley),
+            _ => Err(bad(&format!("edge kind {k}"))),
+        };
+        if ascii {
+            let text = std::str::from_utf8(body).map_err(|_| bad("body not text"))?;
+            let mut lines = text.lines();
+            for _ in 0..nv {
+                let v: Vec<f64> = lines
+                    .next()
+                    .ok_or_else(|| bad("short vertex list"))?
+                    .split_whitespace()
+                    .map(|t| t.parse().map_err(|_| bad("bad number")))
+                    .collect::<Result<_, _>>()?;
+                match v.as_slice() {
+                    [x, y, z] => g.vertices.push(DVec3::new(*x, *y, *z)),
+                    _ => return Err(bad("a vertex needs x y z")),
+                }
+            }
+            for _ in 0..ne {
+                let v: Vec<i64> = lines
+                    .next()
+                    .ok_or_else(|| bad("short edge list"))?
+                    .split_whitespace()
+                    .map(|t| t.parse().map_err(|_| bad("bad integer")))
+                    .collect::<Result<_, _>>()?;
+                match v.as_slice() {
+                    [a, b, k] => g.edges.push((*a as u32, *b as u32, kind_of(*k as u8)?)),
+                    _ => return Err(bad("an edge needs vertex1 vertex2 kind")),
+                }
+            }
+        } else {
+            if body.len() < nv * 24 + ne * 9 {
+                return Err(bad("file shorter than its header says"));
+            }
+            let f = |o: usize| f64::from_le_bytes(body[o..o + 8].try_into().unwrap_or([0; 8]));
+            for i in 0..nv {
+                g.vertices
+                    .push(DVec3::new(f(24 * i), f(24 * i + 8), f(24 * i + 16)));
+            }
+            let e0 = nv * 24;
+            for i in 0..ne {
+                let r = &body[e0 + 9 * i..e0 + 9 * i + 9];
+                let a = i32::from_le_bytes([r[0], r[1], r[2], r[3]]);
+                let b = i32::from_le_bytes([r[4], r[5], r[6], r[7]]);
+                g.edges.push((a as u32, b as u32, kind_of(r[8])?));
+            }
+        }
+        if g.edges
+            .iter()
+            .any(|e| e.0 as usize >= nv || e.1 as usize >= nv)
+        {
+            return Err(bad("an edge names a vertex beyond the list"));
+        }
+        Ok(g)
+    }
+
+    /// A graph of true segments (each its own two vertices).
+    pub fn from_segments(segs: &[crate::synth::TrueSegment]) -> LineGraph {
+        let mut g = LineGraph::default();
+        for s in segs {
+            let v = g.vertices.len() as u32;
+            g.vertices.extend([s.a, s.b]);
+            g.edges.push((v, v + 1, s.kind));
+        }
+        g.corners = vec![false; g.vertices.len()];
+        g
+    }
+}
+
+/// `m` moved onto the perpendicular bisector of `a b` in the plane of the
+/// three, at the same distance from the line `a b` (same triangle area).
+fn bisected(a: DVec3, m: DVec3, b: DVec3) -> DVec3 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    if len2 == 0.0 {
+        return m;
+    }
+    let mid = (a + b) * 0.5;
+    let off = (m - a) - ab * ((m - a).dot(ab) / len2);
+    mid + off
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relaxation_centres_vertices_and_keeps_area() {
+        let a = DVec3::ZERO;
+        let b = DVec3::new(2.0, 0.0, 0.0);
+        let m = DVec3::new(0.3, 0.5, 0.0);
+        let r = bisected(a, m, b);
+        assert!((r - DVec3::new(1.0, 0.5, 0.0)).length() < 1e-12, "{r}");
+    }
+
+    #[test]
+    fn chains_split_at_corners_and_ends() {
+        // A T: 0-1-2 with 3 hanging off 1, plus a separate triangle loop.
+        let mut g = LineGraph {
+            vertices: vec![DVec3::ZERO; 7],
+            edges: vec![
+                (0, 1, LineKind::Ridge),
+                (1, 2, LineKind::Ridge),
+                (1, 3, LineKind::Ridge),
+                (4, 5, LineKind::Valley),
+                (5, 6, LineKind::Valley),
+                (6, 4, LineKind::Valley),
+            ],
+            corners: vec![false; 7],
+        };
+        assert_eq!(g.chains().len(), 4);
+        assert_eq!(g.components(), 2);
+        g.corners[5] = true;
+        let c = g.chains();
+        assert!(
+            c.iter().any(|c| c.len() == 4 && c[0] == 5 && c[3] == 5),
+            "{c:?}"
+        );
+    }
+}

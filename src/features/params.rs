@@ -1,0 +1,224 @@
+//! The feature-line thresholds (paper 5 sections 2-5) and their defaults
+//! from the data: every length in units of the mean spacing `d`, the
+//! curvature threshold from the curvature distribution and the fit
+//! residuals, so `features` works untuned; every one can be overridden.
+
+use super::curvature::CurvatureMeta;
+use super::{CurvatureHood, CurvatureParams, FeaturesError, DEFAULT_RADIUS_SPACINGS};
+use std::f64::consts::PI;
+
+/// User-facing parameters; lengths in mean spacings `d`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeatureParams {
+    pub curvature: CurvatureParams,
+    /// Curvature threshold `alpha` (absolute, 1 / length); default
+    /// [`default_alpha`].
+    pub alpha: Option<f64>,
+    /// Enhancement radius `phi` (section 3).
+    pub phi: f64,
+    /// Growth-circle radius `R` (section 3).
+    pub growth_radius: f64,
+    /// Growth-circle sector angle (paper: pi/3).
+    pub sector: f64,
+    /// Fewest points a curve-fitting set keeps (section 3: sets with too
+    /// few points are dropped).
+    pub min_curve_points: usize,
+    /// Corners closer than `epsilon` merge (section 3).
+    pub epsilon: f64,
+    /// Smoothing radius: start, growth factor, limit (section 4).
+    pub delta: f64,
+    pub delta_growth: f64,
+    pub delta_max: f64,
+    /// Correlation the smoothing neighbourhood must reach (paper: 0.6).
+    pub rho: f64,
+    /// Polyline growth radius `gamma_max` (section 5).
+    pub gamma_max: f64,
+    /// Connection cone: length in `gamma_max` (the paper's `alpha`),
+    /// half-angle `mu` in radians.
+    pub cone_length: f64,
+    pub cone_angle: f64,
+    /// Relaxation passes (paper: 1-2).
+    pub relax_passes: usize,
+    /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
+    pub cell: f64,
+}
+
+impl Default for FeatureParams {
+    fn default() -> Self {
+        FeatureParams {
+            curvature: CurvatureParams::default(),
+            alpha: None,
+            phi: 4.5,
+            growth_radius: 3.5,
+            sector: PI / 3.0,
+            min_curve_points: 5,
+            epsilon: 2.0,
+            delta: 4.0,
+            delta_growth: 1.25,
+            delta_max: 8.0,
+            rho: 0.6,
+            gamma_max: 2.5,
+            cone_length: 3.0,
+            cone_angle: PI / 6.0,
+            relax_passes: 2,
+            // 16 d: the tiles' margin holds a cell beyond the core, and
+            // 32 d made the margin (75 d) four times a 256 MiB plan's
+            // tile at 10M points; the synthetic figures are the same at
+            // 16 d (within 0.4 %) as at 32 d.
+            cell: 16.0,
+        }
+    }
+}
+
+/// Thresholds in absolute units, for one cloud.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolved {
+    pub alpha: f64,
+    pub phi: f64,
+    pub growth_radius: f64,
+    pub sector: f64,
+    pub min_curve_points: usize,
+    pub epsilon: f64,
+    pub delta: f64,
+    pub delta_growth: f64,
+    pub delta_max: f64,
+    pub rho: f64,
+    pub gamma_max: f64,
+    pub cone_length: f64,
+    pub cone_angle: f64,
+    pub relax_passes: usize,
+    pub cell: f64,
+    /// The curvature neighbourhood, to recompute a feature point's quadric.
+    pub hood: CurvatureHood,
+    /// Mean spacing `d`.
+    pub spacing: f64,
+}
+
+/// Multiple of the noise-induced curvature scale `sigma / r^2` the default
+/// threshold stays above.
+pub const NOISE_FACTOR: f64 = 8.0;
+/// Share of the points the default threshold leaves below it at least.
+pub const QUANTILE: f64 = 0.7;
+
+/// The default `alpha`: the larger of the 70th percentile of `|k_i|` (the
+/// paper's dragon kept 30 % of its points) and eight times the curvature
+/// that fit noise alone produces, `sigma / r^2` with `sigma` the median fit
+/// residual (on crease models most points are flat and the percentile falls
+/// into the noise).
+pub fn default_alpha(meta: &CurvatureMeta) -> f64 {
+    let r = match meta.resolved {
+        CurvatureHood::Radius(r) => r,
+        // The k nearest hold about as many points as the default radius.
+        _ => DEFAULT_RADIUS_SPACINGS * meta.spacing,
+    };
+    let noise = NOISE_FACTOR * meta.median_residual / (r * r);
+    meta.dominant_quantile(QUANTILE).max(noise)
+}
+
+impl FeatureParams {
+    pub fn validate(&self) -> Result<(), FeaturesError> {
+        self.curvature.hood.validate()?;
+        let positive = [
+            ("phi", self.phi),
+            ("growth radius", self.growth_radius),
+            ("sector", self.sector),
+            ("epsilon", self.epsilon),
+            ("delta", self.delta),
+            ("delta max", self.delta_max),
+            ("gamma max", self.gamma_max),
+            ("cone length", self.cone_length),
+            ("cone angle", self.cone_angle),
+            ("cell", self.cell),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(format!("{name} must be positive and finite, not {v}")));
+            }
+        }
+        if let Some(a) = self.alpha {
+            if !(a.is_finite() && a >= 0.0) {
+                return Err(bad(format!("alpha must be finite and >= 0, not {a}")));
+            }
+        }
+        if !(self.delta_growth.is_finite() && self.delta_growth > 1.0) {
+            return Err(bad("delta growth must be above 1".into()));
+        }
+        if self.delta_max < self.delta {
+            return Err(bad("delta max must be at least delta".into()));
+        }
+        if !(0.0..1.0).contains(&self.rho) {
+            return Err(bad("rho must lie in [0, 1)".into()));
+        }
+        if self.sector >= PI / 2.0 {
+            return Err(bad("the sector angle must be below pi/2".into()));
+        }
+        if self.cone_angle >= PI / 2.0 {
+            return Err(bad("the cone half-angle must be below pi/2".into()));
+        }
+        if self.min_curve_points < 3 {
+            return Err(bad("a quadratic curve needs at least 3 points".into()));
+        }
+        Ok(())
+    }
+
+    /// Absolute thresholds for a cloud with the curvature `meta`.
+    pub fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
+        let d = meta.spacing;
+        Resolved {
+            alpha: self.alpha.unwrap_or_else(|| default_alpha(meta)),
+            phi: self.phi * d,
+            growth_radius: self.growth_radius * d,
+            sector: self.sector,
+            min_curve_points: self.min_curve_points,
+            epsilon: self.epsilon * d,
+            delta: self.delta * d,
+            delta_growth: self.delta_growth,
+            delta_max: self.delta_max * d,
+            rho: self.rho,
+            gamma_max: self.gamma_max * d,
+            cone_length: self.cone_length * self.gamma_max * d,
+            cone_angle: self.cone_angle,
+            relax_passes: self.relax_passes,
+            cell: self.cell * d,
+            hood: meta.resolved,
+            spacing: d,
+        }
+    }
+}
+
+fn bad(reason: String) -> FeaturesError {
+    FeaturesError::BadParameter(reason)
+}
+
+impl Resolved {
+    /// Cells of the smoothing's grid: the first radius, where most points
+    /// settle, but wide enough that `delta_max` spans at most the 8 cells
+    /// a grid query reaches (`grid.rs`).
+    pub fn smooth_cell(&self) -> f64 {
+        self.delta.max(self.delta_max / 8.0)
+    }
+
+    /// How far the priority of a polyline seed looks for corners.
+    pub fn corner_cap(&self) -> f64 {
+        3.0 * self.gamma_max
+    }
+
+    /// Radius around a point that its quadric's neighbourhood needs, for a
+    /// radius neighbourhood (0 for k nearest: checked per point).
+    pub fn fit_radius(&self) -> f64 {
+        match self.hood {
+            CurvatureHood::Radius(r) => r,
+            _ => 0.0,
+        }
+    }
+
+    /// How far a smoothed point's value (and its seed priority) reaches
+    /// from its source point beyond the enhancement's own reach: corner
+    /// status (corners within `epsilon`, each within `phi` of its source),
+    /// then smoothing (enhanced points within `delta_max`) and the corner
+    /// distance (corners within the cap). See `kernel.rs`.
+    pub fn chain(&self) -> f64 {
+        let corner_status = 2.0 * self.phi + self.epsilon;
+        corner_status + 2.0 * self.phi + self.delta_max + self.corner_cap()
+    }
+}
