@@ -12,6 +12,7 @@ pub mod kernel;
 pub mod lattice;
 pub mod mc_table;
 pub mod mls;
+pub mod owners;
 pub mod polygonize;
 pub mod reconstruct;
 pub mod refine;

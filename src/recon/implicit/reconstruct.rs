@@ -48,24 +48,39 @@ impl ImplicitParams {
 }
 
 /// Mesh vertices per input point allowed for when planning the small-piece
-/// filter's memory: 0.1 on the 1M dragon and 0.14 on 10M at the default
-/// cell (rho + delta), more as the cell shrinks relative to the spacing.
-const VERTICES_PER_POINT: f64 = 0.2;
+/// filter's page tables and the output's size: 0.64 on the 10M dragon at
+/// the default cell (3 spacings), more as the cell shrinks relative to the
+/// spacing (paper 1's cell, rho + delta, gave 0.1 to 0.17).
+const VERTICES_PER_POINT: f64 = 0.8;
+
+/// Peak bytes per loaded point of the marching-cubes kernel at the default
+/// cell (3 spacings): band cubes (~3 per point), corner keys and values,
+/// the MLS index, the tile's triangles (~1.3 per point, 96 B each) and the
+/// sorted-key merges. Measured: the 1M dragon as one tile peaked at 703 MiB
+/// (from 210 MiB before the stage), so at most 650 B per point; above the
+/// normals kernel's 360, so it sets the tiles of a reconstruction (with
+/// the normals' 360 the 10M run planned 301 MiB and peaked at 354 MiB).
+const MARCHING_BYTES_PER_POINT: u64 = 650;
 
 impl ImplicitParams {
     /// What a reconstruction costs, for the memory plan: the normals run's
-    /// cost, plus the small-piece filter's sets when pieces are dropped.
+    /// cost, plus the small-piece filter's page tables when pieces are
+    /// dropped (its per-vertex state is in scratch files behind caches of a
+    /// fixed 16 MiB, within the fixed costs: the read chunk and the
+    /// histogram are gone by then).
     pub fn cost(&self) -> KernelCost {
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
+        let normals = self.normals.cost();
         KernelCost {
+            bytes_per_point: normals.bytes_per_point.max(MARCHING_BYTES_PER_POINT),
             resident_per_point: if pieces {
-                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX as f64
+                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX
             } else {
                 0.0
             },
             // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
             output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
-            ..self.normals.cost()
+            ..normals
         }
     }
 }
@@ -90,6 +105,9 @@ pub struct ImplicitReport {
     /// Holes closed at the end, and holes left (`--closed` only).
     pub holes: HoleReport,
     pub pieces: PieceReport,
+    /// Seam entries left at the end that no hole needs (0: the seam maps
+    /// forgot every vertex once complete).
+    pub seam_left: u64,
     pub run: RunStats,
 }
 
@@ -159,7 +177,8 @@ pub fn reconstruct_implicit(
         spacing,
     };
     let writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
-    let mut stitcher = Stitcher::new(writer, store.origin());
+    let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
+    let mut stitcher = Stitcher::new(writer, store.origin(), cores);
     if params.closed {
         stitcher = stitcher.closing_holes();
     }
@@ -168,7 +187,7 @@ pub fn reconstruct_implicit(
         report.cubes += out.cubes as u64;
         let core = core_box(store, &store.tiles()[t]);
         stitcher
-            .add_tile(&lattice, &core, &out.triangles)
+            .add_tile(&lattice, (t, &core), &out.triangles)
             .map_err(|e| PipelineError::Seam(e.to_string()))
     })?;
     let written = stitcher.finish()?;
@@ -176,6 +195,7 @@ pub fn reconstruct_implicit(
     report.triangles = written.triangles;
     report.holes = written.holes;
     report.pieces = written.pieces;
+    report.seam_left = written.seam_left;
     Ok(report)
 }
 
