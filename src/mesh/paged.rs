@@ -156,7 +156,8 @@ impl PagedU32 {
             s.data.fill(0);
             return Ok(());
         }
-        self.file.read_exact_at(&mut self.bytes, page * PAGE_BYTES)?;
+        self.file
+            .read_exact_at(&mut self.bytes, page * PAGE_BYTES)?;
         for (v, b) in s.data.iter_mut().zip(self.bytes.chunks_exact(4)) {
             *v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
         }
@@ -237,7 +238,9 @@ mod tests {
         let mut plain = vec![0u32; n as usize];
         let mut state = 12345u64;
         for step in 0..200_000u64 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let i = (state >> 33) % n;
             if step % 3 == 0 {
                 plain[i as usize] = step as u32;
@@ -261,7 +264,9 @@ mod tests {
             ext.grow(n as u64);
             let mut state = seed;
             let mut next = || {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 (state >> 33) as usize % n
             };
             for _ in 0..3000 {
@@ -270,7 +275,11 @@ mod tests {
                 ext.union(a as u64, b as u64).unwrap();
             }
             for x in 0..n {
-                assert_eq!(ext.find(x as u64).unwrap(), mem.find(x) as u64, "seed {seed}");
+                assert_eq!(
+                    ext.find(x as u64).unwrap(),
+                    mem.find(x) as u64,
+                    "seed {seed}"
+                );
             }
         }
     }

@@ -63,7 +63,8 @@ impl PieceFilter {
         if min_share <= 0.0 {
             return Ok(PieceFilter { out, spool: None });
         }
-        let scratch = || scratch_beside(out.path()).map_err(|e| MeshError::Io(IoError::os(out.path(), e)));
+        let scratch =
+            || scratch_beside(out.path()).map_err(|e| MeshError::Io(IoError::os(out.path(), e)));
         let buffered = |f| BufWriter::with_capacity(1 << 20, f);
         let spool = Spool {
             min_share,

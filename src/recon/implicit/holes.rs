@@ -110,9 +110,8 @@ impl BoundaryEdges {
     pub fn retire(&mut self, tile: u32) {
         let waiting: HashSet<u32> = self.waiting.keys().flat_map(|&(a, b)| [a, b]).collect();
         let settled = &self.settled_vertices;
-        let final_inside = |v: u32, last: u32| {
-            last <= tile && !settled.contains(&v) && !waiting.contains(&v)
-        };
+        let final_inside =
+            |v: u32, last: u32| last <= tile && !settled.contains(&v) && !waiting.contains(&v);
         self.edges_near_holes
             .retain(|&(a, b), &mut [la, lb]| !(final_inside(a, la) || final_inside(b, lb)));
     }

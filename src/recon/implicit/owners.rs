@@ -42,7 +42,8 @@ impl TileOwners {
         };
         let reach = 1.01 * cell;
         let near = |other: &Aabb| {
-            (0..3).all(|a| other.min[a] <= core.max[a] + reach && core.min[a] - reach <= other.max[a])
+            (0..3)
+                .all(|a| other.min[a] <= core.max[a] + reach && core.min[a] - reach <= other.max[a])
         };
         Neighbourhood {
             tile: tile as u32,
