@@ -21,7 +21,7 @@ mod report;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::place;
-use scanmesh::io::InvalidPolicy;
+use scanmesh::io::{InvalidPolicy, ReadOptions};
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
 use scanmesh::store::build::scratch_store_dir_in;
 use scanmesh::store::{is_store, open_input, BuildOptions, PointStore, TileTarget, Workspace};
@@ -33,7 +33,7 @@ use std::path::{Path, PathBuf};
     version,
     about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core",
     long_about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core.\n\n\
-        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, or a point store \
+        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, E57 (all scans, or --scans), or a point store \
         built by `scanmesh tile`. Memory stays within --mem whatever the input size."
 )]
 struct Cli {
@@ -86,6 +86,10 @@ pub struct CommonArgs {
     /// Drop points with NaN/inf coordinates (counted) instead of failing.
     #[arg(long)]
     skip_invalid: bool,
+    /// E57 input: read only these scans (indices as `scanmesh info` lists
+    /// them, e.g. 0,2), in file order.
+    #[arg(long, value_name = "I,J,...", value_delimiter = ',')]
+    scans: Option<Vec<usize>>,
     /// Directory for the scratch store and spill files (default: beside
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
@@ -121,6 +125,8 @@ pub struct Settings {
     pub tile_points: Option<u64>,
     pub quiet: bool,
     pub policy: InvalidPolicy,
+    /// `--scans`: the E57 scans to read (`None`: all).
+    pub scans: Option<Vec<usize>>,
     pub scratch_dir: Option<PathBuf>,
 }
 
@@ -142,6 +148,7 @@ impl CommonArgs {
             tile_points: self.tile_points,
             quiet: self.quiet,
             scratch_dir: self.scratch_dir.clone(),
+            scans: self.scans.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -152,6 +159,14 @@ impl CommonArgs {
 }
 
 impl Settings {
+    /// How to read the input file (policy and scan selection).
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            policy: self.policy,
+            scans: self.scans.clone(),
+        }
+    }
+
     pub fn budget(&self) -> MemoryBudget {
         MemoryBudget::new(self.mem, self.threads)
     }
@@ -192,7 +207,7 @@ impl Settings {
             input,
             &scratch,
             &self.build_options(cost),
-            self.policy,
+            self.read_options(),
             progress,
         )
         .with_context(|| format!("reading {}", input.display()))?;
@@ -212,7 +227,7 @@ impl Settings {
         let count = if is_store(input) {
             Some(PointStore::open(input)?.len())
         } else {
-            scanmesh::io::open_reader(input, self.policy)
+            scanmesh::io::open_reader(input, self.read_options())
                 .with_context(|| format!("reading {}", input.display()))?
                 .info()
                 .declared_count
