@@ -10,8 +10,7 @@ use scanmesh::io::convert::convert;
 use scanmesh::io::e57::list_scans;
 use scanmesh::io::inspect::inspect_scans;
 use scanmesh::io::{
-    create_writer, open_reader, Format, InvalidPolicy, IoError, PointChunk, ReadOptions,
-    WriterSpec,
+    create_writer, open_reader, Format, InvalidPolicy, IoError, PointChunk, ReadOptions, WriterSpec,
 };
 use scanmesh::pipeline::NoProgress;
 use scanmesh::synth::Rng;
@@ -22,7 +21,11 @@ use std::path::Path;
 #[derive(Clone)]
 enum Rec {
     Cartesian(DVec3),
-    Spherical { range: f64, azimuth: f64, elevation: f64 },
+    Spherical {
+        range: f64,
+        azimuth: f64,
+        elevation: f64,
+    },
     Flagged(i64),
 }
 
@@ -76,11 +79,22 @@ fn reference(scan: &Scan) -> Vec<DVec3> {
 /// translation, an empty scan, a spherical scan with flagged records, and
 /// a cartesian scan without a pose whose invalid state flags some records.
 fn scans(seed: u64) -> Vec<Scan> {
+    scans_of(seed, 1)
+}
+
+/// [`scans`] with `1 / div` of the records.
+fn scans_of(seed: u64, div: usize) -> Vec<Scan> {
     let mut r = Rng::new(seed);
-    let a = (0..700)
-        .map(|_| Rec::Cartesian(DVec3::new(r.range(-30.0, 30.0), r.range(-30.0, 30.0), r.range(-2.0, 15.0))))
+    let a = (0..700 / div)
+        .map(|_| {
+            Rec::Cartesian(DVec3::new(
+                r.range(-30.0, 30.0),
+                r.range(-30.0, 30.0),
+                r.range(-2.0, 15.0),
+            ))
+        })
         .collect();
-    let c = (0..900)
+    let c = (0..900 / div)
         .map(|i| match i % 10 {
             3 => Rec::Flagged(2),
             7 => Rec::Flagged(1),
@@ -91,10 +105,14 @@ fn scans(seed: u64) -> Vec<Scan> {
             },
         })
         .collect();
-    let d = (0..400)
+    let d = (0..400 / div)
         .map(|i| match i % 13 {
             5 => Rec::Flagged(2),
-            _ => Rec::Cartesian(DVec3::new(r.range(0.0, 5.0), r.range(0.0, 5.0), r.range(0.0, 5.0))),
+            _ => Rec::Cartesian(DVec3::new(
+                r.range(0.0, 5.0),
+                r.range(0.0, 5.0),
+                r.range(0.0, 5.0),
+            )),
         })
         .collect();
     vec![
@@ -212,9 +230,11 @@ fn read(path: &Path, read: impl Into<ReadOptions>, max: usize) -> Result<Read, I
 /// of `want`.
 fn relative_error(got: &[DVec3], want: &[DVec3]) -> f64 {
     assert_eq!(got.len(), want.len());
-    let (lo, hi) = want.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-        (lo.min(*p), hi.max(*p))
-    });
+    let (lo, hi) = want
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
     let extent = (hi - lo).max_element();
     let worst = got
         .iter()
@@ -242,7 +262,10 @@ fn valid_indices(scans: &[Scan], chosen: &[usize]) -> Vec<u64> {
 }
 
 fn flagged(scan: &Scan) -> u64 {
-    scan.recs.iter().filter(|r| matches!(r, Rec::Flagged(_))).count() as u64
+    scan.recs
+        .iter()
+        .filter(|r| matches!(r, Rec::Flagged(_)))
+        .count() as u64
 }
 
 #[test]
@@ -257,7 +280,10 @@ fn every_scan_lands_in_the_world_frame_in_file_order() {
     for max in [1, 97, 1 << 15] {
         let got = read(&path, InvalidPolicy::Reject, max).unwrap();
         let err = relative_error(&got.xyz, &want);
-        assert!(err < 1e-6, "seed {seed:#x} max {max}: relative error {err:e}");
+        assert!(
+            err < 1e-6,
+            "seed {seed:#x} max {max}: relative error {err:e}"
+        );
         assert_eq!(got.indices, valid_indices(&scans, &[0, 1, 2, 3]));
         assert_eq!(got.skipped, all_flagged);
     }
@@ -270,7 +296,10 @@ fn every_scan_lands_in_the_world_frame_in_file_order() {
     let mut xyz = Vec::new();
     read_into(back, &mut xyz);
     let err = relative_error(&xyz, &want);
-    assert!(err < 1e-6, "seed {seed:#x}: converted relative error {err:e}");
+    assert!(
+        err < 1e-6,
+        "seed {seed:#x}: converted relative error {err:e}"
+    );
 }
 
 fn read_into(mut r: Box<dyn scanmesh::io::PointReader>, out: &mut Vec<DVec3>) {
@@ -292,14 +321,20 @@ fn scans_are_selected_by_index() {
     };
     // Order and repeats in the request do not matter: file order, once.
     let got = read(&path, pick(vec![3, 0, 3]), 50).unwrap();
-    let want: Vec<DVec3> = [&scans[0], &scans[3]].into_iter().flat_map(reference).collect();
+    let want: Vec<DVec3> = [&scans[0], &scans[3]]
+        .into_iter()
+        .flat_map(reference)
+        .collect();
     assert!(relative_error(&got.xyz, &want) < 1e-6);
     assert_eq!(got.indices, valid_indices(&scans, &[0, 3]));
     assert_eq!(got.skipped, flagged(&scans[3]));
     let only_b = read(&path, pick(vec![2]), 1000).unwrap();
     assert_eq!(only_b.xyz.len(), reference(&scans[2]).len());
     let e = read(&path, pick(vec![4]), 10).err().unwrap().to_string();
-    assert!(e.contains("site.e57") && e.contains("scan 4") && e.contains("has 4"), "{e}");
+    assert!(
+        e.contains("site.e57") && e.contains("scan 4") && e.contains("has 4"),
+        "{e}"
+    );
     // A file without scans refuses a selection.
     let ply = dir.path().join("x.ply");
     convert(&path, &ply, InvalidPolicy::Reject, &NoProgress).unwrap();
@@ -333,8 +368,8 @@ fn info_lists_every_scan_with_its_counts_and_pose() {
         match s.pose {
             Some((q, t)) => {
                 let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
-                for k in 0..4 {
-                    assert!((l.scan.pose.rotation[k] - q[k] / n).abs() < 1e-15);
+                for (got, want) in l.scan.pose.rotation.iter().zip(q) {
+                    assert!((got - want / n).abs() < 1e-15);
                 }
                 assert_eq!(l.scan.pose.translation, t);
             }
@@ -351,10 +386,17 @@ fn info_lists_every_scan_with_its_counts_and_pose() {
         .arg(&path)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let listed = v["scans"].as_array().unwrap();
-    let points: Vec<u64> = listed.iter().map(|s| s["points"].as_u64().unwrap()).collect();
+    let points: Vec<u64> = listed
+        .iter()
+        .map(|s| s["points"].as_u64().unwrap())
+        .collect();
     let want: Vec<u64> = scans.iter().map(|s| reference(s).len() as u64).collect();
     assert_eq!(points, want);
     assert_eq!(listed[2]["name"], "station B");
@@ -374,13 +416,26 @@ fn scans_option_reaches_convert_on_the_command_line() {
         .arg(&out_path)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let summary = String::from_utf8_lossy(&out.stdout);
     let skipped = flagged(&scans[2]) + flagged(&scans[3]);
-    assert!(summary.contains(&format!("({skipped} skipped)")), "{summary}");
+    assert!(
+        summary.contains(&format!("({skipped} skipped)")),
+        "{summary}"
+    );
     let mut xyz = Vec::new();
-    read_into(open_reader(&out_path, InvalidPolicy::Reject).unwrap(), &mut xyz);
-    let want: Vec<DVec3> = [&scans[2], &scans[3]].into_iter().flat_map(reference).collect();
+    read_into(
+        open_reader(&out_path, InvalidPolicy::Reject).unwrap(),
+        &mut xyz,
+    );
+    let want: Vec<DVec3> = [&scans[2], &scans[3]]
+        .into_iter()
+        .flat_map(reference)
+        .collect();
     assert!(relative_error(&xyz, &want) < 1e-6);
 }
 
@@ -395,7 +450,10 @@ fn truncated_and_corrupt_files_are_errors_naming_the_file() {
     // Cut inside a page, and at a page boundary (the XML at the end is gone).
     for len in [bytes.len() / 2 + 17, bytes.len() / 2 / 1024 * 1024, 40] {
         std::fs::write(&cut, &bytes[..len]).unwrap();
-        let e = read(&cut, InvalidPolicy::Skip, 100).err().unwrap().to_string();
+        let e = read(&cut, InvalidPolicy::Skip, 100)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("cut.e57") && e.contains("E57"), "{len}: {e}");
         assert!(e.contains("truncated") || e.contains("ends"), "{len}: {e}");
     }
@@ -404,11 +462,17 @@ fn truncated_and_corrupt_files_are_errors_naming_the_file() {
     bad[5000] ^= 0x40;
     let flipped = dir.path().join("flipped.e57");
     std::fs::write(&flipped, &bad).unwrap();
-    let e = read(&flipped, InvalidPolicy::Skip, 100).err().unwrap().to_string();
+    let e = read(&flipped, InvalidPolicy::Skip, 100)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("flipped.e57") && e.contains("checksum"), "{e}");
     // Only the magic: no header.
     std::fs::write(&cut, b"ASTM-E57").unwrap();
-    let e = read(&cut, InvalidPolicy::Skip, 100).err().unwrap().to_string();
+    let e = read(&cut, InvalidPolicy::Skip, 100)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("cut.e57"), "{e}");
 }
 
@@ -419,7 +483,10 @@ fn non_finite_coordinates_and_poses_are_refused_or_skipped() {
     let mut s = scans(0xE57_0006);
     s[0].recs[10] = Rec::Cartesian(DVec3::new(1.0, f64::NAN, 2.0));
     write_e57(&path, &s);
-    let e = read(&path, InvalidPolicy::Reject, 100).err().unwrap().to_string();
+    let e = read(&path, InvalidPolicy::Reject, 100)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("nan.e57") && e.contains("record 10"), "{e}");
     let got = read(&path, InvalidPolicy::Skip, 100).unwrap();
     let flagged_all: u64 = s.iter().map(flagged).sum();
@@ -431,11 +498,20 @@ fn non_finite_coordinates_and_poses_are_refused_or_skipped() {
     let mut s = scans(0xE57_0007);
     s[2].pose = Some(([1.0, 0.0, 0.0, 0.0], [f64::INFINITY, 0.0, 0.0]));
     write_e57(&pose_path, &s);
-    let e = read(&pose_path, InvalidPolicy::Skip, 100).err().unwrap().to_string();
-    assert!(e.contains("pose.e57") && e.contains("scan 2") && e.contains("pose"), "{e}");
+    let e = read(&pose_path, InvalidPolicy::Skip, 100)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("pose.e57") && e.contains("scan 2") && e.contains("pose"),
+        "{e}"
+    );
     s[2].pose = Some(([0.0; 4], [0.0; 3]));
     write_e57(&pose_path, &s);
-    let e = read(&pose_path, InvalidPolicy::Skip, 100).err().unwrap().to_string();
+    let e = read(&pose_path, InvalidPolicy::Skip, 100)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("scan 2") && e.contains("quaternion"), "{e}");
 }
 
@@ -444,7 +520,13 @@ fn ply_to_e57_to_ply_is_exact() {
     let dir = tempfile::tempdir().unwrap();
     let mut r = Rng::new(0xE57_0008);
     let pts: Vec<DVec3> = (0..5000)
-        .map(|_| DVec3::new(r.range(5e5, 5.02e5), r.range(4.2e6, 4.2e6 + 3e3), r.range(-50.0, 400.0)))
+        .map(|_| {
+            DVec3::new(
+                r.range(5e5, 5.02e5),
+                r.range(4.2e6, 4.2e6 + 3e3),
+                r.range(-50.0, 400.0),
+            )
+        })
         .collect();
     let src = dir.path().join("src.ply");
     let mut w = create_writer(&src, &WriterSpec::new(Format::PlyBinaryLe)).unwrap();
@@ -458,12 +540,22 @@ fn ply_to_e57_to_ply_is_exact() {
     w.finish().unwrap();
     let e57 = dir.path().join("mid.e57");
     let back = dir.path().join("back.ply");
-    assert_eq!(convert(&src, &e57, InvalidPolicy::Reject, &NoProgress).unwrap().points, 5000);
+    assert_eq!(
+        convert(&src, &e57, InvalidPolicy::Reject, &NoProgress)
+            .unwrap()
+            .points,
+        5000
+    );
     let listed = list_scans(&e57).unwrap();
     assert_eq!(listed.len(), 1);
     assert_eq!(listed[0].records, 5000);
     assert!(listed[0].pose.is_identity());
-    assert_eq!(convert(&e57, &back, InvalidPolicy::Reject, &NoProgress).unwrap().points, 5000);
+    assert_eq!(
+        convert(&e57, &back, InvalidPolicy::Reject, &NoProgress)
+            .unwrap()
+            .points,
+        5000
+    );
     let mut xyz = Vec::new();
     read_into(open_reader(&back, InvalidPolicy::Reject).unwrap(), &mut xyz);
     // f64 all the way: bit for bit.
@@ -488,4 +580,35 @@ fn an_unfinished_e57_output_leaves_no_file() {
     assert!(e.contains("never.e57") && e.contains("record 10"), "{e}");
     drop(w);
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+/// A small file checked in (and, without its page checksums, the E57 fuzz
+/// target's seed): `SCANMESH_WRITE_FIXTURES=1` rewrites both.
+const FIXTURE: &str = "tests/fixtures/e57/three_scans.e57";
+const FUZZ_SEED: &str = "fuzz/seeds/e57/three_scans";
+const FIXTURE_SEED: u64 = 0xE57_00F1;
+
+#[test]
+fn the_checked_in_fixture_reads_as_its_generator_says() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join(FIXTURE);
+    let scans = scans_of(FIXTURE_SEED, 10);
+    if std::env::var_os("SCANMESH_WRITE_FIXTURES").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        write_e57(&path, &scans);
+        let bytes = std::fs::read(&path).unwrap();
+        let logical: Vec<u8> = bytes
+            .chunks(1024)
+            .flat_map(|p| p[..1020].to_vec())
+            .collect();
+        let seed = root.join(FUZZ_SEED);
+        std::fs::create_dir_all(seed.parent().unwrap()).unwrap();
+        // The fuzz target's first byte picks policy and scans: 0, all.
+        std::fs::write(seed, [&[0u8][..], &logical].concat()).unwrap();
+    }
+    assert!(std::fs::metadata(&path).unwrap().len() < 100 << 10);
+    let want: Vec<DVec3> = scans.iter().flat_map(reference).collect();
+    let got = read(&path, InvalidPolicy::Reject, 64).unwrap();
+    assert!(relative_error(&got.xyz, &want) < 1e-6);
+    assert_eq!(got.skipped, scans.iter().map(flagged).sum::<u64>());
 }

@@ -66,7 +66,10 @@ pub fn run(a: InfoArgs) -> Result<()> {
                 let (r, scans) = inspect_scans(&a.input, InvalidPolicy::Reject, progress.as_ref())?;
                 (r, Some(scans))
             }
-            false => (inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?, None),
+            false => (
+                inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?,
+                None,
+            ),
         };
         json!({
             "path": a.input.display().to_string(),

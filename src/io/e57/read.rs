@@ -21,8 +21,8 @@ use super::scan::{describe, ScanInfo, Transform};
 use super::seekbuf::SeekBuf;
 use crate::io::policy::Admitter;
 use crate::io::{Format, IoError, PointChunk, PointReader, ReadOptions, SourceInfo};
-use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
 use ::e57::{CartesianCoordinate, PointCloud};
+use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -101,7 +101,11 @@ pub(crate) fn open_file(path: &Path) -> Result<(File57, Vec<ScanInfo>), IoError>
 
 /// Which scans to read: all, or the selection, each at most once and in
 /// file order.
-fn selected(path: &Path, scans: &[ScanInfo], pick: Option<&[usize]>) -> Result<Vec<usize>, IoError> {
+fn selected(
+    path: &Path,
+    scans: &[ScanInfo],
+    pick: Option<&[usize]>,
+) -> Result<Vec<usize>, IoError> {
     let Some(pick) = pick else {
         return Ok((0..scans.len()).collect());
     };
@@ -129,7 +133,10 @@ impl E57Reader {
         let mut plan = Vec::with_capacity(picked.len());
         let mut declared = 0u64;
         for &i in &picked {
-            let base = scans[..i].iter().map(|s| s.records).fold(0u64, u64::saturating_add);
+            let base = scans[..i]
+                .iter()
+                .map(|s| s.records)
+                .fold(0u64, u64::saturating_add);
             declared = declared.saturating_add(scans[i].records);
             plan.push(Planned {
                 cloud: clouds[i].clone(),

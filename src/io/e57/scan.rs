@@ -90,11 +90,7 @@ pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<Sca
         Some(t) => {
             let q = &t.rotation;
             let v = &t.translation;
-            pose_from(
-                [q.w, q.x, q.y, q.z],
-                [v.x, v.y, v.z],
-            )
-            .map_err(bad)?
+            pose_from([q.w, q.x, q.y, q.z], [v.x, v.y, v.z]).map_err(bad)?
         }
     };
     let (cartesian, spherical) = (pc.has_cartesian(), pc.has_spherical());
@@ -123,11 +119,15 @@ pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<Sca
 /// Validates and normalises a pose.
 fn pose_from(q: [f64; 4], t: [f64; 3]) -> Result<Pose, String> {
     if q.iter().chain(t.iter()).any(|v| !v.is_finite()) {
-        return Err(format!("pose is not finite (rotation {q:?}, translation {t:?})"));
+        return Err(format!(
+            "pose is not finite (rotation {q:?}, translation {t:?})"
+        ));
     }
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if !(norm > 1e-12) || !norm.is_finite() {
-        return Err(format!("pose rotation quaternion {q:?} has no direction"));
+    if !norm.is_finite() || norm <= 1e-12 {
+        return Err(format!(
+            "pose rotation quaternion {q:?} cannot be normalised"
+        ));
     }
     Ok(Pose {
         rotation: q.map(|v| v / norm),

@@ -10,8 +10,8 @@
 
 use super::read::e57_error;
 use crate::io::{AtomicFile, IoError, PointChunk, PointWriter};
-use crossbeam::channel::{bounded, Receiver, Sender};
 use ::e57::{Record, RecordValue};
+use crossbeam::channel::{bounded, Receiver, Sender};
 use glam::DVec3;
 use std::fs::File;
 use std::path::{Path, PathBuf};
