@@ -342,6 +342,18 @@ fn scans_are_selected_by_index() {
     assert!(e.contains("x.ply") && e.contains("--scans"), "{e}");
 }
 
+/// Runs the binary with `args` then `paths`; its stdout, once it succeeded.
+fn scanmesh(args: &[&str], paths: &[&Path]) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args(args)
+        .args(paths)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    String::from_utf8(out.stdout).unwrap()
+}
+
 #[test]
 fn info_lists_every_scan_with_its_counts_and_pose() {
     let dir = tempfile::tempdir().unwrap();
@@ -381,17 +393,8 @@ fn info_lists_every_scan_with_its_counts_and_pose() {
     assert_eq!(whole.skipped, scans.iter().map(flagged).sum::<u64>());
     assert_eq!(whole.info.declared_count, Some(2000));
     // The command line prints the same counts.
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(["info", "--json", "-q"])
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = scanmesh(&["info", "--json", "-q"], &[&path]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let listed = v["scans"].as_array().unwrap();
     let points: Vec<u64> = listed
         .iter()
@@ -410,18 +413,7 @@ fn scans_option_reaches_convert_on_the_command_line() {
     let scans = scans(0xE57_0004);
     write_e57(&path, &scans);
     let out_path = dir.path().join("b.xyz");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(["convert", "-q", "--scans", "2,3"])
-        .arg(&path)
-        .arg(&out_path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary = String::from_utf8_lossy(&out.stdout);
+    let summary = scanmesh(&["convert", "-q", "--scans", "2,3"], &[&path, &out_path]);
     let skipped = flagged(&scans[2]) + flagged(&scans[3]);
     assert!(
         summary.contains(&format!("({skipped} skipped)")),
