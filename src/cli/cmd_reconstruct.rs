@@ -16,10 +16,10 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct ReconstructArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output mesh (.ply binary by default, .obj).
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Reconstruction method.
     #[arg(long, value_enum, default_value_t = Method::Implicit)]
     method: Method,
@@ -92,6 +92,16 @@ pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
         Some("obj") => MeshFormat::Obj,
         _ => bail!("{}: unknown mesh format (use .ply or .obj)", path.display()),
     })
+}
+
+impl ReconstructArgs {
+    /// The tile stages that can run as separate jobs (`--emit`).
+    pub fn tile_stages(&self) -> Result<Vec<&'static str>> {
+        match self.method {
+            Method::Implicit => Ok(vec!["normals", "marching cubes"]),
+            _ => bail!("--emit: only --method implicit runs its tiles as separate jobs yet"),
+        }
+    }
 }
 
 pub fn run(a: ReconstructArgs) -> Result<()> {

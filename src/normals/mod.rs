@@ -184,7 +184,7 @@ pub enum NormalsError {
     Sources(#[from] sources::SourcesError),
 }
 
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NormalsReport {
     pub points: u64,
     pub tiles: usize,

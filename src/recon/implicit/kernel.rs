@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 /// What one tile contributes: its cubes' triangles, vertices keyed by
 /// global lattice edge, in cube order.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct ImplicitTile {
     pub triangles: Vec<[CubeVertex; 3]>,
     pub cubes: usize,
@@ -85,6 +85,10 @@ impl TileKernel for ImplicitKernel {
 
     fn name(&self) -> &str {
         "marching cubes"
+    }
+
+    fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
+        Some(crate::pipeline::Codec::serde())
     }
 
     fn margin(&self) -> f64 {
