@@ -240,6 +240,12 @@ impl Settings {
         progress: &dyn Progress,
     ) -> Result<Prepared> {
         self.check_floor(&cost)?;
+        if self.scans.is_some() && is_store(input) {
+            bail!(
+                "{}: --scans selects scans of an E57 input; a store holds the scans it was built from",
+                input.display()
+            );
+        }
         if let Some(run) = &self.run {
             return self.open_run(run, input, output, cost, progress);
         }
