@@ -304,3 +304,50 @@ fn the_gnu_parallel_script_writes_the_plain_runs_bytes() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     same_file(&c.path("plain.ply"), &c.path("par.ply"));
 }
+
+/// SIGINT during the tile stage: exit 130, nothing temporary left beside
+/// the output (the run directory keeps its finished tiles), and the rerun
+/// resumes to the plain run's bytes.
+#[test]
+fn an_interrupted_run_leaves_nothing_behind_and_resumes() {
+    let c = Case::new();
+    ok(&strs(&c.reconstruct("plain.ply", &[])));
+    let run = c.path("run");
+    let args = c.reconstruct("out.ply", &["--run-dir", &run, "--threads", "1"]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args(&args)
+        .spawn()
+        .expect("spawn");
+    let cubes = Path::new(&run).join("tiles/marching-cubes");
+    let started = std::time::Instant::now();
+    while tile_files(Path::new(&run), "marching-cubes").is_empty() {
+        if child.try_wait().expect("wait").is_some() || started.elapsed().as_secs() > 120 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let _ = std::fs::metadata(&cubes);
+    let interrupted = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(interrupted.success());
+    let status = child.wait().expect("wait");
+    // The run may have finished before the signal arrived on a fast machine.
+    if !Path::new(&c.path("out.ply")).exists() {
+        assert_eq!(status.code(), Some(130), "{status:?}");
+        let mut left: Vec<String> = std::fs::read_dir(&c.root)
+            .expect("list")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(
+            left,
+            ["plain.ply", "run", "sphere.xyz"],
+            "left beside the output"
+        );
+    }
+    ok(&strs(&args));
+    same_file(&c.path("plain.ply"), &c.path("out.ply"));
+}

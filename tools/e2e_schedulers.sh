@@ -37,7 +37,8 @@ check() { # name, command args...
       wait_slurm
     fi
     if cmp -s "plain.$ext" "$kind.$ext"; then
-      echo "$name via $kind ($TASKS tasks a stage): byte-identical ($((SECONDS - t0)) s)"
+      peak=$(grep -o 'peak [0-9.]*[KMG]iB' "run-$kind/log.txt" | sort -k2 -h | tail -1)
+      echo "$name via $kind ($TASKS tasks a stage): byte-identical ($((SECONDS - t0)) s; $(grep -c ' done ' "run-$kind/log.txt") jobs, largest $peak)"
     else
       echo "$name via $kind: DIFFERS from the single-process run" >&2
       "$BIN" status "run-$kind" >&2 || true

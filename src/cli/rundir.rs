@@ -101,7 +101,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
     let outcome = super::dispatch(command);
     let outcome = match (outcome, stopped_at(), &job) {
         (Err(_), Some(stage), _) => {
-            run.log(&format!("done {what} (stopped at {stage})"));
+            run.log(&format!("done {what} (stopped at {stage}), peak {}", super::peak()));
             return Ok(());
         }
         (Ok(()), None, Job::Tiles { stage, .. }) => Err(anyhow!(
@@ -116,7 +116,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
             if !matches!(job, Job::Tiles { .. }) {
                 run.finish(&output, super::report::last_summary())?;
             }
-            run.log(&format!("done {what}"));
+            run.log(&format!("done {what}, peak {}", super::peak()));
         }
         Err(e) => run.log(&format!("failed {what}: {e:#}")),
     }
