@@ -21,7 +21,7 @@ use super::lattice::{JobKey, Lattice};
 use super::local::PointInfo;
 use super::orient::flipped;
 use super::params::ProjectionParams;
-use super::surface::{State, Surface};
+use super::surface::{State, Surface, NONE};
 use crate::geom::Aabb;
 use crate::spatial::{GridIndex, IndexError};
 use glam::DVec3;
@@ -137,15 +137,18 @@ impl JobPoints {
     }
 }
 
-/// Tile index -> job index, by binary search.
-struct ToLocal(Vec<(u32, u32)>);
+/// Tile index -> job index: a tile-sized map (`NONE` where absent) that
+/// each worker reuses, cleared after every job.
+pub struct ToLocal(Vec<u32>);
 
 impl ToLocal {
+    pub fn new(tile_points: usize) -> Self {
+        ToLocal(vec![NONE; tile_points])
+    }
+
     fn get(&self, tile: u32) -> Option<u32> {
-        self.0
-            .binary_search_by_key(&tile, |e| e.0)
-            .ok()
-            .map(|k| self.0[k].1)
+        let l = self.0[tile as usize];
+        (l != NONE).then_some(l)
     }
 }
 
@@ -173,6 +176,7 @@ pub fn run_job<'a, H: Neighbourhoods>(
     tile: &TileView<H>,
     lower: &dyn Fn(JobKey) -> Option<&'a JobOutput>,
     params: &ProjectionParams,
+    local: &mut ToLocal,
 ) -> Result<JobOutput, IndexError> {
     let view = lat.view_box(key);
     let grow = lat.grow_box(key);
@@ -186,11 +190,31 @@ pub fn run_job<'a, H: Neighbourhoods>(
         let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
         jp.push(i, p, tile.ids[i as usize], Some(info), grows, lat.in_window(key, p));
     }
+    for (l, &i) in members.iter().enumerate() {
+        local.0[i as usize] = l as u32;
+    }
+    let result = grow_job(key, lat, tile, lower, params, local, &members, jp);
+    for &i in &members {
+        local.0[i as usize] = NONE;
+    }
+    result
+}
+
+/// The job once its view's points are numbered.
+#[allow(clippy::too_many_arguments)]
+fn grow_job<'a, H: Neighbourhoods>(
+    key: JobKey,
+    lat: &Lattice,
+    tile: &TileView<H>,
+    lower: &dyn Fn(JobKey) -> Option<&'a JobOutput>,
+    params: &ProjectionParams,
+    local: &ToLocal,
+    members: &[u32],
+    mut jp: JobPoints,
+) -> Result<JobOutput, IndexError> {
+    let view = lat.view_box(key);
     let n_view = members.len();
-    let mut sorted: Vec<(u32, u32)> = members.iter().copied().zip(0..).collect();
-    sorted.sort_unstable();
-    let local = ToLocal(sorted);
-    let hoods = remap_lists(&members, tile.hoods, &local);
+    let hoods = remap_lists(members, tile.hoods, local);
     // The lower jobs' triangles with a corner in the view.
     let mut names = Names::default();
     let mut ghosts: HashMap<u32, u32> = HashMap::new();

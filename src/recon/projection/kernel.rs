@@ -12,7 +12,7 @@
 //!
 //! Jobs of one level run in parallel (they never meet); levels in order.
 
-use super::job::{run_job, Buckets, JobOutput, TileView};
+use super::job::{run_job, Buckets, JobOutput, TileView, ToLocal};
 use super::lattice::{JobKey, Lattice, LEVELS};
 use super::local::local_data;
 use super::orient::volume6;
@@ -104,7 +104,10 @@ impl TileKernel for ProjectionKernel {
             let lower = |k: JobKey| done.get(&k);
             let outputs = keys
                 .par_iter()
-                .map(|&k| run_job(k, lat, &view, &lower, &self.params))
+                .map_init(
+                    || ToLocal::new(tile.points.len()),
+                    |local, &k| run_job(k, lat, &view, &lower, &self.params, local),
+                )
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(|e| KernelError::Failed(e.to_string()))?;
             for (k, out) in keys.into_iter().zip(outputs) {
@@ -144,6 +147,9 @@ impl ProjectionKernel {
             let v = lat.view_box(k);
             let lo = (tile.loaded.min - v.min).max_element();
             let hi = (v.max - tile.loaded.max).max_element();
+            if (lo > 0.0 || hi > 0.0) && std::env::var_os("SCANMESH_DEBUG_MARGIN").is_some() {
+                eprintln!("key {k:?} view {v:?} loaded {:?} core {:?} owned {}", tile.loaded, tile.core, owned.contains(&k));
+            }
             short = short.max(lo).max(hi);
         }
         if short > 0.0 {
@@ -155,6 +161,9 @@ impl ProjectionKernel {
 }
 
 fn more_margin(tile: &TilePoints, short: f64) -> KernelError {
+    if std::env::var_os("SCANMESH_DEBUG_MARGIN").is_some() {
+        eprintln!("tile {} margin {} short {}", tile.tile, tile.margin, short);
+    }
     let extra = if short.is_finite() {
         short
     } else {

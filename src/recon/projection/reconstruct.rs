@@ -18,17 +18,36 @@ use crate::store::{PointStore, StoreError};
 use std::path::Path;
 
 /// The lattice in lattice units (`lattice_unit`): the band every job of
-/// a higher level re-grows along the planes, the overlap of each level
-/// with the lower ones (a triangle up to this size across the line where
-/// a lower level stopped can still be made), and the cell, more than
-/// twice the corners' half-width `BAND + 3 OVERLAP`. A tile's margin holds
-/// about a cell: 48 units kept it at 58 units; the band and overlap are
-/// those the seam pass of tiles used before (4 spacings).
+/// a higher level re-grows along the planes; the overlap of each level
+/// with the lower ones (a hole up to this size where a lower level
+/// stopped can still be closed: at 4 units the 1M dragon kept 681 loops,
+/// at 8, 56); the spill; and the cell, more than twice the corners'
+/// half-width `BAND + 3 OVERLAP`.
 pub const BAND_UNITS: f64 = 4.0;
-pub const OVERLAP_UNITS: f64 = 8.0;
+pub const OVERLAP_UNITS: f64 = 9.0;
 pub const CELL_UNITS: f64 = 64.0;
 /// How far a job grows beyond its window (triangles it drops).
-pub const SPILL_UNITS: f64 = 4.0;
+pub const SPILL_UNITS: f64 = 3.0;
+
+/// The lattice for a unit and a neighbour list's reach (both absolute).
+/// A job reads its points' lists and the triangles at their neighbours,
+/// so it sees a reach (and a unit) beyond its spill. The overlap is kept
+/// above spill plus view: then a job reads no lower job beyond the lattice
+/// plane its window stops short of, and a tile's jobs reach a cell beyond
+/// its core, not two (`kernel.rs`).
+pub fn lattice(unit: f64, reach: f64) -> Lattice {
+    let spill = SPILL_UNITS * unit;
+    let view = reach + unit;
+    let overlap = (OVERLAP_UNITS * unit).max(spill + view + unit);
+    let band = BAND_UNITS * unit;
+    Lattice {
+        cell: (CELL_UNITS * unit).max(2.0 * (band + 3.0 * overlap) + 2.0 * unit),
+        band,
+        overlap,
+        spill,
+        view,
+    }
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProjectionReport {
@@ -83,20 +102,11 @@ pub fn reconstruct_projection(
     };
     let reach = hood_factor * kth_distance(spacing, params.k);
     let unit = lattice_unit(store, spacing);
-    let lattice = Lattice {
-        cell: CELL_UNITS * unit,
-        band: BAND_UNITS * unit,
-        overlap: OVERLAP_UNITS * unit,
-        spill: SPILL_UNITS * unit,
-        // A job reads its window's points' lists and the triangles at
-        // their neighbours: two list reaches (as the tiles' seam frames
-        // did).
-        view: 2.0 * kth_distance(unit, params.k) * hood_factor + 2.0 * unit,
-    };
-    // The farthest job a tile runs reaches a cell less the band beyond its
-    // core, plus its view, plus the lists of the points there (twice the
-    // typical reach: sparser points have longer lists, and a reload
-    // costs a whole tile).
+    let lattice = lattice(unit, hood_factor * kth_distance(unit, params.k));
+    // The farthest job a tile runs reads a cell less the band beyond its
+    // core, plus its spill and view, plus the lists of the points there
+    // (twice the typical reach: sparser points have longer lists, and a
+    // reload costs a whole tile).
     let margin = lattice.cell - lattice.band + lattice.spill + lattice.view + 2.0 * reach;
     let kernel = ProjectionKernel {
         params: *params,
