@@ -147,9 +147,6 @@ impl ProjectionKernel {
             let v = lat.view_box(k);
             let lo = (tile.loaded.min - v.min).max_element();
             let hi = (v.max - tile.loaded.max).max_element();
-            if (lo > 0.0 || hi > 0.0) && std::env::var_os("SCANMESH_DEBUG_MARGIN").is_some() {
-                eprintln!("key {k:?} view {v:?} loaded {:?} core {:?} owned {}", tile.loaded, tile.core, owned.contains(&k));
-            }
             short = short.max(lo).max(hi);
         }
         if short > 0.0 {
@@ -161,9 +158,6 @@ impl ProjectionKernel {
 }
 
 fn more_margin(tile: &TilePoints, short: f64) -> KernelError {
-    if std::env::var_os("SCANMESH_DEBUG_MARGIN").is_some() {
-        eprintln!("tile {} margin {} short {}", tile.tile, tile.margin, short);
-    }
     let extra = if short.is_finite() {
         short
     } else {
