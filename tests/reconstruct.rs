@@ -200,6 +200,9 @@ fn tiled_equals_untiled(closed: bool) {
         whole.quality.vertices, tiled.quality.vertices,
         "duplicate seam vertices"
     );
+    // The seam maps forget each vertex once its last tile is stitched, so
+    // nothing but what a hole needs is left at the end.
+    assert_eq!(tiled.report.seam_left, 0);
 }
 
 #[test]
@@ -210,4 +213,53 @@ fn one_thread_equals_two_threads() {
     assert!(one.mesh.vertices == two.mesh.vertices && one.mesh.triangles == two.mesh.triangles);
     assert!(one.quality.watertight);
     assert_eq!(one.quality.euler_characteristic, 2);
+}
+
+/// Normals a store holds from another run (here unoriented) are not
+/// reused silently: the manifest records the parameters that made them,
+/// and a reconstruction asking for others recomputes them (issue 13: a
+/// sphere went from 1 boundary loop to 3 loops and Euler -135).
+#[test]
+fn normals_made_with_other_parameters_are_recomputed() {
+    use scanmesh::normals::{compute_normals, has_normals_of, NormalParams, Orientation};
+    let points = generate(&Shape::unit_sphere(), 6000, 0.0, 7)
+        .expect("generate")
+        .points;
+    with_store(&points, 1500, 1, |store, dir| {
+        let params = ImplicitParams {
+            closed: true,
+            ..ImplicitParams::default()
+        };
+        let run = |store: &mut scanmesh::store::PointStore, name: &str| {
+            let out = dir.join(name);
+            let r = reconstruct_implicit(
+                store,
+                &params,
+                &out,
+                MeshFormat::PlyBinary,
+                RunOptions::new(1),
+                &NoProgress,
+            )
+            .expect("reconstruct");
+            (r, std::fs::read(out).expect("read mesh"))
+        };
+        let (first, bytes) = run(store, "a.ply");
+        assert!(first.normals.is_some(), "the first run computes normals");
+        let (again, same) = run(store, "b.ply");
+        assert!(
+            again.normals.is_none(),
+            "normals of the same parameters are reused"
+        );
+        assert_eq!(bytes, same);
+        let unoriented = NormalParams {
+            orientation: Orientation::None,
+            ..NormalParams::default()
+        };
+        compute_normals(store, &unoriented, RunOptions::new(1), &NoProgress).expect("normals");
+        assert!(has_normals_of(store, &unoriented));
+        assert!(!has_normals_of(store, &params.normals));
+        let (last, after) = run(store, "c.ply");
+        assert!(last.normals.is_some(), "unoriented normals were reused");
+        assert_eq!(bytes, after);
+    });
 }

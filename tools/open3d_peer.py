@@ -41,10 +41,20 @@ def main():
     ap.add_argument("output")
     ap.add_argument("--k", type=int, default=12)
     ap.add_argument("--depth", type=int, default=9)
+    ap.add_argument(
+        "--normals-given",
+        action="store_true",
+        help="use the input's normals (e.g. from `scanmesh normals`) instead of estimating them",
+    )
     a = ap.parse_args()
     pcd = o3d.io.read_point_cloud(a.input)
     n = len(pcd.points)
-    total = oriented_normals(pcd, a.k)
+    if a.normals_given:
+        if not pcd.has_normals():
+            raise SystemExit(f"{a.input}: --normals-given but the file has no normals")
+        total = 0.0
+    else:
+        total = oriented_normals(pcd, a.k)
     if a.job == "normals":
         o3d.io.write_point_cloud(a.output, pcd)
     elif a.job == "poisson":

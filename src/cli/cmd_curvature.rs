@@ -13,10 +13,10 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct CurvatureArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output PLY: x y z k1 k2 H K residual flags per point, in input order.
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     #[command(flatten)]
     fit: FitArgs,
     #[command(flatten)]

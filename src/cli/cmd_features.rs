@@ -10,11 +10,11 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct FeaturesArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output lines: .ply (vertex x y z double; edge vertex1 vertex2 int,
     /// kind uchar 1 ridge / 2 valley) or .obj (`l` records).
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Print a JSON summary instead of the one-line report.
     #[arg(long)]
     json: bool,

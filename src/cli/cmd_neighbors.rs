@@ -15,10 +15,10 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct NeighborsArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output file (binary CSR, see `scanmesh::neighbours::csr`; or text).
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Which neighbourhood: topological (paper 3, mean reverse shift) or
     /// the plain k nearest.
     #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = HoodKind::Topological)]

@@ -9,17 +9,17 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
 };
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::export_points;
+use scanmesh::store::{export_points, NORMAL_FILE};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Args)]
 pub struct NormalsArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output point file (.ply binary by default, or .xyz/.csv).
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Neighbours per point (paper: 8..15).
     #[arg(long, default_value_t = 12)]
     k: usize,
@@ -168,7 +168,21 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;
-    let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
+    // A resumed run keeps normals it finished (its store outlives it).
+    let kept = s
+        .run
+        .as_ref()
+        .and_then(|r| r.stage::<NormalsReport>("normals"));
+    let report = match kept {
+        Some(report) if store.has_column(NORMAL_FILE) => report,
+        _ => {
+            let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
+            if let Some(r) = &s.run {
+                r.keep_stage("normals", &report)?;
+            }
+            report
+        }
+    };
     let window = run.plan.window_points;
     export_points(store, &a.output, &spec, window, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;

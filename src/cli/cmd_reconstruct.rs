@@ -9,6 +9,7 @@ use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport,
 };
+use scanmesh::recon::implicit::sdf::Field;
 use scanmesh::recon::projection::ProjectionParams;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,10 +17,10 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct ReconstructArgs {
     /// Input point file or store directory.
-    input: PathBuf,
+    pub input: PathBuf,
     /// Output mesh (.ply binary by default, .obj).
     #[arg(short, long)]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Reconstruction method.
     #[arg(long, value_enum, default_value_t = Method::Implicit)]
     method: Method,
@@ -37,6 +38,13 @@ pub struct ReconstructArgs {
     /// patches, and pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
+    /// The signed distance (--method implicit): `mls` (default) averages
+    /// the tangent planes of the 16 nearest samples over about two local
+    /// spacings and moves each vertex onto that surface; `sample` is
+    /// paper 1's plane through the nearest sample (keeps sharp edges
+    /// sharpest, follows the noise), vertices linearly interpolated.
+    #[arg(long, value_enum, default_value_t = Plane::Mls)]
+    plane: Plane,
     /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
     /// triangles with a larger circumradius are boundaries. Default: 5 x
     /// the largest nearest-neighbour distance of the triangle's corners
@@ -81,6 +89,14 @@ enum Method {
     Delaunay,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum Plane {
+    /// Moving least squares over the local spacing (issue 19).
+    Mls,
+    /// Paper 1's definition: the nearest sample's tangent plane.
+    Sample,
+}
+
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
     let ext = path
         .extension()
@@ -92,6 +108,16 @@ pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
         Some("obj") => MeshFormat::Obj,
         _ => bail!("{}: unknown mesh format (use .ply or .obj)", path.display()),
     })
+}
+
+impl ReconstructArgs {
+    /// The tile stages that can run as separate jobs (`--emit`).
+    pub fn tile_stages(&self) -> Result<Vec<&'static str>> {
+        match self.method {
+            Method::Implicit => Ok(vec!["normals", "marching cubes"]),
+            _ => bail!("--emit: only --method implicit runs its tiles as separate jobs yet"),
+        }
+    }
 }
 
 pub fn run(a: ReconstructArgs) -> Result<()> {
@@ -120,6 +146,10 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         noise: a.noise,
         closed: a.closed,
         min_piece: a.min_piece,
+        field: match a.plane {
+            Plane::Mls => Field::Mls,
+            Plane::Sample => Field::Paper1,
+        },
         ..ImplicitParams::default()
     };
     // Checked again by the library; here before any input is read.

@@ -14,9 +14,13 @@ mod cmd_reconstruct;
 mod cmd_reconstruct_delaunay;
 mod cmd_reconstruct_projection;
 mod cmd_render;
+mod cmd_run_job;
+mod cmd_status;
 mod cmd_tile;
+mod emit;
 mod progress;
 mod report;
+mod rundir;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -24,7 +28,10 @@ use scanmesh::io::place;
 use scanmesh::io::InvalidPolicy;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
 use scanmesh::store::build::scratch_store_dir_in;
-use scanmesh::store::{is_store, open_input, BuildOptions, PointStore, TileTarget, Workspace};
+use scanmesh::store::{
+    ingest_kept, is_store, open_input, BuildOptions, Checkpoints, Job, PointStore, TileTarget,
+    Workspace,
+};
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -66,6 +73,11 @@ enum Command {
     Eval(cmd_eval::EvalArgs),
     /// Run the main job on a sample embedded in the binary.
     Demo(cmd_demo::DemoArgs),
+    /// Do one part of a run kept in a run directory (what --emit's
+    /// scripts call on each node).
+    RunJob(cmd_run_job::RunJobArgs),
+    /// Stages, tiles done, failures and time left of a run directory.
+    Status(cmd_status::StatusArgs),
 }
 
 /// Options every processing command takes.
@@ -94,6 +106,24 @@ pub struct CommonArgs {
     /// peak RSS and disk traffic, the summary, the outcome, the version.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+    /// Keep the run in DIR (its store, finished tiles, log): the same
+    /// command again resumes where it stopped (normals, neighbors,
+    /// reconstruct).
+    #[arg(long, value_name = "DIR")]
+    run_dir: Option<PathBuf>,
+    /// With --run-dir: discard what DIR holds and start afresh.
+    #[arg(long, requires = "run_dir")]
+    restart: bool,
+    /// With --run-dir: print a job script for GNU parallel or Slurm
+    /// instead of running (tile stages as parallel jobs).
+    #[arg(long, value_enum, requires = "run_dir")]
+    emit: Option<emit::Scheduler>,
+    /// With --emit: jobs per tile stage.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    tasks: u32,
+    /// The part of the run this process does (set by `run-job`).
+    #[arg(skip)]
+    job: Job,
 }
 
 /// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
@@ -122,6 +152,9 @@ pub struct Settings {
     pub quiet: bool,
     pub policy: InvalidPolicy,
     pub scratch_dir: Option<PathBuf>,
+    /// The run directory (`--run-dir`) and this process's part of it.
+    pub run: Option<rundir::RunDir>,
+    pub job: Job,
 }
 
 impl CommonArgs {
@@ -142,6 +175,12 @@ impl CommonArgs {
             tile_points: self.tile_points,
             quiet: self.quiet,
             scratch_dir: self.scratch_dir.clone(),
+            run: self
+                .run_dir
+                .as_deref()
+                .map(rundir::RunDir::new)
+                .transpose()?,
+            job: self.job.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -186,6 +225,9 @@ impl Settings {
         progress: &dyn Progress,
     ) -> Result<Prepared> {
         self.check_floor(&cost)?;
+        if let Some(run) = &self.run {
+            return self.open_run(run, input, output, cost, progress);
+        }
         let scratch_dir = self.check_places(input, output, &cost)?;
         let scratch = scratch_store_dir_in(&scratch_dir, output);
         let ws = open_input(
@@ -197,6 +239,57 @@ impl Settings {
         )
         .with_context(|| format!("reading {}", input.display()))?;
         self.prepare(ws, cost)
+    }
+
+    /// The run directory's store (ingested first if the run has none yet),
+    /// keeping finished tiles for this process's job.
+    fn open_run(
+        &self,
+        run: &rundir::RunDir,
+        input: &Path,
+        output: &Path,
+        cost: KernelCost,
+        progress: &dyn Progress,
+    ) -> Result<Prepared> {
+        let tile_job = matches!(self.job, Job::Tiles { .. });
+        let store_dir = if is_store(input) {
+            input.to_path_buf()
+        } else {
+            run.store_dir()
+        };
+        if !is_store(&store_dir) {
+            if tile_job {
+                bail!(
+                    "{}: the run has no store yet: its first job (ingest) must finish before tile jobs",
+                    run.dir.display()
+                );
+            }
+            let with_scratch = Settings {
+                scratch_dir: Some(run.dir.clone()),
+                ..self.clone()
+            };
+            with_scratch.check_places(input, output, &cost)?;
+            ingest_kept(
+                input,
+                &store_dir,
+                &self.build_options(cost),
+                self.policy,
+                progress,
+            )
+            .with_context(|| format!("reading {}", input.display()))?;
+        }
+        // Tile jobs of one stage run side by side and only read the store.
+        let mut store = match tile_job {
+            true => PointStore::open_shared(&store_dir)?,
+            false => PointStore::open(&store_dir)?,
+        };
+        let checkpoints = Checkpoints::new(run.tiles_dir(), self.job.clone());
+        if self.job == Job::Whole {
+            checkpoints.remove_leftovers()?;
+        }
+        rundir::watch(&checkpoints);
+        store.keep_tiles(checkpoints);
+        self.prepare(Workspace::kept(store), cost)
     }
 
     /// Checks, before any input is read, that the output and scratch
@@ -267,6 +360,21 @@ pub fn run() -> Result<()> {
         place::check_output(path)?;
     }
     let outcome = match cli.command {
+        Command::RunJob(a) => cmd_run_job::run(a),
+        Command::Status(a) => cmd_status::run(a),
+        command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
+    };
+    if let Some(path) = &report {
+        report::write(path, &start, &outcome)?;
+    }
+    outcome
+}
+
+/// Runs one command in this process.
+fn dispatch(command: Command) -> Result<()> {
+    match command {
+        Command::RunJob(a) => cmd_run_job::run(a),
+        Command::Status(a) => cmd_status::run(a),
         Command::Info(a) => cmd_info::run(a),
         Command::Convert(a) => cmd_convert::run(a),
         Command::Tile(a) => cmd_tile::run(a),
@@ -278,18 +386,18 @@ pub fn run() -> Result<()> {
         Command::Render(a) => cmd_render::run(a),
         Command::Eval(a) => cmd_eval::run(a),
         Command::Demo(a) => cmd_demo::run(a),
-    };
-    if let Some(path) = &report {
-        report::write(path, &start, &outcome)?;
     }
-    outcome
 }
 
 impl Command {
     /// The options every processing command takes, if this is one.
     fn common(&self) -> Option<&CommonArgs> {
         match self {
-            Command::Info(_) | Command::Eval(_) | Command::Render(_) => None,
+            Command::Info(_)
+            | Command::Eval(_)
+            | Command::Render(_)
+            | Command::RunJob(_)
+            | Command::Status(_) => None,
             Command::Convert(a) => Some(&a.common),
             Command::Tile(a) => Some(&a.common),
             Command::Normals(a) => Some(&a.common),
@@ -298,6 +406,41 @@ impl Command {
             Command::Neighbors(a) => Some(&a.common),
             Command::Reconstruct(a) => Some(&a.common),
             Command::Demo(a) => Some(&a.common),
+        }
+    }
+}
+
+impl Command {
+    fn common_mut(&mut self) -> Option<&mut CommonArgs> {
+        match self {
+            Command::Normals(a) => Some(&mut a.common),
+            Command::Neighbors(a) => Some(&mut a.common),
+            Command::Reconstruct(a) => Some(&mut a.common),
+            Command::Curvature(a) => Some(&mut a.common),
+            Command::Features(a) => Some(&mut a.common),
+            _ => None,
+        }
+    }
+
+    /// Input and output of a command that can keep a run directory.
+    fn paths(&self) -> Option<(&Path, &Path)> {
+        match self {
+            Command::Normals(a) => Some((&a.input, &a.output)),
+            Command::Neighbors(a) => Some((&a.input, &a.output)),
+            Command::Reconstruct(a) => Some((&a.input, &a.output)),
+            Command::Curvature(a) => Some((&a.input, &a.output)),
+            Command::Features(a) => Some((&a.input, &a.output)),
+            _ => None,
+        }
+    }
+
+    /// The tile stages whose tiles can run as separate jobs, in order.
+    fn tile_stages(&self) -> Result<Vec<&'static str>> {
+        match self {
+            Command::Normals(_) => Ok(vec!["normals"]),
+            Command::Neighbors(_) => Ok(vec!["neighbours"]),
+            Command::Reconstruct(a) => a.tile_stages(),
+            _ => bail!("--emit: this command has no tile stages that run as separate jobs yet (normals, neighbors and reconstruct have)"),
         }
     }
 }

@@ -106,6 +106,11 @@ pub fn summary(line: String) {
     }
 }
 
+/// The summary line printed last, if any.
+pub fn last_summary() -> Option<String> {
+    LOG.lock().ok()?.summary.clone()
+}
+
 /// Writes the report of this run to `path`: `start` is when the command
 /// began, `outcome` its result.
 pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow::Result<()> {

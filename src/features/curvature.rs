@@ -16,11 +16,11 @@ use super::{
     CURVATURE_FLAGS_FILE, CURVATURE_META_FILE, FLAG_UNORIENTED,
 };
 use crate::normals::{
-    compute_normals, FLAG_DEGENERATE as N_DEGENERATE, FLAG_UNORIENTED as N_UNORIENTED,
+    ensure_normals, FLAG_DEGENERATE as N_DEGENERATE, FLAG_UNORIENTED as N_UNORIENTED,
 };
 use crate::pipeline::{run_tiles, KernelError, Progress, RunOptions, RunStats, TileKernel};
 use crate::spatial::Neighbour;
-use crate::store::{spacing::ensure_spacing, PointStore, NORMAL_FILE};
+use crate::store::{spacing::ensure_spacing, PointStore};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -276,10 +276,7 @@ pub fn compute_curvature(
     progress: &dyn Progress,
 ) -> Result<CurvatureReport, FeaturesError> {
     params.hood.validate()?;
-    let computed_normals = !store.has_column(NORMAL_FILE);
-    if computed_normals {
-        compute_normals(store, &params.normals, opts, progress)?;
-    }
+    let computed_normals = ensure_normals(store, &params.normals, opts, progress)?.is_some();
     let estimate = ensure_spacing(store)?;
     let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;
     if !(d > 0.0 && d.is_finite()) {

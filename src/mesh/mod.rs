@@ -13,6 +13,7 @@
 pub mod angles;
 pub mod distance;
 pub mod error;
+mod paged;
 pub mod pieces;
 pub mod quality;
 pub mod self_intersect;

@@ -8,11 +8,13 @@
 //! object, but a few lattice cubes around a stray cluster of samples (VRIP
 //! debris inside the dragon, noise) close into pieces of their own.
 //! MeshLab's "remove isolated pieces" is the usual after-the-fact tool; here
-//! it costs 4 bytes per vertex while streaming (the sets) and a replay of the
-//! scratch files at the end. With a share of 0 the filter passes everything
-//! straight through and keeps nothing.
+//! it costs a replay of the scratch files at the end, and the per-vertex
+//! state (the sets' parents, then the triangle counts that become the new
+//! numbers) lives in scratch files too, behind caches of a fixed size
+//! ([`super::paged`]), so that `--mem` holds at any mesh size. With a share
+//! of 0 the filter passes everything straight through and keeps nothing.
 
-use super::union_find::DisjointSets;
+use super::paged::{ExternalSets, PagedU32, TABLE_BYTES_PER_ELEMENT};
 use super::write::scratch_beside;
 use super::{MeshError, MeshWriter};
 use crate::io::IoError;
@@ -20,10 +22,13 @@ use glam::DVec3;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 
-/// Memory per mesh vertex when spooling: the disjoint sets' parents (4,
-/// with an eighth of headroom) and, on replay, the triangle counts that
-/// become the new numbers (4).
-pub const BYTES_PER_VERTEX: u64 = 9;
+/// Memory per mesh vertex: the page tables of the parents' and the
+/// counts' files (the pages themselves are in the fixed-size caches).
+pub const BYTES_PER_VERTEX: f64 = 2.0 * TABLE_BYTES_PER_ELEMENT;
+
+/// Cache of each per-vertex file: 8 MiB (2048 pages) holds a tile's
+/// vertices and the seam pages it reaches back to.
+const CACHE_BYTES: usize = 8 << 20;
 
 /// Items replayed into the writer at a time.
 const BATCH: usize = 1 << 16;
@@ -46,7 +51,9 @@ struct Spool {
     vertices: BufWriter<File>,
     faces: BufWriter<File>,
     vertex_count: u64,
-    sets: DisjointSets<u32>,
+    sets: ExternalSets,
+    /// The counts' file, opened with the others so a full disk shows early.
+    counts: File,
 }
 
 impl PieceFilter {
@@ -56,17 +63,16 @@ impl PieceFilter {
         if min_share <= 0.0 {
             return Ok(PieceFilter { out, spool: None });
         }
-        let scratch = || {
-            scratch_beside(out.path())
-                .map(|f| BufWriter::with_capacity(1 << 20, f))
-                .map_err(|e| MeshError::Io(IoError::os(out.path(), e)))
-        };
+        let scratch =
+            || scratch_beside(out.path()).map_err(|e| MeshError::Io(IoError::os(out.path(), e)));
+        let buffered = |f| BufWriter::with_capacity(1 << 20, f);
         let spool = Spool {
             min_share,
-            vertices: scratch()?,
-            faces: scratch()?,
+            vertices: buffered(scratch()?),
+            faces: buffered(scratch()?),
             vertex_count: 0,
-            sets: DisjointSets::new(0),
+            sets: ExternalSets::new(scratch()?, CACHE_BYTES),
+            counts: scratch()?,
         };
         Ok(PieceFilter {
             spool: Some(spool),
@@ -129,7 +135,7 @@ impl Spool {
             }
         }
         self.vertex_count += vertices.len() as u64;
-        self.sets.grow(self.vertex_count as usize);
+        self.sets.grow(self.vertex_count);
         Ok(())
     }
 
@@ -141,10 +147,9 @@ impl Spool {
             // An index past the vertices (a caller's bug) gets a set of its
             // own here and an out-of-range number on replay, where the
             // writer names it.
-            self.sets
-                .grow(t.iter().max().map_or(0, |&m| m as usize + 1));
-            self.sets.union(t[0] as usize, t[1] as usize);
-            self.sets.union(t[0] as usize, t[2] as usize);
+            self.sets.grow(t.iter().max().map_or(0, |&m| m as u64 + 1));
+            self.sets.union(t[0] as u64, t[1] as u64)?;
+            self.sets.union(t[0] as u64, t[2] as u64)?;
         }
         Ok(())
     }
@@ -155,76 +160,105 @@ impl Spool {
         let os = |e| MeshError::Io(IoError::os(&path, e));
         let mut faces = rewind(self.faces).map_err(os)?;
         // Triangles per piece, at the piece's root (its smallest vertex).
-        let mut count = vec![0u32; self.sets.len()];
-        for_each_record::<12>(&mut faces, |r| {
-            let a = u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize;
-            let root = self.sets.find(a);
-            count[root] = count[root].saturating_add(1);
+        let mut count = PagedU32::new(self.counts, CACHE_BYTES);
+        let mut largest = 0u32;
+        try_for_each_record::<12, std::io::Error>(&mut faces, |r| {
+            let a = u32::from_le_bytes([r[0], r[1], r[2], r[3]]);
+            let root = self.sets.find(a as u64)?;
+            let c = count.get(root)?.saturating_add(1);
+            largest = largest.max(c);
+            count.set(root, c)
         })
         .map_err(os)?;
-        let largest = count.iter().copied().max().unwrap_or(0);
         let least = (self.min_share * largest as f64).ceil() as u32;
         let mut report = PieceReport::default();
         // A root comes before its members, so `count` can turn into the new
         // numbering as it goes: at a root its own count is still there; at
         // a member the root's new number is (u32::MAX: dropped).
         let mut next = 0u32;
-        for v in 0..count.len() {
-            let root = self.sets.find(v);
+        for v in 0..self.sets.len() {
+            let root = self.sets.find(v).map_err(os)?;
             let kept = if root == v {
-                let keep = count[v] >= least;
-                if !keep && count[v] > 0 {
+                let c = count.get(v).map_err(os)?;
+                let keep = c >= least;
+                if !keep && c > 0 {
                     report.pieces_dropped += 1;
-                    report.triangles_dropped += count[v] as u64;
+                    report.triangles_dropped += c as u64;
                 }
                 keep
             } else {
-                count[root] != u32::MAX
+                count.get(root).map_err(os)? != u32::MAX
             };
-            count[v] = match kept {
+            let number = match kept {
                 false => u32::MAX,
-                true if v as u64 >= self.vertex_count => u32::MAX - 1,
+                true if v >= self.vertex_count => u32::MAX - 1,
                 true => {
                     next += 1;
                     next - 1
                 }
             };
+            count.set(v, number).map_err(os)?;
         }
-        let renumbered = count;
+        let mut renumbered = count;
         let mut vertices = rewind(self.vertices).map_err(os)?;
         let mut batch = Vec::with_capacity(BATCH);
-        let mut result = Ok(0);
-        let mut v = 0usize;
-        for_each_record::<24>(&mut vertices, |r| {
-            if renumbered[v] != u32::MAX {
+        let mut v = 0u64;
+        try_for_each_record::<24, Replay>(&mut vertices, |r| {
+            if renumbered.get(v)? != u32::MAX {
                 let c = |i: usize| f64::from_le_bytes(r[i..i + 8].try_into().unwrap_or([0; 8]));
                 batch.push(DVec3::new(c(0), c(8), c(16)));
             }
             v += 1;
-            if batch.len() == BATCH && result.is_ok() {
-                result = out.add_vertices(&batch);
+            if batch.len() == BATCH {
+                out.add_vertices(&batch).map_err(Replay::Mesh)?;
                 batch.clear();
             }
+            Ok(())
         })
-        .map_err(os)?;
-        result.and_then(|_| out.add_vertices(&batch))?;
+        .map_err(|e| e.into_mesh(&path))?;
+        out.add_vertices(&batch)?;
         faces.seek(SeekFrom::Start(0)).map_err(os)?;
         let mut kept = Vec::with_capacity(BATCH);
-        let mut result = Ok(());
-        for_each_record::<12>(&mut faces, |r| {
+        try_for_each_record::<12, Replay>(&mut faces, |r| {
             let i = |k: usize| u32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]);
-            let t = [i(0), i(4), i(8)].map(|x| renumbered[x as usize]);
+            let mut t = [0u32; 3];
+            for (slot, x) in t.iter_mut().zip([i(0), i(4), i(8)]) {
+                *slot = renumbered.get(x as u64)?;
+            }
             if t[0] != u32::MAX {
                 kept.push(t);
             }
-            if kept.len() == BATCH && result.is_ok() {
-                result = out.add_triangles(&kept);
+            if kept.len() == BATCH {
+                out.add_triangles(&kept).map_err(Replay::Mesh)?;
                 kept.clear();
             }
+            Ok(())
         })
-        .map_err(os)?;
-        result.and_then(|()| out.add_triangles(&kept))?;
+        .map_err(|e| e.into_mesh(&path))?;
+        out.add_triangles(&kept)?;
         Ok(report)
+    }
+}
+
+/// A failure while replaying into the writer: the scratch files' or the
+/// writer's own.
+enum Replay {
+    Io(std::io::Error),
+    Mesh(MeshError),
+}
+
+impl From<std::io::Error> for Replay {
+    fn from(e: std::io::Error) -> Self {
+        Replay::Io(e)
+    }
+}
+
+impl Replay {
+    fn into_mesh(self, path: &std::path::Path) -> MeshError {
+        match self {
+            Replay::Io(e) => MeshError::Io(IoError::os(path, e)),
+            Replay::Mesh(e) => e,
+        }
     }
 }
 
@@ -234,16 +268,17 @@ fn rewind(w: BufWriter<File>) -> std::io::Result<BufReader<File>> {
     Ok(BufReader::with_capacity(1 << 20, f))
 }
 
-fn for_each_record<const N: usize>(
+/// Calls `f` on each record of `N` bytes until the end or `f`'s first error.
+fn try_for_each_record<const N: usize, E: From<std::io::Error>>(
     r: &mut BufReader<File>,
-    mut f: impl FnMut(&[u8; N]),
-) -> std::io::Result<()> {
+    mut f: impl FnMut(&[u8; N]) -> Result<(), E>,
+) -> Result<(), E> {
     let mut record = [0u8; N];
     loop {
         match r.read_exact(&mut record) {
-            Ok(()) => f(&record),
+            Ok(()) => f(&record)?,
             Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(()),
-            Err(e) => return Err(e),
+            Err(e) => return Err(e.into()),
         }
     }
 }

@@ -75,21 +75,6 @@ impl<S: Slot> DisjointSets<S> {
     pub fn is_root(&self, x: usize) -> bool {
         self.parent[x].to_usize() == x
     }
-
-    /// Adds singleton sets up to `n` members in all.
-    pub fn grow(&mut self, n: usize) {
-        let len = self.parent.len();
-        // An eighth of headroom, not the doubling `extend` would give: the
-        // sets are counted per member in the memory plan.
-        if n > self.parent.capacity() {
-            self.parent.reserve_exact(n - len + n / 8);
-        }
-        self.parent.extend((len..n).map(S::from_usize));
-    }
-
-    pub fn len(&self) -> usize {
-        self.parent.len()
-    }
 }
 
 /// Disjoint sets that also carry a parity bit per member relative to its

@@ -21,7 +21,7 @@ use crate::tiling::TilePoints;
 use rayon::prelude::*;
 
 /// One tile's neighbourhoods, core points sorted by input-order id.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighboursTile {
     /// Input-order ids of the core points, ascending.
     pub ids: Vec<u64>,
@@ -52,6 +52,10 @@ impl TileKernel for NeighboursKernel {
 
     fn name(&self) -> &str {
         "neighbours"
+    }
+
+    fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
+        Some(crate::pipeline::Codec::serde())
     }
 
     fn margin(&self) -> f64 {

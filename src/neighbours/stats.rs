@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 /// Size and iteration histograms over a set of points.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct HoodStats {
     /// `sizes[s]`: points with `s` neighbours.
     sizes: Vec<u64>,

@@ -27,7 +27,7 @@ use super::unionfind::UnionFind;
 /// walks the union-find in the store's spatial order where input ids jump
 /// at random (10M points: the orientation passes 4.3 s -> 2.7 s). Slots
 /// never enter [`Edge::key`], so the tree does not depend on the tiling.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
     pub w: f64,
     pub a: u32,

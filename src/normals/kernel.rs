@@ -22,7 +22,7 @@ use crate::tiling::TilePoints;
 use glam::DVec3;
 
 /// What one tile contributes.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct NormalsTile {
     /// Unit normals of the core points, in store order (zero when degenerate).
     pub normals: Vec<[f32; 3]>,
@@ -84,6 +84,10 @@ impl TileKernel for NormalsKernel {
 
     fn name(&self) -> &str {
         "normals"
+    }
+
+    fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
+        Some(crate::pipeline::Codec::serde())
     }
 
     fn margin(&self) -> f64 {

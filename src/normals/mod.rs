@@ -124,6 +124,11 @@ impl Default for NormalParams {
 }
 
 impl NormalParams {
+    /// The parameters as the manifest records them for the normals column.
+    pub fn provenance(&self) -> String {
+        format!("normals {self:?}")
+    }
+
     /// Peak bytes per loaded point of the kernel (index, neighbour lists,
     /// normals, edges), for the memory planner. Topological: the R*-tree's
     /// entries and nodes (~40 more bytes a point) and lists of about 2k
@@ -184,7 +189,7 @@ pub enum NormalsError {
     Sources(#[from] sources::SourcesError),
 }
 
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NormalsReport {
     pub points: u64,
     pub tiles: usize,
@@ -218,8 +223,34 @@ pub fn compute_normals(
     store.sync_column(&normals)?;
     store.sync_column(&flags)?;
     store.manifest.sampling = Some(report.sampling);
+    store
+        .manifest
+        .provenance
+        .insert(NORMAL_FILE.to_string(), params.provenance());
     store.save_manifest()?;
     Ok(report)
+}
+
+/// Whether `store` holds normals computed with `params` (with their
+/// sampling statistics): the ones a later pass may reuse.
+pub fn has_normals_of(store: &PointStore, params: &NormalParams) -> bool {
+    store.has_column(NORMAL_FILE)
+        && store.manifest.sampling.is_some()
+        && store.manifest.provenance.get(NORMAL_FILE) == Some(&params.provenance())
+}
+
+/// Computes normals with `params` unless the store holds them already;
+/// the report when it computed them.
+pub fn ensure_normals(
+    store: &mut PointStore,
+    params: &NormalParams,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<Option<NormalsReport>, NormalsError> {
+    if has_normals_of(store, params) {
+        return Ok(None);
+    }
+    compute_normals(store, params, opts, progress).map(Some)
 }
 
 /// The kernel pass and, for the spanning tree, the global orientation.

@@ -14,7 +14,7 @@ const SUM_UNIT: f64 = (1u64 << 40) as f64;
 
 /// Histogram of positive values on a log2 scale around `scale`, with 1.1 %
 /// wide bins; zeros and values outside the range are counted apart.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LogHistogram {
     scale: f64,
     bins: Vec<u64>,
@@ -143,7 +143,7 @@ pub struct SamplingStats {
 }
 
 /// Per-tile accumulators of [`SamplingStats`].
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SamplingHistograms {
     pub nn: LogHistogram,
     pub residual: LogHistogram,

@@ -3,11 +3,13 @@
 //! hands them to the kernel's seam policy. It knows nothing of geometry.
 
 pub mod budget;
+pub mod codec;
 pub mod plan;
 pub mod progress;
 pub mod run;
 
 pub use budget::{peak_rss_bytes, MemoryBudget};
+pub use codec::Codec;
 pub use plan::{BudgetError, KernelCost, MemoryPlan};
 pub use progress::{NoProgress, Progress};
 pub use run::{run_tiles, KernelError, RunOptions, RunStats, TileKernel};
@@ -31,4 +33,22 @@ pub enum PipelineError {
     WorkerLost,
     #[error("{0}")]
     Seam(String),
+    /// The job this process was started for is done (`--until`, a tile
+    /// job): not a failure.
+    #[error("stopped at stage `{stage}` as the job asked")]
+    Stopped { stage: String },
+    #[error("stage `{stage}` has {done} of {total} tiles done: its tile jobs must finish before this job")]
+    StageIncomplete {
+        stage: String,
+        done: usize,
+        total: usize,
+    },
+    #[error("stage `{stage}` keeps no tile results, so it cannot run as tile jobs")]
+    NotSplittable { stage: String },
+    #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({reason})")]
+    Codec {
+        stage: String,
+        tile: usize,
+        reason: String,
+    },
 }

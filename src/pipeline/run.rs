@@ -1,9 +1,12 @@
 //! Running a tile kernel over every tile of a store: a crossbeam job queue,
 //! `threads` workers, at most `in_flight` tiles loaded or waiting at once, and
-//! a reorder buffer so the seam policy sees results in tile order.
+//! a reorder buffer so the seam policy sees results in tile order. In a
+//! resumable run the store keeps finished tiles ([`crate::store::Checkpoints`]):
+//! a kernel with a [`Codec`] has each result saved as it finishes and read
+//! back instead of recomputed, and a tile job computes some tiles only.
 
-use super::{PipelineError, Progress};
-use crate::store::{PointStore, StoreError};
+use super::{Codec, PipelineError, Progress};
+use crate::store::{Checkpoints, Job, PointStore, StoreError};
 use crate::tiling::{load_tile, TilePoints};
 use crossbeam::channel;
 use std::collections::BTreeMap;
@@ -33,6 +36,10 @@ pub trait TileKernel: Sync {
     /// Whether tiles must carry the store's normals and flags.
     fn needs_normals(&self) -> bool {
         false
+    }
+    /// How results are saved for a resumable run (`None`: recomputed).
+    fn codec(&self) -> Option<Codec<Self::Output>> {
+        None
     }
 }
 
@@ -74,18 +81,22 @@ impl RunOptions {
     }
 }
 
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStats {
     pub tiles: usize,
     /// Tiles rerun with a wider margin.
     pub retries: usize,
     pub largest_margin: f64,
+    /// Tiles read back from a resumable run's saved results.
+    pub reused: usize,
 }
 
 type TileOutcome<O> = (usize, Result<(O, f64, usize), PipelineError>);
 
 /// Runs `kernel` on every tile; `seam` receives each tile's result in tile
-/// order on the calling thread.
+/// order on the calling thread. In a tile job (see [`Job`]) only the job's
+/// tiles are computed and saved, `seam` sees nothing, and the result is
+/// [`PipelineError::Stopped`].
 pub fn run_tiles<K: TileKernel>(
     store: &PointStore,
     kernel: &K,
@@ -94,13 +105,39 @@ pub fn run_tiles<K: TileKernel>(
     mut seam: impl FnMut(usize, K::Output) -> Result<(), PipelineError>,
 ) -> Result<RunStats, PipelineError> {
     let n = store.tiles().len();
+    let keep = store
+        .checkpoints()
+        .and_then(|c| kernel.codec().map(|k| (c, k)));
+    let work = Work::for_job(store.checkpoints(), kernel.name(), n, keep.is_some()).map_err(
+        |e| match e {
+            PipelineError::Stopped { stage } => stop(store, &stage),
+            e => e,
+        },
+    )?;
+    let reused = match &keep {
+        Some((c, _)) => work
+            .tiles
+            .iter()
+            .filter(|&&t| c.has(kernel.name(), t))
+            .count(),
+        None => 0,
+    };
+    let stage = match reused {
+        0 => kernel.name().to_string(),
+        r => format!(
+            "{} (resumed: {r} of {} tiles reused)",
+            kernel.name(),
+            work.tiles.len()
+        ),
+    };
+    let tiles = &work.tiles;
     let (job_tx, job_rx) = channel::unbounded::<usize>();
-    (0..n).for_each(|t| {
-        let _ = job_tx.send(t);
+    (0..tiles.len()).for_each(|i| {
+        let _ = job_tx.send(i);
     });
     drop(job_tx);
-    // A worker takes a token before a job, so tiles are taken in order by
-    // token holders and the smallest undelivered tile always holds one.
+    // A worker takes a token before a job, so jobs are taken in order by
+    // token holders and the smallest undelivered job always holds one.
     let (token_tx, token_rx) = channel::bounded::<()>(opts.in_flight.max(1));
     for _ in 0..opts.in_flight.max(1) {
         let _ = token_tx.send(());
@@ -108,33 +145,48 @@ pub fn run_tiles<K: TileKernel>(
     let (res_tx, res_rx) = channel::unbounded::<TileOutcome<K::Output>>();
     let cancel = AtomicBool::new(false);
     let retries = AtomicUsize::new(0);
-    progress.begin(kernel.name(), n as u64);
+    progress.begin(&stage, tiles.len() as u64);
     let mut stats = RunStats {
         tiles: n,
+        reused,
         ..RunStats::default()
     };
+    let keep = keep.as_ref().map(|(c, k)| (*c, k));
     let result = std::thread::scope(|s| {
         for _ in 0..opts.threads.max(1) {
             let (job_rx, token_rx, res_tx) = (job_rx.clone(), token_rx.clone(), res_tx.clone());
             let (cancel, retries) = (&cancel, &retries);
             s.spawn(move || {
                 while token_rx.recv().is_ok() {
-                    let Ok(t) = job_rx.recv() else { break };
+                    let Ok(i) = job_rx.recv() else { break };
                     if cancel.load(Ordering::Relaxed) {
                         break;
                     }
-                    let out = run_one(store, kernel, t);
+                    let out = fetch(store, kernel, keep, tiles[i]);
                     if let Ok((_, _, r)) = &out {
                         retries.fetch_add(*r, Ordering::Relaxed);
                     }
-                    if res_tx.send((t, out)).is_err() {
+                    if res_tx.send((i, out)).is_err() {
                         break;
                     }
                 }
             });
         }
         drop(res_tx);
-        let delivered = deliver(n, &res_rx, &token_tx, progress, &mut seam, &mut stats);
+        let delivered = deliver(
+            tiles.len(),
+            &res_rx,
+            &token_tx,
+            progress,
+            &mut stats,
+            |i, out| {
+                if work.to_seam {
+                    seam(tiles[i], out)
+                } else {
+                    Ok(())
+                }
+            },
+        );
         if delivered.is_err() {
             cancel.store(true, Ordering::Relaxed);
         }
@@ -143,7 +195,99 @@ pub fn run_tiles<K: TileKernel>(
     });
     progress.end();
     stats.retries = retries.load(Ordering::Relaxed);
-    result.map(|_| stats)
+    result?;
+    if work.to_seam {
+        Ok(stats)
+    } else {
+        Err(stop(store, kernel.name()))
+    }
+}
+
+/// The job is done at `stage`: says so to whoever holds the checkpoints.
+fn stop(store: &PointStore, stage: &str) -> PipelineError {
+    if let Some(c) = store.checkpoints() {
+        c.stop_at(stage);
+    }
+    PipelineError::Stopped {
+        stage: stage.to_string(),
+    }
+}
+
+/// The tiles a run of one stage handles, and whether the seam sees them.
+struct Work {
+    tiles: Vec<usize>,
+    to_seam: bool,
+}
+
+impl Work {
+    /// What this process does of stage `stage` (`n` tiles) for its job.
+    fn for_job(
+        checkpoints: Option<&Checkpoints>,
+        stage: &str,
+        n: usize,
+        kept: bool,
+    ) -> Result<Work, PipelineError> {
+        let all = Work {
+            tiles: (0..n).collect(),
+            to_seam: true,
+        };
+        let Some(c) = checkpoints else {
+            return Ok(all);
+        };
+        let this = |s: &str| Checkpoints::slug(s) == Checkpoints::slug(stage);
+        match &c.job {
+            Job::Whole => Ok(all),
+            Job::Until(s) if this(s) => Err(PipelineError::Stopped {
+                stage: stage.to_string(),
+            }),
+            Job::Until(_) => Ok(all),
+            Job::Tiles { stage: s, tiles } if this(s) => match kept {
+                true => Ok(Work {
+                    tiles: tiles.tiles(n).filter(|&t| !c.has(stage, t)).collect(),
+                    to_seam: false,
+                }),
+                false => Err(PipelineError::NotSplittable {
+                    stage: stage.to_string(),
+                }),
+            },
+            // A tile job of a later stage replays this one, complete.
+            Job::Tiles { .. } => match c.count(stage, n) {
+                done if kept && done == n => Ok(all),
+                done => Err(PipelineError::StageIncomplete {
+                    stage: stage.to_string(),
+                    done: if kept { done } else { 0 },
+                    total: n,
+                }),
+            },
+        }
+    }
+}
+
+/// A tile's result: read back when saved, else computed (and saved).
+fn fetch<K: TileKernel>(
+    store: &PointStore,
+    kernel: &K,
+    keep: Option<(&Checkpoints, &Codec<K::Output>)>,
+    t: usize,
+) -> Result<(K::Output, f64, usize), PipelineError> {
+    let Some((c, codec)) = keep else {
+        return run_one(store, kernel, t);
+    };
+    if let Some(bytes) = c.load(kernel.name(), t)? {
+        // One that does not decode (checksum right, encoding not) is
+        // recomputed like a missing one.
+        if let Ok(out) = (codec.decode)(&bytes) {
+            return Ok((out, kernel.margin(), 0));
+        }
+    }
+    let (out, margin, retries) = run_one(store, kernel, t)?;
+    let bytes = (codec.encode)(&out).map_err(|e| PipelineError::Codec {
+        stage: kernel.name().to_string(),
+        tile: t,
+        reason: e.to_string(),
+    })?;
+    c.save(kernel.name(), t, &bytes)?;
+    Ok((out, margin, retries))
 }
 
 fn deliver<O>(
@@ -151,8 +295,8 @@ fn deliver<O>(
     res_rx: &channel::Receiver<TileOutcome<O>>,
     token_tx: &channel::Sender<()>,
     progress: &dyn Progress,
-    seam: &mut impl FnMut(usize, O) -> Result<(), PipelineError>,
     stats: &mut RunStats,
+    mut seam: impl FnMut(usize, O) -> Result<(), PipelineError>,
 ) -> Result<(), PipelineError> {
     let mut pending = BTreeMap::new();
     let mut next = 0;

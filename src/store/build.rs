@@ -143,6 +143,7 @@ fn build_with_spill(
         source: String::new(),
         source_has_normals: reader.info().has_normals,
         sampling: None,
+        provenance: Default::default(),
     })
 }
 

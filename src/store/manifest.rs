@@ -33,6 +33,11 @@ pub struct Manifest {
     /// Sampling density and noise, once a normals pass measured them.
     #[serde(default)]
     pub sampling: Option<crate::normals::stats::SamplingStats>,
+    /// For each derived column, the parameters that produced it, so a
+    /// later pass asking for other parameters recomputes it rather than
+    /// reusing it silently (absent: unknown, recomputed when asked).
+    #[serde(default)]
+    pub provenance: std::collections::BTreeMap<String, String>,
 }
 
 /// The coarse histogram grid the planner split; tile cores are integer boxes

@@ -9,6 +9,7 @@
 
 pub mod build;
 mod cells;
+pub mod checkpoint;
 pub mod column;
 pub mod export;
 mod lock;
@@ -20,10 +21,11 @@ pub mod source;
 pub mod spacing;
 
 pub use build::{build_store, BuildOptions, TileTarget};
+pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
 pub use export::export_points;
 pub use manifest::{GridSpec, Manifest, TileEntry};
-pub use source::{is_store, open_input, Workspace};
+pub use source::{ingest_kept, is_store, open_input, Workspace};
 
 use crate::geom::Aabb;
 use glam::DVec3;
@@ -85,6 +87,9 @@ pub struct PointStore {
     /// Removed when the run ends (see [`Workspace`]): nothing needs to
     /// reach the disk.
     scratch: bool,
+    /// Where finished tiles are kept when the store belongs to a
+    /// resumable run (`--run-dir`), and the job of this process.
+    checkpoints: Option<Checkpoints>,
     /// The advisory lock held while the store is open.
     _lock: lock::StoreLock,
 }
@@ -126,6 +131,7 @@ impl PointStore {
             dir: dir.to_path_buf(),
             manifest,
             scratch: false,
+            checkpoints: None,
             _lock: lock,
         };
         store.validate()?;
@@ -177,6 +183,16 @@ impl PointStore {
 
     pub fn is_scratch(&self) -> bool {
         self.scratch
+    }
+
+    /// Keeps tile results in `checkpoints` (a resumable run).
+    pub fn keep_tiles(&mut self, checkpoints: Checkpoints) {
+        self.checkpoints = Some(checkpoints);
+    }
+
+    /// Where tile results are kept, if this store's run is resumable.
+    pub fn checkpoints(&self) -> Option<&Checkpoints> {
+        self.checkpoints.as_ref()
     }
 
     /// Forces a column of this store to disk, unless the store is scratch.

@@ -15,6 +15,14 @@ pub struct Workspace {
 }
 
 impl Workspace {
+    /// A store that outlives the run (the user's, or a resumable run's).
+    pub fn kept(store: PointStore) -> Self {
+        Workspace {
+            store,
+            scratch: None,
+        }
+    }
+
     pub fn is_scratch(&self) -> bool {
         self.scratch.is_some()
     }
@@ -59,6 +67,29 @@ pub fn open_input(
         store,
         scratch: Some((scratch.to_path_buf(), registered)),
     })
+}
+
+/// Ingests `input` into a store at `dir` that outlives the run (a
+/// resumable run's): built under a name beside it and renamed, so `dir` is
+/// a whole store or absent, and a killed build is simply redone.
+pub fn ingest_kept(
+    input: &Path,
+    dir: &Path,
+    opts: &BuildOptions,
+    policy: InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<(), StoreError> {
+    let partial = dir.with_extension("partial");
+    if partial.exists() {
+        std::fs::remove_dir_all(&partial).map_err(|e| StoreError::os(&partial, e))?;
+    }
+    let _registered = crate::io::cleanup::register(&partial);
+    let guard = ScratchGuard(partial.clone());
+    let mut reader = open_reader(input, policy)?;
+    drop(build_store(reader.as_mut(), &partial, opts, progress)?);
+    std::fs::rename(&partial, dir).map_err(|e| StoreError::os(dir, e))?;
+    std::mem::forget(guard);
+    Ok(())
 }
 
 struct ScratchGuard(PathBuf);

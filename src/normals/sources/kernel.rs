@@ -30,6 +30,10 @@ impl TileKernel for SourcesKernel {
         "orient: six sources"
     }
 
+    fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
+        Some(crate::pipeline::Codec::serde())
+    }
+
     fn margin(&self) -> f64 {
         self.margin
     }

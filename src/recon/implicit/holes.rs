@@ -20,6 +20,9 @@
 //! Memory: a directed edge between two seam vertices waits in a map until
 //! the neighbouring tile brings its twin, so the map is about the seam's
 //! size; an edge with a vertex private to the tile is settled within it.
+//! The mesh edges a patch must not repeat are kept only while one of their
+//! vertices is incomplete (a later tile may name it, [`super::owners`]) or
+//! both are on the boundary.
 
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
@@ -36,6 +39,8 @@ pub type LoopVertex = (u32, DVec3);
 pub struct StitchedTriangle {
     pub vertices: [LoopVertex; 3],
     pub on_seam: [bool; 3],
+    /// The last tile that may name each vertex.
+    pub last: [u32; 3],
 }
 
 #[derive(Default)]
@@ -46,8 +51,11 @@ pub struct BoundaryEdges {
     /// Edges without a twin, for good.
     settled: Vec<[LoopVertex; 2]>,
     /// Mesh edges (smaller index first) a patch must not repeat: those
-    /// between seam vertices, and those at private vertices of a hole.
-    edges_near_holes: HashSet<(u32, u32)>,
+    /// between seam vertices, and those at private vertices of a hole; with
+    /// the last tile that may name each vertex.
+    edges_near_holes: HashMap<(u32, u32), [u32; 2]>,
+    /// The vertices of `settled`.
+    settled_vertices: HashSet<u32>,
 }
 
 /// What [`BoundaryEdges::fill`] did.
@@ -85,12 +93,39 @@ impl BoundaryEdges {
                 let (a, b) = (t.vertices[i].0, t.vertices[j].0);
                 let between_seams = t.on_seam[i] && t.on_seam[j];
                 if between_seams || at_hole.contains(&a) || at_hole.contains(&b) {
-                    self.edges_near_holes.insert((a.min(b), a.max(b)));
+                    let (la, lb) = (t.last[i], t.last[j]);
+                    let lasts = if a < b { [la, lb] } else { [lb, la] };
+                    self.edges_near_holes.insert((a.min(b), a.max(b)), lasts);
                 }
             }
         }
+        self.settled_vertices.extend(at_hole);
         self.settled
             .extend(local.into_iter().map(|((a, b), [p, q])| [(a, p), (b, q)]));
+    }
+
+    /// Forgets the edges no patch can use once tile `tile` is stitched: a
+    /// patch joins boundary vertices only, and a vertex no later tile can
+    /// name is on the boundary now or never.
+    pub fn retire(&mut self, tile: u32) {
+        let waiting: HashSet<u32> = self.waiting.keys().flat_map(|&(a, b)| [a, b]).collect();
+        let settled = &self.settled_vertices;
+        let final_inside =
+            |v: u32, last: u32| last <= tile && !settled.contains(&v) && !waiting.contains(&v);
+        self.edges_near_holes
+            .retain(|&(a, b), &mut [la, lb]| !(final_inside(a, la) || final_inside(b, lb)));
+    }
+
+    /// Edges kept that no patch can use (0 when every tile retired its own).
+    pub fn unneeded(&self) -> u64 {
+        let waiting: HashSet<u32> = self.waiting.keys().flat_map(|&(a, b)| [a, b]).collect();
+        let boundary = |v: u32| self.settled_vertices.contains(&v) || waiting.contains(&v);
+        let unneeded = self
+            .edges_near_holes
+            .keys()
+            .filter(|&&(a, b)| !(boundary(a) && boundary(b)))
+            .count();
+        unneeded as u64
     }
 
     /// Chains the boundary edges into loops and triangulates each loop that
@@ -102,9 +137,12 @@ impl BoundaryEdges {
                 .into_iter()
                 .map(|((a, b), [p, q])| [(a, p), (b, q)]),
         );
+        // Hash order must not decide how a pinched loop is walked (the
+        // count of loops left open changed from run to run).
+        edges.sort_unstable_by_key(|[a, b]| (a.0, b.0));
         let mut report = HoleReport::default();
         let mut triangles = Vec::new();
-        let is_edge = |a: u32, b: u32| self.edges_near_holes.contains(&(a.min(b), a.max(b)));
+        let is_edge = |a: u32, b: u32| self.edges_near_holes.contains_key(&(a.min(b), a.max(b)));
         for lp in chain_loops(edges) {
             let patch = lp
                 .filter(|l| l.len() <= MAX_FILLED_LOOP)
@@ -272,6 +310,7 @@ mod tests {
             .map(|t| StitchedTriangle {
                 vertices: *t,
                 on_seam: t.map(|x| seam(x.0)),
+                last: [u32::MAX; 3],
             })
             .collect()
     }

@@ -11,8 +11,11 @@ pub mod holes;
 pub mod kernel;
 pub mod lattice;
 pub mod mc_table;
+pub mod mls;
+pub mod owners;
 pub mod polygonize;
 pub mod reconstruct;
+pub mod refine;
 pub mod sdf;
 pub mod stitch;
 

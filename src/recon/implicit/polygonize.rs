@@ -11,7 +11,7 @@ use super::lattice::{edge_key, Lattice, LatticeError};
 use super::mc_table::{self, CORNER_OFFSETS, EDGE_AXIS, EDGE_CORNERS};
 
 /// A surface vertex on a lattice edge: the edge's key and the crossing point.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CubeVertex {
     pub key: u64,
     pub pos: DVec3,

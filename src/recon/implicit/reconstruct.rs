@@ -7,11 +7,12 @@
 use super::holes::HoleReport;
 use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
+use super::sdf::Field;
 use super::stitch::Stitcher;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport};
-use crate::normals::{compute_normals, NormalParams, NormalsError, NormalsReport};
+use crate::normals::{ensure_normals, NormalParams, NormalsError, NormalsReport};
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
-use crate::store::{PointStore, StoreError, NORMAL_FILE};
+use crate::store::{PointStore, StoreError};
 use crate::tiling::load::core_box;
 use glam::DVec3;
 use std::path::Path;
@@ -28,6 +29,8 @@ pub struct ImplicitParams {
     /// Drop connected pieces with fewer triangles than this share of the
     /// largest piece's; default [`CLOSED_MIN_PIECE`] with `closed`, else 0.
     pub min_piece: Option<f64>,
+    /// The signed distance (default: moving least squares).
+    pub field: Field,
 }
 
 impl ImplicitParams {
@@ -45,24 +48,39 @@ impl ImplicitParams {
 }
 
 /// Mesh vertices per input point allowed for when planning the small-piece
-/// filter's memory: 0.1 on the 1M dragon and 0.14 on 10M at the default
-/// cell (rho + delta), more as the cell shrinks relative to the spacing.
-const VERTICES_PER_POINT: f64 = 0.2;
+/// filter's page tables and the output's size: 0.64 on the 10M dragon at
+/// the default cell (3 spacings), more as the cell shrinks relative to the
+/// spacing (paper 1's cell, rho + delta, gave 0.1 to 0.17).
+const VERTICES_PER_POINT: f64 = 0.8;
+
+/// Peak bytes per loaded point of the marching-cubes kernel at the default
+/// cell (3 spacings): band cubes (~3 per point), corner keys and values,
+/// the MLS index, the tile's triangles (~1.3 per point, 96 B each) and the
+/// sorted-key merges. Measured: the 1M dragon as one tile peaked at 703 MiB
+/// (from 210 MiB before the stage), so at most 650 B per point; above the
+/// normals kernel's 360, so it sets the tiles of a reconstruction (with
+/// the normals' 360 the 10M run planned 301 MiB and peaked at 354 MiB).
+const MARCHING_BYTES_PER_POINT: u64 = 650;
 
 impl ImplicitParams {
     /// What a reconstruction costs, for the memory plan: the normals run's
-    /// cost, plus the small-piece filter's sets when pieces are dropped.
+    /// cost, plus the small-piece filter's page tables when pieces are
+    /// dropped (its per-vertex state is in scratch files behind caches of a
+    /// fixed 16 MiB, within the fixed costs: the read chunk and the
+    /// histogram are gone by then).
     pub fn cost(&self) -> KernelCost {
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
+        let normals = self.normals.cost();
         KernelCost {
+            bytes_per_point: normals.bytes_per_point.max(MARCHING_BYTES_PER_POINT),
             resident_per_point: if pieces {
-                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX as f64
+                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX
             } else {
                 0.0
             },
             // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
             output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
-            ..self.normals.cost()
+            ..normals
         }
     }
 }
@@ -87,6 +105,9 @@ pub struct ImplicitReport {
     /// Holes closed at the end, and holes left (`--closed` only).
     pub holes: HoleReport,
     pub pieces: PieceReport,
+    /// Seam entries left at the end that no hole needs (0: the seam maps
+    /// forgot every vertex once complete).
+    pub seam_left: u64,
     pub run: RunStats,
 }
 
@@ -118,10 +139,10 @@ pub fn reconstruct_implicit(
     progress: &dyn Progress,
 ) -> Result<ImplicitReport, ReconError> {
     let min_piece = params.min_piece_share()?;
-    let mut report = ImplicitReport::default();
-    if !store.has_column(NORMAL_FILE) || store.manifest.sampling.is_none() {
-        report.normals = Some(compute_normals(store, &params.normals, opts, progress)?);
-    }
+    let mut report = ImplicitReport {
+        normals: ensure_normals(store, &params.normals, opts, progress)?,
+        ..ImplicitReport::default()
+    };
     let stats = store.manifest.sampling.unwrap_or_default();
     report.rho = if stats.rho > 0.0 {
         stats.rho
@@ -130,21 +151,34 @@ pub fn reconstruct_implicit(
     };
     report.rho_outliers = stats.rho_outliers;
     report.delta = positive("noise", params.noise.unwrap_or(stats.noise), true)?;
+    let spacing = if stats.mean_nn > 0.0 {
+        stats.mean_nn
+    } else {
+        report.rho
+    };
     report.cell = positive(
         "cell",
-        params.cell.unwrap_or(report.rho + report.delta),
+        params.cell.unwrap_or(default_cell(
+            params.field,
+            spacing,
+            report.rho + report.delta,
+        )),
         false,
     )?;
+    let band = band_cubes(params.field, spacing, report.cell);
     let lattice = Lattice::new(DVec3::ZERO, report.cell)?;
     let reach = report.rho + report.delta;
     let kernel = ImplicitKernel {
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
         initial_margin: 4.0 * report.cell + 2.0 * reach,
-        band: 1,
+        band,
+        field: params.field,
+        spacing,
     };
     let writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
-    let mut stitcher = Stitcher::new(writer, store.origin());
+    let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
+    let mut stitcher = Stitcher::new(writer, store.origin(), cores);
     if params.closed {
         stitcher = stitcher.closing_holes();
     }
@@ -153,7 +187,7 @@ pub fn reconstruct_implicit(
         report.cubes += out.cubes as u64;
         let core = core_box(store, &store.tiles()[t]);
         stitcher
-            .add_tile(&lattice, &core, &out.triangles)
+            .add_tile(&lattice, (t, &core), &out.triangles)
             .map_err(|e| PipelineError::Seam(e.to_string()))
     })?;
     let written = stitcher.finish()?;
@@ -161,7 +195,51 @@ pub fn reconstruct_implicit(
     report.triangles = written.triangles;
     report.holes = written.holes;
     report.pieces = written.pieces;
+    report.seam_left = written.seam_left;
     Ok(report)
+}
+
+/// Lattice cell of the MLS field, in spacings (mean nearest-neighbour
+/// distances). Its vertices lie on the field's zero set whatever the cell,
+/// so the cell only sets how finely the mesh follows curvature (the chord
+/// error, about L^2 / 8R for edges L on radius R). 1M noisy dragon, open,
+/// mean distance to the true surface in spacings at cells of 3.7 / 2.9 /
+/// 2.2 spacings: 0.069 / 0.060 / 0.055 (Open3D Poisson depth 9: 0.072),
+/// the time about inversely proportional to the cell squared.
+pub const MLS_CELL_SPACINGS: f64 = 3.0;
+
+/// The default cell: paper 1's `rho + delta` (section 2.6) for its own
+/// field; [`MLS_CELL_SPACINGS`] for the MLS field.
+///
+/// Deviation for the MLS field: `rho` is the *largest* nearest-neighbour
+/// distance (7 spacings on the dragon), coarse enough that the chord error
+/// (0.14 spacings on the dragon) swamps the field's accuracy.
+fn default_cell(field: Field, spacing: f64, paper: f64) -> f64 {
+    match field {
+        Field::Mls => MLS_CELL_SPACINGS * spacing,
+        Field::Paper1 => paper,
+    }
+}
+
+/// Half-width of the band of cubes around the samples, in spacings. The
+/// band is where the surface can appear, so it must reach across the
+/// sparsest sampling (terrain far from the scanner: the test terrain at a
+/// cell of 3 spacings has 34 holes with a band of 1 cube, 0 with 2), and
+/// with `--closed` across the places the scan missed (the dragon's 1M
+/// samples leave a patch 30 spacings across), where the least-area patch
+/// of [`super::holes`] cannot follow the shape. 1M dragon, `--closed`, cell
+/// 2.9 spacings: a band of 1 / 2 / 3 cubes leaves 5 / 0 / 0 boundary loops
+/// (mean distance 0.062 / 0.063 / 0.065 spacings).
+const BAND_SPACINGS: f64 = 4.0;
+
+/// The band's reach in cubes: one for paper 1's field (its cell is
+/// `rho + delta`), else at least one, the half-width above when the cell
+/// is finer.
+fn band_cubes(field: Field, spacing: f64, cell: f64) -> i64 {
+    if field == Field::Paper1 {
+        return 1;
+    }
+    ((BAND_SPACINGS * spacing / cell).ceil() as i64).clamp(1, 8)
 }
 
 fn positive(what: &'static str, value: f64, zero_ok: bool) -> Result<f64, ReconError> {

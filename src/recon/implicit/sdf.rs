@@ -51,6 +51,35 @@ pub const CLOSED_PLANES: usize = 64;
 /// farthest of the [`CLOSED_PLANES`] samples.
 const CLOSED_WIDTH: f64 = 0.8;
 
+/// Which signed distance the corners and vertices take.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Field {
+    /// The moving-least-squares average of nearby planes ([`super::mls`]),
+    /// vertices moved onto its zero set along their lattice edges.
+    #[default]
+    Mls,
+    /// Paper 1 section 2.5: the nearest sample's plane (with `--closed`,
+    /// [`CLOSED_PLANES`] averaged), vertices linearly interpolated.
+    Paper1,
+}
+
+impl Field {
+    /// The field's value at lattice corner `p` (see [`signed_distance`]).
+    pub fn corner(
+        self,
+        s: &Samples,
+        tile: &TilePoints,
+        p: DVec3,
+        limit: f64,
+        nbr: &mut Vec<Neighbour>,
+    ) -> Corner {
+        match self {
+            Field::Mls => super::mls::mls_corner(s, tile, p, limit, nbr),
+            Field::Paper1 => signed_distance(s, tile, p, limit, nbr),
+        }
+    }
+}
+
 /// Evaluates `f` at `p`; `limit` is `rho + delta` (infinite for `--closed`).
 ///
 /// The nearest sample's plane is tried first, from a single-nearest query;
@@ -162,7 +191,12 @@ fn nearest_planes(
 /// Whether `nbr`, the `want` nearest loaded samples of `p`, are the `want`
 /// nearest of all; `Err` with the shortfall of the loaded region if not.
 /// Fewer than `want` loaded are complete only if nothing lies beyond.
-fn complete(tile: &TilePoints, p: DVec3, nbr: &[Neighbour], want: usize) -> Result<(), f64> {
+pub(super) fn complete(
+    tile: &TilePoints,
+    p: DVec3,
+    nbr: &[Neighbour],
+    want: usize,
+) -> Result<(), f64> {
     let reach = match nbr.last() {
         Some(last) if nbr.len() == want => last.dist2.sqrt(),
         _ => f64::INFINITY,
@@ -202,7 +236,7 @@ fn try_plane(
 
 /// Whether some sample lies within `limit` of `z`; `Err` with the shortfall
 /// when the loaded region cannot tell.
-fn projection_on_data(
+pub(super) fn projection_on_data(
     s: &Samples,
     tile: &TilePoints,
     z: DVec3,

@@ -2,8 +2,9 @@
 //! vertices keyed by global lattice edge; each key gets one output index.
 //! An edge all of whose four cubes belong to the arriving tile is private
 //! and forgotten after the tile; an edge on the tile's boundary may be met
-//! again by a neighbour, so its index stays in a map (about the seam's
-//! size, not the mesh's). Output indices are given in first-appearance
+//! again by a neighbour, so its index stays in a map until the last tile
+//! owning one of its cubes has been stitched ([`super::owners`]): the map
+//! holds the front between stitched and unstitched tiles, not every seam. Output indices are given in first-appearance
 //! order, so the mesh is the same for a given tiling and thread count.
 //! Asked to close holes, it also hands every tile's triangles to
 //! [`super::holes`], and patches the loops at the end.
@@ -11,6 +12,7 @@
 use super::holes::{BoundaryEdges, HoleReport, StitchedTriangle};
 use super::kernel::owns;
 use super::lattice::{edge_from_key, Lattice};
+use super::owners::TileOwners;
 use super::polygonize::CubeVertex;
 use crate::geom::Aabb;
 use crate::mesh::{MeshError, PieceFilter, PieceReport};
@@ -24,14 +26,25 @@ pub struct StitchReport {
     pub triangles: u64,
     pub holes: HoleReport,
     pub pieces: PieceReport,
+    /// Seam state left at the end that no hole needs: 0 unless a vertex's
+    /// owners were not found (tests check it).
+    pub seam_left: u64,
+}
+
+/// A seam vertex's output index and the last tile that may name it.
+#[derive(Clone, Copy)]
+struct SeamVertex {
+    index: u32,
+    last: u32,
 }
 
 pub struct Stitcher {
     writer: PieceFilter,
     /// Offset from lattice (store-relative) coordinates to output ones.
     origin: DVec3,
-    shared: HashMap<u64, u32>,
+    shared: HashMap<u64, SeamVertex>,
     private: HashMap<u64, u32>,
+    owners: TileOwners,
     /// Boundary edges, gathered when holes are to be closed.
     holes: Option<BoundaryEdges>,
     pub vertices: u64,
@@ -39,12 +52,14 @@ pub struct Stitcher {
 }
 
 impl Stitcher {
-    pub fn new(writer: PieceFilter, origin: DVec3) -> Self {
+    /// `cores`: every tile's core box, in the order tiles will arrive.
+    pub fn new(writer: PieceFilter, origin: DVec3, cores: Vec<Aabb>) -> Self {
         Stitcher {
             writer,
             origin,
             shared: HashMap::new(),
             private: HashMap::new(),
+            owners: TileOwners::new(cores),
             holes: None,
             vertices: 0,
             triangles: 0,
@@ -59,13 +74,15 @@ impl Stitcher {
         }
     }
 
-    /// Adds one tile's triangles; `core` is the tile's core box.
+    /// Adds tile `tile`'s triangles (tiles arrive in order); `core` is its
+    /// core box.
     pub fn add_tile(
         &mut self,
         lattice: &Lattice,
-        core: &Aabb,
+        (tile, core): (usize, &Aabb),
         tris: &[[CubeVertex; 3]],
     ) -> Result<(), MeshError> {
+        let around = self.owners.around(tile, lattice.cell);
         self.private.clear();
         let mut new_vertices = Vec::new();
         let mut faces = Vec::with_capacity(tris.len());
@@ -73,30 +90,40 @@ impl Stitcher {
         for t in tris {
             let mut face = [0u32; 3];
             let mut seam = [false; 3];
-            for ((slot, v), on_seam) in face.iter_mut().zip(t).zip(&mut seam) {
-                *on_seam = touches_other_tiles(lattice, core, v.key);
-                let map = if *on_seam {
-                    &mut self.shared
-                } else {
-                    &mut self.private
-                };
+            let mut last = [tile as u32; 3];
+            for i in 0..3 {
+                let v = &t[i];
                 let next = (self.vertices + new_vertices.len() as u64) as u32;
-                *slot = *map.entry(v.key).or_insert_with(|| {
+                seam[i] = touches_other_tiles(lattice, core, v.key);
+                let mut add = || {
                     new_vertices.push(self.origin + v.pos);
                     next
-                });
+                };
+                if seam[i] {
+                    let owners = &self.owners;
+                    let entry = self.shared.entry(v.key).or_insert_with(|| SeamVertex {
+                        index: add(),
+                        last: owners.last_owner(lattice, &around, v.key),
+                    });
+                    (face[i], last[i]) = (entry.index, entry.last);
+                } else {
+                    face[i] = *self.private.entry(v.key).or_insert_with(add);
+                }
             }
             if self.holes.is_some() {
                 stitched.push(StitchedTriangle {
                     vertices: [0, 1, 2].map(|i| (face[i], self.origin + t[i].pos)),
                     on_seam: seam,
+                    last,
                 });
             }
             faces.push(face);
         }
         if let Some(holes) = &mut self.holes {
             holes.add_tile(&stitched);
+            holes.retire(tile as u32);
         }
+        self.shared.retain(|_, v| v.last > tile as u32);
         self.writer.add_vertices(&new_vertices)?;
         self.writer.add_triangles(&faces)?;
         self.vertices += new_vertices.len() as u64;
@@ -106,8 +133,12 @@ impl Stitcher {
 
     /// Closes the holes (if asked) and completes the file.
     pub fn finish(mut self) -> Result<StitchReport, MeshError> {
-        let mut report = StitchReport::default();
+        let mut report = StitchReport {
+            seam_left: self.shared.len() as u64,
+            ..StitchReport::default()
+        };
         if let Some(holes) = self.holes.take() {
+            report.seam_left += holes.unneeded();
             let patches;
             (patches, report.holes) = holes.fill();
             self.writer.add_triangles(&patches)?;

@@ -1,0 +1,118 @@
+//! `scanmesh run-job DIR`: one part of the run kept in DIR, as the scripts
+//! of `--emit` call it on each node: everything before a tile stage
+//! (`--until`), some tiles of one (`--stage` with `--share` or `--tiles`),
+//! or the rest of the run. The command line is the one DIR recorded, run
+//! from the directory it was given in, on the input it was given (checked
+//! unchanged).
+
+use super::rundir::{fingerprint, RunDir};
+use super::Cli;
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser};
+use scanmesh::store::{Job, TileSet};
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct RunJobArgs {
+    /// Run directory (made by a command given --run-dir, or its --emit).
+    dir: PathBuf,
+    /// The tile stage this job computes tiles of (as `status` names it).
+    #[arg(long, requires = "tile_set")]
+    stage: Option<String>,
+    /// Tiles FIRST-LAST of --stage (0-based, inclusive).
+    #[arg(long, value_parser = parse_range, group = "tile_set")]
+    tiles: Option<TileSet>,
+    /// Share INDEX/COUNT of --stage's tiles, for array jobs.
+    #[arg(long, value_parser = parse_share, group = "tile_set")]
+    share: Option<TileSet>,
+    /// Do what comes before this tile stage, then stop.
+    #[arg(long, conflicts_with = "stage")]
+    until: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bars.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+impl RunJobArgs {
+    fn job(&self) -> Job {
+        match (&self.stage, self.tiles.or(self.share), &self.until) {
+            (Some(stage), Some(tiles), _) => Job::Tiles {
+                stage: stage.clone(),
+                tiles,
+            },
+            (_, _, Some(stage)) => Job::Until(stage.clone()),
+            _ => Job::Whole,
+        }
+    }
+}
+
+pub fn run(a: RunJobArgs) -> Result<()> {
+    if !a.dir.is_dir() {
+        bail!("{}: no such run directory", a.dir.display());
+    }
+    let run = RunDir::new(&a.dir)?;
+    let Some(id) = run.identity()? else {
+        bail!(
+            "{}: not a run directory (start the run with --run-dir first)",
+            a.dir.display()
+        );
+    };
+    if id.scanmesh_version != env!("CARGO_PKG_VERSION") {
+        bail!(
+            "{}: the run was started by scanmesh {}, this is {}",
+            a.dir.display(),
+            id.scanmesh_version,
+            env!("CARGO_PKG_VERSION")
+        );
+    }
+    std::env::set_current_dir(&id.cwd)
+        .with_context(|| format!("the run's directory {}", id.cwd.display()))?;
+    if fingerprint(&id.input.path)? != id.input {
+        bail!(
+            "{}: the input changed since the run started; start it again with --restart",
+            id.input.path.display()
+        );
+    }
+    let mut args = vec!["scanmesh".to_string()];
+    args.extend(id.args.iter().cloned());
+    args.extend(["--run-dir".into(), run.dir.to_string_lossy().into_owned()]);
+    if a.quiet {
+        args.push("--quiet".into());
+    }
+    if let Some(t) = a.threads {
+        args.extend(["--threads".into(), t.to_string()]);
+    }
+    let mut command = Cli::try_parse_from(&args)
+        .with_context(|| format!("{}: the recorded command line", a.dir.display()))?
+        .command;
+    let Some(common) = command.common_mut() else {
+        bail!("{}: the recorded command keeps no run", a.dir.display());
+    };
+    common.job = a.job();
+    super::rundir::run_in_dir(command, args[1..].to_vec())
+}
+
+fn parse_range(s: &str) -> Result<TileSet, String> {
+    let (a, b) = s.split_once('-').unwrap_or((s, s));
+    let first = a.trim().parse().map_err(|e| format!("{s}: {e}"))?;
+    let last = b.trim().parse().map_err(|e| format!("{s}: {e}"))?;
+    if last < first {
+        return Err(format!("{s}: the last tile comes before the first"));
+    }
+    Ok(TileSet::Range { first, last })
+}
+
+fn parse_share(s: &str) -> Result<TileSet, String> {
+    let (a, b) = s
+        .split_once('/')
+        .ok_or(format!("{s}: expected INDEX/COUNT"))?;
+    let index: usize = a.trim().parse().map_err(|e| format!("{s}: {e}"))?;
+    let count: usize = b.trim().parse().map_err(|e| format!("{s}: {e}"))?;
+    if count == 0 || index >= count {
+        return Err(format!("{s}: INDEX must be below COUNT"));
+    }
+    Ok(TileSet::Share { index, count })
+}

@@ -1,0 +1,286 @@
+//! Per-vertex state of unbounded size kept in a scratch file: an array of
+//! `u32` read and written through a cache of a fixed number of 4 KiB pages
+//! (clock eviction, dirty pages written back), and the disjoint sets of
+//! [`super::pieces`] on top of it.
+//!
+//! Why not a memory map: `--mem` is a promise about peak RSS, and mapped
+//! pages count in it once touched; with memory to spare the kernel never
+//! evicts them, so a map of the whole array grows with the mesh. Positioned
+//! reads and writes go through the OS page cache, which is not the
+//! process's RSS. The stitcher numbers vertices tile by tile and a tile's
+//! triangles reach back only to the seam vertices of its neighbours, so the
+//! pages in use are the current tile's, the roots' and a few per seam: a
+//! cache of a few MiB misses rarely (measured in the module's tests and on
+//! the 10M dragon, see ARCHITECTURE.md).
+//!
+//! Per element held in RAM: the page table's 4 bytes per 1024 elements.
+
+use std::fs::File;
+use std::io;
+use std::os::unix::fs::FileExt;
+
+/// Elements per page (4 KiB of `u32`).
+const PAGE: usize = 1024;
+const PAGE_BYTES: u64 = (PAGE * 4) as u64;
+
+/// RAM held per element: the page table's entry per page.
+pub const TABLE_BYTES_PER_ELEMENT: f64 = 4.0 / PAGE as f64;
+
+/// A growable `u32` array in a file, zero where never written.
+pub(crate) struct PagedU32 {
+    file: File,
+    /// Whole pages the file holds (later pages read as zeros).
+    file_pages: u64,
+    /// Page number -> slot + 1 (0: not cached).
+    table: Vec<u32>,
+    slots: Vec<Slot>,
+    capacity: usize,
+    hand: usize,
+    /// The last page looked up and its slot: most accesses repeat it.
+    last: Option<(u64, usize)>,
+    bytes: Vec<u8>,
+}
+
+struct Slot {
+    page: u64,
+    dirty: bool,
+    referenced: bool,
+    data: Box<[u32]>,
+}
+
+impl PagedU32 {
+    /// An array over the scratch file `file` (empty), caching at most
+    /// `cache_bytes` of pages (at least one).
+    pub fn new(file: File, cache_bytes: usize) -> Self {
+        PagedU32 {
+            file,
+            file_pages: 0,
+            table: Vec::new(),
+            slots: Vec::new(),
+            capacity: (cache_bytes / PAGE_BYTES as usize).max(1),
+            hand: 0,
+            last: None,
+            bytes: vec![0; PAGE_BYTES as usize],
+        }
+    }
+
+    pub fn get(&mut self, i: u64) -> io::Result<u32> {
+        let slot = self.slot_of(i / PAGE as u64)?;
+        Ok(self.slots[slot].data[i as usize % PAGE])
+    }
+
+    pub fn set(&mut self, i: u64, value: u32) -> io::Result<()> {
+        let slot = self.slot_of(i / PAGE as u64)?;
+        let s = &mut self.slots[slot];
+        s.data[i as usize % PAGE] = value;
+        s.dirty = true;
+        Ok(())
+    }
+
+    /// The slot holding `page`, loading it (and evicting another) if needed.
+    fn slot_of(&mut self, page: u64) -> io::Result<usize> {
+        if let Some((p, slot)) = self.last {
+            if p == page {
+                return Ok(slot);
+            }
+        }
+        let entry = self.table.get(page as usize).copied().unwrap_or(0);
+        let slot = if entry > 0 {
+            entry as usize - 1
+        } else {
+            self.load(page)?
+        };
+        self.slots[slot].referenced = true;
+        self.last = Some((page, slot));
+        Ok(slot)
+    }
+
+    fn load(&mut self, page: u64) -> io::Result<usize> {
+        let slot = if self.slots.len() < self.capacity {
+            self.slots.push(Slot {
+                page,
+                dirty: false,
+                referenced: false,
+                data: vec![0; PAGE].into_boxed_slice(),
+            });
+            self.slots.len() - 1
+        } else {
+            let victim = self.victim();
+            self.write_back(victim)?;
+            self.table[self.slots[victim].page as usize] = 0;
+            victim
+        };
+        self.read_page(page, slot)?;
+        if self.table.len() <= page as usize {
+            self.table.resize(page as usize + 1, 0);
+        }
+        self.table[page as usize] = slot as u32 + 1;
+        Ok(slot)
+    }
+
+    /// Clock: the first slot not referenced since the hand last passed.
+    fn victim(&mut self) -> usize {
+        loop {
+            let i = self.hand;
+            self.hand = (self.hand + 1) % self.slots.len();
+            let s = &mut self.slots[i];
+            if !s.referenced {
+                return i;
+            }
+            s.referenced = false;
+        }
+    }
+
+    fn write_back(&mut self, slot: usize) -> io::Result<()> {
+        let s = &mut self.slots[slot];
+        if !s.dirty {
+            return Ok(());
+        }
+        for (b, v) in self.bytes.chunks_exact_mut(4).zip(s.data.iter()) {
+            b.copy_from_slice(&v.to_le_bytes());
+        }
+        self.file.write_all_at(&self.bytes, s.page * PAGE_BYTES)?;
+        self.file_pages = self.file_pages.max(s.page + 1);
+        s.dirty = false;
+        Ok(())
+    }
+
+    fn read_page(&mut self, page: u64, slot: usize) -> io::Result<()> {
+        if self.last.is_some_and(|(_, s)| s == slot) {
+            self.last = None;
+        }
+        let s = &mut self.slots[slot];
+        s.page = page;
+        s.dirty = false;
+        if page >= self.file_pages {
+            s.data.fill(0);
+            return Ok(());
+        }
+        self.file
+            .read_exact_at(&mut self.bytes, page * PAGE_BYTES)?;
+        for (v, b) in s.data.iter_mut().zip(self.bytes.chunks_exact(4)) {
+            *v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        }
+        Ok(())
+    }
+}
+
+/// Disjoint sets over `0..len` in a [`PagedU32`], with the semantics of
+/// [`super::union_find::DisjointSets`]: union links the larger root under
+/// the smaller, so a set's root is its smallest member whatever the order
+/// of unions (the filter's output does not depend on the cache). An element
+/// stores its parent + 1, 0 for a root, so unwritten pages are singletons.
+pub(crate) struct ExternalSets {
+    parent: PagedU32,
+    len: u64,
+}
+
+impl ExternalSets {
+    pub fn new(file: File, cache_bytes: usize) -> Self {
+        ExternalSets {
+            parent: PagedU32::new(file, cache_bytes),
+            len: 0,
+        }
+    }
+
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Adds singleton sets up to `n` members in all.
+    pub fn grow(&mut self, n: u64) {
+        self.len = self.len.max(n);
+    }
+
+    fn parent(&mut self, x: u64) -> io::Result<u64> {
+        Ok(match self.parent.get(x)? {
+            0 => x,
+            p => p as u64 - 1,
+        })
+    }
+
+    /// The root of `x`'s set, halving the path on the way.
+    pub fn find(&mut self, mut x: u64) -> io::Result<u64> {
+        loop {
+            let p = self.parent(x)?;
+            if p == x {
+                return Ok(x);
+            }
+            let gp = self.parent(p)?;
+            if gp != p {
+                self.parent.set(x, gp as u32 + 1)?;
+            }
+            x = gp;
+        }
+    }
+
+    /// Joins the sets of `a` and `b`.
+    pub fn union(&mut self, a: u64, b: u64) -> io::Result<()> {
+        let (ra, rb) = (self.find(a)?, self.find(b)?);
+        if ra != rb {
+            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+            self.parent.set(hi, lo as u32 + 1)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::union_find::DisjointSets;
+
+    /// A tiny cache (2 pages) over 20 pages of values, against a `Vec`.
+    #[test]
+    fn paged_array_equals_a_vec_through_evictions() {
+        let mut paged = PagedU32::new(tempfile::tempfile().unwrap(), 2 * PAGE_BYTES as usize);
+        let n = 20 * PAGE as u64;
+        let mut plain = vec![0u32; n as usize];
+        let mut state = 12345u64;
+        for step in 0..200_000u64 {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let i = (state >> 33) % n;
+            if step % 3 == 0 {
+                plain[i as usize] = step as u32;
+                paged.set(i, step as u32).unwrap();
+            } else {
+                assert_eq!(paged.get(i).unwrap(), plain[i as usize], "index {i}");
+            }
+        }
+        for i in 0..n {
+            assert_eq!(paged.get(i).unwrap(), plain[i as usize], "index {i}");
+        }
+    }
+
+    /// Random unions, seeded: the same roots as the in-memory sets.
+    #[test]
+    fn external_sets_equal_the_in_memory_ones() {
+        for seed in [1u64, 7, 99] {
+            let n = 5000usize;
+            let mut ext = ExternalSets::new(tempfile::tempfile().unwrap(), PAGE_BYTES as usize);
+            let mut mem = DisjointSets::<u32>::new(n);
+            ext.grow(n as u64);
+            let mut state = seed;
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 33) as usize % n
+            };
+            for _ in 0..3000 {
+                let (a, b) = (next(), next());
+                mem.union(a, b);
+                ext.union(a as u64, b as u64).unwrap();
+            }
+            for x in 0..n {
+                assert_eq!(
+                    ext.find(x as u64).unwrap(),
+                    mem.find(x) as u64,
+                    "seed {seed}"
+                );
+            }
+        }
+    }
+}

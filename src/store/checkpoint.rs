@@ -1,0 +1,249 @@
+//! Finished tiles of a resumable run (`--run-dir`): each tile stage's
+//! results are kept under the run directory, one file a tile, so a run
+//! that dies (a kill, a reboot, a full disk) redoes only the tiles that
+//! were in flight, and tile jobs on a cluster can share the work. Also the
+//! [`Job`] this process was started for (all of it, up to a stage, or some
+//! tiles of one stage).
+//!
+//! A tile file appears whole or not at all: it is written under a
+//! temporary name, forced to disk and renamed. It starts with a magic, the
+//! payload length and an FNV-1a checksum of the payload, so a file cut or
+//! damaged on disk is found, removed and its tile recomputed.
+
+use super::StoreError;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+const MAGIC: &[u8; 8] = b"SMTILE1\0";
+const HEADER: usize = 24;
+
+/// Which part of the run a process does.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub enum Job {
+    /// Everything not done yet (a plain run, or a resume).
+    #[default]
+    Whole,
+    /// Everything before the tile stage `stage`, then stop.
+    Until(String),
+    /// Only `tiles` of the tile stage `stage`, then stop; earlier tile
+    /// stages must be complete.
+    Tiles { stage: String, tiles: TileSet },
+}
+
+/// Some tiles of a stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TileSet {
+    /// Tiles `first..=last`.
+    Range { first: usize, last: usize },
+    /// The `index`-th of `count` contiguous, nearly equal shares (a
+    /// scheduler's array task does not know the tile count when submitted).
+    Share { index: usize, count: usize },
+}
+
+impl TileSet {
+    /// The tiles of `0..n` in this set.
+    pub fn tiles(&self, n: usize) -> std::ops::Range<usize> {
+        match *self {
+            TileSet::Range { first, last } => first.min(n)..last.saturating_add(1).min(n),
+            TileSet::Share { index, count } => {
+                let count = count.max(1);
+                (n * index / count).min(n)..(n * (index + 1) / count).min(n)
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for TileSet {
+    /// As `run-job` takes it: `--tiles 3-5` or `--share 0/16`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TileSet::Range { first, last } => write!(f, "--tiles {first}-{last}"),
+            TileSet::Share { index, count } => write!(f, "--share {index}/{count}"),
+        }
+    }
+}
+
+/// The tile results of a run directory, and this process's job in it.
+#[derive(Clone, Debug)]
+pub struct Checkpoints {
+    dir: PathBuf,
+    pub job: Job,
+    /// The stage where the job stopped as asked, shared by the clones (the
+    /// application learns it there rather than from an error chain).
+    stopped: Arc<OnceLock<String>>,
+}
+
+impl Checkpoints {
+    /// Tile results under `dir` (created when needed).
+    pub fn new(dir: impl Into<PathBuf>, job: Job) -> Self {
+        Checkpoints {
+            dir: dir.into(),
+            job,
+            stopped: Arc::default(),
+        }
+    }
+
+    /// Records that the job is done at `stage`.
+    pub fn stop_at(&self, stage: &str) {
+        let _ = self.stopped.set(stage.to_string());
+    }
+
+    /// The stage where the job stopped as asked, if it did.
+    pub fn stopped_at(&self) -> Option<&str> {
+        self.stopped.get().map(String::as_str)
+    }
+
+    /// A stage name as a directory name ("marching cubes" -> "marching-cubes").
+    pub fn slug(stage: &str) -> String {
+        stage
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+            .collect()
+    }
+
+    fn stage_dir(&self, stage: &str) -> PathBuf {
+        self.dir.join(Self::slug(stage))
+    }
+
+    fn tile_path(&self, stage: &str, tile: usize) -> PathBuf {
+        self.stage_dir(stage).join(format!("{tile:07}.tile"))
+    }
+
+    /// The saved payload of `tile`, if it is there and whole; a damaged
+    /// file is removed (the tile is then recomputed).
+    pub fn load(&self, stage: &str, tile: usize) -> Result<Option<Vec<u8>>, StoreError> {
+        let path = self.tile_path(stage, tile);
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(StoreError::os(&path, e)),
+        };
+        match payload(&bytes) {
+            Some(p) => Ok(Some(p.to_vec())),
+            None => {
+                std::fs::remove_file(&path).map_err(|e| StoreError::os(&path, e))?;
+                Ok(None)
+            }
+        }
+    }
+
+    /// Whether `tile` has a saved result (not checked: [`Self::load`] does).
+    pub fn has(&self, stage: &str, tile: usize) -> bool {
+        self.tile_path(stage, tile).is_file()
+    }
+
+    /// Saves `tile`'s payload: temporary name, fsync, rename.
+    pub fn save(&self, stage: &str, tile: usize, payload: &[u8]) -> Result<(), StoreError> {
+        let dir = self.stage_dir(stage);
+        std::fs::create_dir_all(&dir).map_err(|e| StoreError::os(&dir, e))?;
+        let path = self.tile_path(stage, tile);
+        let tmp = dir.join(format!("{tile:07}.tmp-{}", std::process::id()));
+        let write = || -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(MAGIC)?;
+            f.write_all(&(payload.len() as u64).to_le_bytes())?;
+            f.write_all(&fnv1a(payload).to_le_bytes())?;
+            f.write_all(payload)?;
+            f.sync_data()?;
+            std::fs::rename(&tmp, &path)
+        };
+        write().map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            StoreError::os(&path, e)
+        })
+    }
+
+    /// How many of `n` tiles of `stage` have a saved result.
+    pub fn count(&self, stage: &str, n: usize) -> usize {
+        (0..n).filter(|&t| self.has(stage, t)).count()
+    }
+
+    /// Removes temporary files a killed process left (not its tiles).
+    pub fn remove_leftovers(&self) -> Result<usize, StoreError> {
+        let mut removed = 0;
+        let Ok(stages) = std::fs::read_dir(&self.dir) else {
+            return Ok(0);
+        };
+        for stage in stages.flatten() {
+            let Ok(files) = std::fs::read_dir(stage.path()) else {
+                continue;
+            };
+            for f in files.flatten() {
+                if f.file_name().to_string_lossy().contains(".tmp-") {
+                    remove(&f.path())?;
+                    removed += 1;
+                }
+            }
+        }
+        Ok(removed)
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+}
+
+fn remove(path: &Path) -> Result<(), StoreError> {
+    std::fs::remove_file(path).map_err(|e| StoreError::os(path, e))
+}
+
+/// The payload of a whole tile file.
+fn payload(bytes: &[u8]) -> Option<&[u8]> {
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        return None;
+    }
+    let len = u64::from_le_bytes(bytes[8..16].try_into().ok()?);
+    let sum = u64::from_le_bytes(bytes[16..24].try_into().ok()?);
+    let body = &bytes[HEADER..];
+    (body.len() as u64 == len && fnv1a(body) == sum).then_some(body)
+}
+
+/// FNV-1a, 64 bits: a checksum against torn and damaged files, not an
+/// adversary (a run directory is the user's own).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn saved_tiles_load_and_damaged_ones_are_dropped() {
+        let dir = tempfile::tempdir().unwrap();
+        let cp = Checkpoints::new(dir.path(), Job::Whole);
+        assert_eq!(cp.load("marching cubes", 3).unwrap(), None);
+        cp.save("marching cubes", 3, b"hello tile").unwrap();
+        assert_eq!(
+            cp.load("marching cubes", 3).unwrap().unwrap(),
+            b"hello tile"
+        );
+        assert_eq!(cp.count("marching cubes", 5), 1);
+        let path = dir.path().join("marching-cubes/0000003.tile");
+        let mut bytes = std::fs::read(&path).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(cp.load("marching cubes", 3).unwrap(), None);
+        assert!(!path.exists(), "a damaged tile file stays");
+        std::fs::write(dir.path().join("marching-cubes/0000004.tmp-9"), b"x").unwrap();
+        assert_eq!(cp.remove_leftovers().unwrap(), 1);
+    }
+
+    #[test]
+    fn shares_cover_every_tile_once() {
+        for n in [0, 1, 7, 100, 1025] {
+            let mut next = 0;
+            for index in 0..16 {
+                let r = TileSet::Share { index, count: 16 }.tiles(n);
+                assert_eq!(r.start, next);
+                next = r.end;
+            }
+            assert_eq!(next, n);
+        }
+        assert_eq!(TileSet::Range { first: 3, last: 5 }.tiles(4), 3..4);
+    }
+}

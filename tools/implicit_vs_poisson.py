@@ -1,0 +1,108 @@
+"""Side-by-side accuracy and time: `scanmesh reconstruct` (open and --closed)
+against Open3D Poisson on the same points, in one run (issue 19).
+
+Not part of CI (needs Open3D: `pip install open3d`, and a reference mesh):
+
+    python3 tools/implicit_vs_poisson.py d1m.ply dragon_vrip.ply.gz \
+        --spacing 1.365e-4 [--scanmesh target/release/scanmesh] \
+        [--depth 9] [--repeat 3] [--extra '--cell 2e-4'] [--skip-peer]
+
+Runs are back to back, alternating, `--repeat` times; times are wall
+medians (normals included on both sides: reconstruct computes them from
+the bare points, Open3D estimates and orients its own). Distances come
+from `scanmesh eval --reference`, both ways, averaged, and are printed in
+units of `--spacing` (the *input's* mean nearest-neighbour distance), not
+the reference's spacing `eval` uses.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def timed(cmd):
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def evaluate(scanmesh, mesh, reference, spacing):
+    out = subprocess.run(
+        [scanmesh, "eval", mesh, "--reference", reference, "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    d = json.loads(out)
+    dist, q = d["distance"], d["quality"]
+    there = dist["mesh_to_reference"]["absolute"]["mean"]
+    back = dist["reference_to_mesh"]["absolute"]["mean"]
+    return {
+        "mean_sp": 0.5 * (there + back) / spacing,
+        "there_sp": there / spacing,
+        "back_sp": back / spacing,
+        "hausdorff_sp": dist["hausdorff"] / spacing,
+        "quality": q,
+    }
+
+
+def summary(q):
+    keys = ["components", "boundary_loops", "non_manifold_edges", "non_manifold_vertices", "watertight"]
+    return ", ".join(f"{k} {q[k]}" for k in keys if k in q)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("input")
+    ap.add_argument("reference")
+    ap.add_argument("--spacing", type=float, required=True)
+    ap.add_argument("--scanmesh", default=os.path.join(HERE, "..", "target", "release", "scanmesh"))
+    ap.add_argument("--depth", type=int, default=9)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--extra", default="", help="extra reconstruct options")
+    ap.add_argument("--skip-peer", action="store_true")
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp(prefix="implicit_vs_poisson_")
+    extra = a.extra.split()
+    runs = {
+        "scanmesh open": [a.scanmesh, "reconstruct", a.input, "-q", "-o", f"{tmp}/open.ply", *extra],
+        "scanmesh --closed": [
+            a.scanmesh, "reconstruct", a.input, "-q", "--closed", "-o", f"{tmp}/closed.ply", *extra,
+        ],
+    }
+    meshes = {"scanmesh open": f"{tmp}/open.ply", "scanmesh --closed": f"{tmp}/closed.ply"}
+    if not a.skip_peer:
+        peer = f"open3d poisson d{a.depth}"
+        runs[peer] = [
+            sys.executable, os.path.join(HERE, "open3d_peer.py"), "poisson", a.input,
+            f"{tmp}/poisson.ply", "--depth", str(a.depth),
+        ]
+        meshes[peer] = f"{tmp}/poisson.ply"
+    times = {name: [] for name in runs}
+    for _ in range(a.repeat):
+        for name, cmd in runs.items():
+            times[name].append(timed(cmd))
+    peer_time = statistics.median(times[peer]) if not a.skip_peer else None
+    print(f"input {a.input}, distances in input spacings ({a.spacing:g}), both ways averaged")
+    print(f"{'run':<22} {'mean':>7} {'there':>7} {'back':>7} {'hausd.':>7} {'time':>7} {'ratio':>6}  mesh")
+    for name in runs:
+        e = evaluate(a.scanmesh, meshes[name], a.reference, a.spacing)
+        t = statistics.median(times[name])
+        ratio = f"{t / peer_time:.2f}" if peer_time else "-"
+        print(
+            f"{name:<22} {e['mean_sp']:7.4f} {e['there_sp']:7.4f} {e['back_sp']:7.4f} "
+            f"{e['hausdorff_sp']:7.2f} {t:6.2f}s {ratio:>6}  {summary(e['quality'])}"
+        )
+    print(f"times: medians of {a.repeat} alternating runs: " + "; ".join(
+        f"{n} {', '.join(f'{x:.2f}' for x in ts)}" for n, ts in times.items()))
+
+
+if __name__ == "__main__":
+    main()
