@@ -76,7 +76,10 @@ fn many_tiles_equal_one() {
     assert!(one.jobs >= 20, "{} jobs", one.jobs);
     assert_eq!(one.jobs, many.jobs);
     assert!(many.jobs_run > many.jobs);
-    assert!(by_position(&m1) == by_position(&mm), "the tiles changed the mesh");
+    assert!(
+        by_position(&m1) == by_position(&mm),
+        "the tiles changed the mesh"
+    );
     let q = sound(&mm);
     // Every input point is a vertex, in store order; the torus in one
     // piece with a few small holes at most.

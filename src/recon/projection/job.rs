@@ -123,7 +123,15 @@ struct JobPoints {
 
 impl JobPoints {
     /// A point; `grows`: in the job's growth box, `keep`: in its window.
-    fn push(&mut self, tile: u32, p: DVec3, id: u64, info: Option<&PointInfo>, grows: bool, keep: bool) {
+    fn push(
+        &mut self,
+        tile: u32,
+        p: DVec3,
+        id: u64,
+        info: Option<&PointInfo>,
+        grows: bool,
+        keep: bool,
+    ) {
         self.tile.push(tile);
         self.points.push(p);
         self.ids.push(id);
@@ -188,7 +196,14 @@ pub fn run_job<'a, H: Neighbourhoods>(
         let p = tile.points[i as usize];
         let info = &tile.info[i as usize];
         let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
-        jp.push(i, p, tile.ids[i as usize], Some(info), grows, lat.in_window(key, p));
+        jp.push(
+            i,
+            p,
+            tile.ids[i as usize],
+            Some(info),
+            grows,
+            lat.in_window(key, p),
+        );
     }
     for (l, &i) in members.iter().enumerate() {
         local.0[i as usize] = l as u32;
@@ -325,7 +340,8 @@ fn grow_job<'a, H: Neighbourhoods>(
     for p in 0..pieces {
         let (root, flip) = s.pieces.find(p);
         if root != p {
-            out.relations.push((names.names[p as usize], name_of(root), flip));
+            out.relations
+                .push((names.names[p as usize], name_of(root), flip));
         }
     }
     Ok(out)

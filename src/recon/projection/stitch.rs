@@ -12,13 +12,13 @@
 
 use super::kernel::ProjectionTile;
 use super::orient::flipped;
-use crate::normals::unionfind::ParityUnionFind;
 use crate::io::IoError;
 use crate::mesh::write::scratch_beside;
 use crate::mesh::{MeshError, MeshWriter};
+use crate::normals::unionfind::ParityUnionFind;
 use crate::store::{PointStore, StoreError, TileEntry};
-use std::fs::File;
 use std::collections::HashMap;
+use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::PathBuf;
 
