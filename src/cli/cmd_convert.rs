@@ -10,7 +10,8 @@ use std::time::Instant;
 pub struct ConvertArgs {
     /// Input point file.
     input: PathBuf,
-    /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz).
+    /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz, .pcd,
+    /// .e57: one scan, positions only).
     output: PathBuf,
     #[command(flatten)]
     pub common: super::CommonArgs,
@@ -21,7 +22,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     super::check_distinct(&a.input, &a.output)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let stats = convert(&a.input, &a.output, s.policy, progress.as_ref())?;
+    let stats = convert(&a.input, &a.output, s.read_options(), progress.as_ref())?;
     super::report::summary(format!(
         "convert: {} points ({} skipped) in {:.2} s, peak {} -> {}",
         stats.points,

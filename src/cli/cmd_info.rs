@@ -2,7 +2,8 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use scanmesh::io::inspect::inspect;
+use scanmesh::io::e57::is_e57_magic;
+use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
 use scanmesh::io::InvalidPolicy;
 use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
@@ -16,7 +17,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// A point file (PLY, XYZ/CSV, LAS/LAZ, PCD, optionally .gz) or a store directory.
+    /// A point file (PLY, XYZ/CSV, LAS/LAZ, PCD, optionally .gz; E57, whose
+    /// scans are listed) or a store directory.
     input: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
@@ -59,19 +61,30 @@ pub fn run(a: InfoArgs) -> Result<()> {
         store_report(&a.input)?
     } else {
         let progress = super::progress::progress(a.quiet);
-        let r = inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?;
+        let (r, scans) = match is_e57(&a.input) {
+            true => {
+                let (r, scans) = inspect_scans(&a.input, InvalidPolicy::Reject, progress.as_ref())?;
+                (r, Some(scans))
+            }
+            false => (
+                inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?,
+                None,
+            ),
+        };
         json!({
             "path": a.input.display().to_string(),
             "format": format!("{:?}", r.info.format),
             "gzip": r.info.gzip,
             "declared_points": r.info.declared_count,
             "points": r.count,
+            "skipped_invalid": r.skipped,
             "has_normals": r.info.has_normals,
             "bounds_min": r.bounds.min.to_array(),
             "bounds_max": r.bounds.max.to_array(),
             "spacing_estimate": r.spacing,
             "las_scale": r.info.las_transform.map(|t| t.scale.to_array()),
             "las_offset": r.info.las_transform.map(|t| t.offset.to_array()),
+            "scans": scans.as_deref().map(scans_json),
         })
     };
     if a.json {
@@ -102,13 +115,65 @@ fn store_report(dir: &std::path::Path) -> Result<serde_json::Value> {
     }))
 }
 
+/// Whether `path` starts with the E57 signature (a file that cannot be
+/// read is left to the inspection to report).
+fn is_e57(path: &std::path::Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .is_ok_and(|_| is_e57_magic(&magic))
+}
+
+fn scans_json(scans: &[ScanInspection]) -> serde_json::Value {
+    scans
+        .iter()
+        .map(|s| {
+            json!({
+                "index": s.scan.index,
+                "name": s.scan.name,
+                "guid": s.scan.guid,
+                "records": s.scan.records,
+                "points": s.points,
+                "invalid": s.skipped,
+                "rotation_wxyz": s.scan.pose.rotation,
+                "translation": s.scan.pose.translation,
+                "cartesian": s.scan.cartesian,
+                "spherical": s.scan.spherical,
+                "attributes": s.scan.attributes,
+                "bounds_min": (s.points > 0).then(|| s.bounds.min.to_array()),
+                "bounds_max": (s.points > 0).then(|| s.bounds.max.to_array()),
+            })
+        })
+        .collect()
+}
+
 fn print_text(v: &serde_json::Value) {
     if let Some(map) = v.as_object() {
         for (k, val) in map {
-            if !val.is_null() {
+            if !val.is_null() && k != "scans" {
                 println!("{:>18}: {}", k, val);
             }
         }
+    }
+    for s in v["scans"].as_array().into_iter().flatten() {
+        let coords = match (s["cartesian"].as_bool(), s["spherical"].as_bool()) {
+            (Some(true), Some(true)) => "cartesian+spherical",
+            (Some(true), _) => "cartesian",
+            _ => "spherical",
+        };
+        println!(
+            "  scan {} {}: {} records, {} points, {} invalid; pose rotation (w,x,y,z) {} translation {}; {}; attributes {}",
+            s["index"],
+            s["name"],
+            s["records"],
+            s["points"],
+            s["invalid"],
+            s["rotation_wxyz"],
+            s["translation"],
+            coords,
+            s["attributes"]
+        );
     }
 }
 

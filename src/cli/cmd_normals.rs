@@ -210,6 +210,12 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
             path.display()
         );
     }
+    if format == Format::E57 {
+        bail!(
+            "{}: E57 has no standard field for normals; write .ply, .xyz or .pcd",
+            path.display()
+        );
+    }
     if ascii && format == Format::PlyBinaryLe {
         format = Format::PlyAscii;
     }

@@ -40,13 +40,16 @@ pub fn run(
 pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
     let st = &r.stitch;
     super::report::summary(format!(
-        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e} -> {} triangles ({} grown on seams), {:.2} s, peak {} -> {}",
+        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces, {:.2} s, peak {} -> {}",
         st.vertices,
         tiles,
         r.run.retries,
         r.spacing,
+        r.jobs,
+        r.lattice.cell,
+        r.jobs_run as f64 / r.jobs.max(1) as f64,
         st.triangles,
-        st.seam_triangles,
+        st.pieces,
         secs,
         super::peak(),
         out.display()

@@ -32,7 +32,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     // Removed if the build is interrupted: a store without its manifest is
     // no store.
     let building = cleanup::register(&a.output);
-    let mut reader = open_reader(&a.input, s.policy)?;
+    let mut reader = open_reader(&a.input, s.read_options())?;
     let cost = NormalParams::default().cost();
     s.check_floor(&cost)?;
     let opts = s.build_options(cost);

@@ -25,7 +25,7 @@ mod rundir;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::place;
-use scanmesh::io::InvalidPolicy;
+use scanmesh::io::{InvalidPolicy, ReadOptions};
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
 use scanmesh::store::build::scratch_store_dir_in;
 use scanmesh::store::{
@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
     version,
     about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core",
     long_about = "Normals, neighbourhoods and surfaces from huge laser scans, out of core.\n\n\
-        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, or a point store \
+        Inputs: PLY (ascii/binary, .gz), XYZ/CSV text (.gz), LAS/LAZ, PCD, E57 (all scans, or --scans), or a point store \
         built by `scanmesh tile`. Memory stays within --mem whatever the input size."
 )]
 struct Cli {
@@ -98,6 +98,10 @@ pub struct CommonArgs {
     /// Drop points with NaN/inf coordinates (counted) instead of failing.
     #[arg(long)]
     skip_invalid: bool,
+    /// E57 input: read only these scans (indices as `scanmesh info` lists
+    /// them, e.g. 0,2), in file order.
+    #[arg(long, value_name = "I,J,...", value_delimiter = ',')]
+    scans: Option<Vec<usize>>,
     /// Directory for the scratch store and spill files (default: beside
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
@@ -151,6 +155,8 @@ pub struct Settings {
     pub tile_points: Option<u64>,
     pub quiet: bool,
     pub policy: InvalidPolicy,
+    /// `--scans`: the E57 scans to read (`None`: all).
+    pub scans: Option<Vec<usize>>,
     pub scratch_dir: Option<PathBuf>,
     /// The run directory (`--run-dir`) and this process's part of it.
     pub run: Option<rundir::RunDir>,
@@ -175,6 +181,7 @@ impl CommonArgs {
             tile_points: self.tile_points,
             quiet: self.quiet,
             scratch_dir: self.scratch_dir.clone(),
+            scans: self.scans.clone(),
             run: self
                 .run_dir
                 .as_deref()
@@ -191,6 +198,14 @@ impl CommonArgs {
 }
 
 impl Settings {
+    /// How to read the input file (policy and scan selection).
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            policy: self.policy,
+            scans: self.scans.clone(),
+        }
+    }
+
     pub fn budget(&self) -> MemoryBudget {
         MemoryBudget::new(self.mem, self.threads)
     }
@@ -225,6 +240,12 @@ impl Settings {
         progress: &dyn Progress,
     ) -> Result<Prepared> {
         self.check_floor(&cost)?;
+        if self.scans.is_some() && is_store(input) {
+            bail!(
+                "{}: --scans selects scans of an E57 input; a store holds the scans it was built from",
+                input.display()
+            );
+        }
         if let Some(run) = &self.run {
             return self.open_run(run, input, output, cost, progress);
         }
@@ -234,7 +255,7 @@ impl Settings {
             input,
             &scratch,
             &self.build_options(cost),
-            self.policy,
+            self.read_options(),
             progress,
         )
         .with_context(|| format!("reading {}", input.display()))?;
@@ -273,7 +294,7 @@ impl Settings {
                 input,
                 &store_dir,
                 &self.build_options(cost),
-                self.policy,
+                self.read_options(),
                 progress,
             )
             .with_context(|| format!("reading {}", input.display()))?;
@@ -305,7 +326,7 @@ impl Settings {
         let count = if is_store(input) {
             Some(PointStore::open(input)?.len())
         } else {
-            scanmesh::io::open_reader(input, self.policy)
+            scanmesh::io::open_reader(input, self.read_options())
                 .with_context(|| format!("reading {}", input.display()))?
                 .info()
                 .declared_count

@@ -3,7 +3,7 @@
 //! the first point, so a source without header bounds is read twice.
 
 use super::{
-    create_writer, format_from_name, open_reader, Format, InvalidPolicy, IoError, PointChunk,
+    create_writer, format_from_name, open_reader, Format, IoError, PointChunk, ReadOptions,
     WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
@@ -16,20 +16,22 @@ pub struct ConvertStats {
     pub skipped: u64,
 }
 
+/// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
 pub fn convert(
     input: &Path,
     output: &Path,
-    policy: InvalidPolicy,
+    read: impl Into<ReadOptions>,
     progress: &dyn Progress,
 ) -> Result<ConvertStats, IoError> {
+    let read: ReadOptions = read.into();
     let (format, _) = format_from_name(output).ok_or_else(|| IoError::UnknownFormat {
         path: output.to_path_buf(),
     })?;
-    let mut reader = open_reader(input, policy)?;
+    let mut reader = open_reader(input, &read)?;
     let info = reader.info().clone();
     let is_las = matches!(format, Format::Las | Format::Laz);
     let bounds = match (is_las, info.header_bounds, info.las_transform) {
-        (true, None, None) => Some(scan_bounds(input, policy, progress)?),
+        (true, None, None) => Some(scan_bounds(input, &read, progress)?),
         (_, b, _) => b,
     };
     let spec = WriterSpec {
@@ -57,10 +59,10 @@ pub fn convert(
 /// Bounding box of all points of `path`, by one streaming pass.
 pub fn scan_bounds(
     path: &Path,
-    policy: InvalidPolicy,
+    read: impl Into<ReadOptions>,
     progress: &dyn Progress,
 ) -> Result<Aabb, IoError> {
-    let mut reader = open_reader(path, policy)?;
+    let mut reader = open_reader(path, read)?;
     let mut chunk = PointChunk::default();
     let mut bounds = Aabb::EMPTY;
     progress.begin("bounds", reader.info().declared_count.unwrap_or(0));

@@ -12,7 +12,7 @@ pub enum IoError {
         source: std::io::Error,
     },
     #[error(
-        "{path}: unknown format (expected .ply, .xyz/.txt/.csv, .las or .laz, optionally .gz)"
+        "{path}: unknown format (expected .ply, .xyz/.txt/.csv, .las, .laz, .pcd or .e57; text, PLY and PCD optionally .gz)"
     )]
     UnknownFormat { path: PathBuf },
     #[error("{path}: bad header: {reason}")]
@@ -41,6 +41,8 @@ pub enum IoError {
     Unwritable { path: PathBuf, reason: String },
     #[error("{path}: LAS: {reason}")]
     Las { path: PathBuf, reason: String },
+    #[error("{path}: E57: {reason}")]
+    E57 { path: PathBuf, reason: String },
     #[error("{path}: file is empty (no header, no points)")]
     Empty { path: PathBuf },
 }

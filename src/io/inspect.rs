@@ -2,7 +2,7 @@
 //! streaming pass gives (count, bounds) and a spacing estimate from the
 //! first points, which for scanner data are spatially coherent.
 
-use super::{open_reader, InvalidPolicy, IoError, PointChunk, SourceInfo, DEFAULT_CHUNK};
+use super::{open_reader, IoError, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
 use crate::geom::Aabb;
 use crate::pipeline::Progress;
 use crate::spatial::{build_index, KnnBackend};
@@ -23,12 +23,13 @@ pub struct Inspection {
     pub spacing: Option<f64>,
 }
 
+/// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
 pub fn inspect(
     path: &Path,
-    policy: InvalidPolicy,
+    read: impl Into<ReadOptions>,
     progress: &dyn Progress,
 ) -> Result<Inspection, IoError> {
-    let mut reader = open_reader(path, policy)?;
+    let mut reader = open_reader(path, read)?;
     let info = reader.info().clone();
     let mut chunk = PointChunk::default();
     let mut bounds = Aabb::EMPTY;
@@ -68,4 +69,61 @@ fn prefix_spacing(sample: &[DVec3]) -> Option<f64> {
         }
     }
     (n > 0).then(|| sum / n as f64)
+}
+
+/// One scan of an E57, as `info` lists it: what the file declares and what
+/// a pass over its records found.
+#[derive(Clone, Debug)]
+pub struct ScanInspection {
+    pub scan: super::e57::ScanInfo,
+    pub points: u64,
+    /// Records flagged invalid by the file (or non-finite, under
+    /// [`super::InvalidPolicy::Skip`]).
+    pub skipped: u64,
+    pub bounds: Aabb,
+}
+
+/// An E57 inspected scan by scan, in one pass over the file (each scan's
+/// section is read once); the whole file's figures are their sums, its
+/// spacing that of the first scan with points.
+pub fn inspect_scans(
+    path: &Path,
+    policy: super::InvalidPolicy,
+    progress: &dyn Progress,
+) -> Result<(Inspection, Vec<ScanInspection>), IoError> {
+    let scans = super::e57::list_scans(path)?;
+    let mut whole: Option<Inspection> = None;
+    let mut out = Vec::with_capacity(scans.len());
+    for scan in scans {
+        let read = ReadOptions {
+            policy,
+            scans: Some(vec![scan.index]),
+        };
+        let one = inspect(path, read, progress)?;
+        out.push(ScanInspection {
+            scan,
+            points: one.count,
+            skipped: one.skipped,
+            bounds: one.bounds,
+        });
+        whole = Some(match whole {
+            None => one,
+            Some(mut w) => {
+                w.count += one.count;
+                w.skipped += one.skipped;
+                w.bounds = w.bounds.union(&one.bounds);
+                w.spacing = w.spacing.or(one.spacing);
+                w
+            }
+        });
+    }
+    let whole = match whole {
+        Some(mut w) => {
+            w.info.declared_count = Some(out.iter().map(|s| s.scan.records).sum());
+            w
+        }
+        // No scan at all: the plain inspection reports the empty file.
+        None => inspect(path, policy, progress)?,
+    };
+    Ok((whole, out))
 }

@@ -1,5 +1,5 @@
 //! Point-cloud formats: streaming, chunked readers and writers for PLY
-//! (ASCII, binary LE/BE, gzip), XYZ/CSV text (gzip) and LAS/LAZ.
+//! (ASCII, binary LE/BE, gzip), XYZ/CSV text (gzip), LAS/LAZ, PCD and E57.
 //!
 //! Readers hand out [`PointChunk`]s of bounded size, so no format ever needs the
 //! whole file in memory. Coordinates are validated once here (finite, counts
@@ -8,6 +8,7 @@
 pub mod atomic;
 pub mod cleanup;
 pub mod convert;
+pub mod e57;
 pub mod error;
 pub mod inspect;
 pub mod las;
@@ -50,6 +51,9 @@ pub enum Format {
     /// PCL's Point Cloud Data: read as ASCII, binary or binary_compressed,
     /// written binary.
     Pcd,
+    /// ASTM E2807: every scan read into the world frame by its pose;
+    /// written as one scan of f64 coordinates.
+    E57,
 }
 
 /// A bounded batch of consecutive input records.
@@ -125,6 +129,30 @@ pub enum InvalidPolicy {
     Skip,
 }
 
+/// How to read an input: what to do with non-finite coordinates and, for a
+/// file of several scans (E57), which scans to read (`None`: all).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    pub policy: InvalidPolicy,
+    /// Scan indices, as `scanmesh info` lists them; read in file order.
+    pub scans: Option<Vec<usize>>,
+}
+
+impl From<InvalidPolicy> for ReadOptions {
+    fn from(policy: InvalidPolicy) -> Self {
+        ReadOptions {
+            policy,
+            scans: None,
+        }
+    }
+}
+
+impl From<&ReadOptions> for ReadOptions {
+    fn from(read: &ReadOptions) -> Self {
+        read.clone()
+    }
+}
+
 /// A streaming source of points.
 pub trait PointReader: Send {
     fn info(&self) -> &SourceInfo;
@@ -132,7 +160,9 @@ pub trait PointReader: Send {
     /// number read; 0 means the input is exhausted (and its declared count,
     /// if any, was met: a short file is an error, not an early 0).
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError>;
-    /// Records dropped under [`InvalidPolicy::Skip`] so far.
+    /// Records dropped so far: those with non-finite coordinates under
+    /// [`InvalidPolicy::Skip`], and those the file itself flags as no point
+    /// (E57's invalid states), under every policy.
     fn skipped(&self) -> u64;
     /// A new reader over the same points from the first, when reading the
     /// source again costs no more than reading a copy of it (an uncompressed
@@ -179,7 +209,8 @@ pub trait PointWriter: Send {
 }
 
 /// Format implied by a file name (`.ply`, `.xyz`, `.txt`, `.csv`, `.las`,
-/// `.laz`, `.pcd`, each optionally followed by `.gz` for text, PLY and PCD).
+/// `.laz`, `.pcd`, `.e57`, each optionally followed by `.gz` for text, PLY
+/// and PCD).
 pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
     let name = path.file_name()?.to_str()?.to_ascii_lowercase();
     let (stem, gz) = match name.strip_suffix(".gz") {
@@ -193,6 +224,7 @@ pub fn format_from_name(path: &Path) -> Option<(Format, bool)> {
         "las" => Format::Las,
         "laz" => Format::Laz,
         "pcd" => Format::Pcd,
+        "e57" => Format::E57,
         _ => return None,
     };
     Some((f, gz))

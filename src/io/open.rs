@@ -1,13 +1,14 @@
 //! Choosing a reader for a file: by content first (gzip, `ply`, `LASF`
 //! magic), by name only for text formats, which have no magic.
 
+use super::e57::{is_e57_magic, E57Reader};
 use super::las::LasReader;
 use super::obj::read_obj;
 use super::pcd::{is_pcd_magic, PcdReader};
 use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
 use super::source::open_input;
 use super::xyz::XyzReader;
-use super::{format_from_name, Format, InvalidPolicy, IoError, PointReader};
+use super::{format_from_name, Format, IoError, PointReader, ReadOptions};
 use glam::DVec3;
 use std::path::Path;
 
@@ -16,12 +17,37 @@ const LAS_MAGIC: &[u8] = b"LASF";
 /// Opens a point file of any supported format for streaming.
 ///
 /// gzip (`1f 8b`) is decompressed transparently and the inner content
-/// sniffed; `ply\n` means PLY, `LASF` LAS/LAZ, a PCD header line PCD;
-/// anything else is read as
+/// sniffed; `ply\n` means PLY, `LASF` LAS/LAZ, a PCD header line PCD,
+/// `ASTM-E57` E57; anything else is read as
 /// XYZ/CSV text if its name says so (`.xyz`, `.txt`, `.csv`, `.pts`, each
 /// optionally `.gz`), else it is [`IoError::UnknownFormat`].
-pub fn open_reader(path: &Path, policy: InvalidPolicy) -> Result<Box<dyn PointReader>, IoError> {
+///
+/// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`];
+/// a scan selection is refused for a format without scans.
+pub fn open_reader(
+    path: &Path,
+    read: impl Into<ReadOptions>,
+) -> Result<Box<dyn PointReader>, IoError> {
+    let read: ReadOptions = read.into();
     let opened = open_input(path)?;
+    if is_e57_magic(&opened.magic) && !opened.gzip {
+        // The e57 crate wants a seekable file: reopen it plainly.
+        drop(opened);
+        return Ok(Box::new(E57Reader::open(path, &read)?));
+    }
+    if read.scans.is_some() {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: "--scans selects scans of an E57 file; this file is not one".into(),
+        });
+    }
+    let policy = read.policy;
+    if is_e57_magic(&opened.magic) {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: "gzip-compressed E57 cannot be read as a stream; gunzip it".into(),
+        });
+    }
     if is_ply_magic(&opened.magic) {
         let r = PlyPointReader::open(path, opened.input, opened.gzip, policy)?;
         return Ok(Box::new(r));
@@ -55,6 +81,7 @@ pub fn open_reader(path: &Path, policy: InvalidPolicy) -> Result<Box<dyn PointRe
         )?)),
         Some((Format::Las | Format::Laz, _)) => Err(bad("LASF")),
         Some((Format::Pcd, _)) => Err(bad("# .PCD, VERSION or FIELDS")),
+        Some((Format::E57, _)) => Err(bad("ASTM-E57")),
         Some(_) => Err(bad("ply")),
         None => Err(IoError::UnknownFormat {
             path: path.to_path_buf(),

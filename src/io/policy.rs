@@ -83,13 +83,28 @@ impl Admitter {
             }
             InvalidPolicy::Skip => {
                 self.skipped += 1;
-                if chunk.indices.is_none() {
-                    // No skip so far in this chunk: positions were implicit.
-                    let first = chunk.first_index;
-                    chunk.indices = Some((first..first + chunk.xyz.len() as u64).collect());
-                }
+                explicit_indices(chunk);
                 Ok(())
             }
+        }
+    }
+
+    /// Drops a record the file itself marks as no point (E57's invalid
+    /// states), under every policy; the reader counts these itself.
+    pub fn pass(&self, chunk: &mut PointChunk) {
+        explicit_indices(chunk);
+    }
+
+    /// The next record is `record`, which need not follow the last one (a
+    /// reader that leaves out whole parts of its file, as E57 scans).
+    pub fn jump(&self, chunk: &mut PointChunk, record: u64) {
+        if chunk.indices.is_some() {
+            return;
+        }
+        if chunk.xyz.is_empty() {
+            chunk.first_index = record;
+        } else if chunk.first_index + chunk.xyz.len() as u64 != record {
+            explicit_indices(chunk);
         }
     }
 
@@ -99,5 +114,14 @@ impl Admitter {
             chunk.first_index = first;
         }
         chunk.xyz.len()
+    }
+}
+
+/// Makes a chunk's indices explicit (records are about to be left out).
+fn explicit_indices(chunk: &mut PointChunk) {
+    if chunk.indices.is_none() {
+        // No gap so far in this chunk: positions were implicit.
+        let first = chunk.first_index;
+        chunk.indices = Some((first..first + chunk.xyz.len() as u64).collect());
     }
 }

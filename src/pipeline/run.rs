@@ -114,22 +114,7 @@ pub fn run_tiles<K: TileKernel>(
             e => e,
         },
     )?;
-    let reused = match &keep {
-        Some((c, _)) => work
-            .tiles
-            .iter()
-            .filter(|&&t| c.has(kernel.name(), t))
-            .count(),
-        None => 0,
-    };
-    let stage = match reused {
-        0 => kernel.name().to_string(),
-        r => format!(
-            "{} (resumed: {r} of {} tiles reused)",
-            kernel.name(),
-            work.tiles.len()
-        ),
-    };
+    let (reused, stage) = resumed(keep.as_ref().map(|(c, _)| *c), kernel.name(), &work.tiles);
     let tiles = &work.tiles;
     let (job_tx, job_rx) = channel::unbounded::<usize>();
     (0..tiles.len()).for_each(|i| {
@@ -211,6 +196,17 @@ fn stop(store: &PointStore, stage: &str) -> PipelineError {
     PipelineError::Stopped {
         stage: stage.to_string(),
     }
+}
+
+/// How many of `tiles` a resumed run reads back, and the stage's name as
+/// progress shows it ("normals (resumed: 812 of 1024 tiles reused)").
+fn resumed(keep: Option<&Checkpoints>, name: &str, tiles: &[usize]) -> (usize, String) {
+    let reused = keep.map_or(0, |c| tiles.iter().filter(|&&t| c.has(name, t)).count());
+    let label = match reused {
+        0 => name.to_string(),
+        r => format!("{name} (resumed: {r} of {} tiles reused)", tiles.len()),
+    };
+    (reused, label)
 }
 
 /// The tiles a run of one stage handles, and whether the seam sees them.

@@ -3,7 +3,7 @@
 //! when the run ends, successful or not.
 
 use super::{build_store, BuildOptions, PointStore, StoreError};
-use crate::io::{open_reader, InvalidPolicy};
+use crate::io::{open_reader, ReadOptions};
 use crate::pipeline::Progress;
 use std::path::{Path, PathBuf};
 
@@ -41,12 +41,13 @@ pub fn is_store(path: &Path) -> bool {
     path.join(super::manifest::MANIFEST_FILE).is_file()
 }
 
-/// Opens `input` as a store, or ingests it into a scratch store at `scratch`.
+/// Opens `input` as a store, or ingests it into a scratch store at `scratch`
+/// (`read`: an [`InvalidPolicy`](crate::io::InvalidPolicy) or [`ReadOptions`]).
 pub fn open_input(
     input: &Path,
     scratch: &Path,
     opts: &BuildOptions,
-    policy: InvalidPolicy,
+    read: impl Into<ReadOptions>,
     progress: &dyn Progress,
 ) -> Result<Workspace, StoreError> {
     if is_store(input) {
@@ -55,7 +56,7 @@ pub fn open_input(
             scratch: None,
         });
     }
-    let mut reader = open_reader(input, policy)?;
+    let mut reader = open_reader(input, read)?;
     // Own the directory before building, so a failed or interrupted build
     // is cleaned up too.
     let registered = crate::io::cleanup::register(scratch);
@@ -76,7 +77,7 @@ pub fn ingest_kept(
     input: &Path,
     dir: &Path,
     opts: &BuildOptions,
-    policy: InvalidPolicy,
+    read: impl Into<ReadOptions>,
     progress: &dyn Progress,
 ) -> Result<(), StoreError> {
     let partial = dir.with_extension("partial");
@@ -85,7 +86,7 @@ pub fn ingest_kept(
     }
     let _registered = crate::io::cleanup::register(&partial);
     let guard = ScratchGuard(partial.clone());
-    let mut reader = open_reader(input, policy)?;
+    let mut reader = open_reader(input, read)?;
     drop(build_store(reader.as_mut(), &partial, opts, progress)?);
     std::fs::rename(&partial, dir).map_err(|e| StoreError::os(dir, e))?;
     std::mem::forget(guard);

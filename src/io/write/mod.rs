@@ -1,5 +1,5 @@
-//! Streaming point writers: binary PLY (LE/BE), ASCII PLY, XYZ text and
-//! LAS/LAZ. Every writer goes through [`AtomicFile`](super::AtomicFile): the
+//! Streaming point writers: binary PLY (LE/BE), ASCII PLY, XYZ text,
+//! LAS/LAZ, and E57 ([`crate::io::e57`]). Every writer goes through [`AtomicFile`](super::AtomicFile): the
 //! output appears under its final name only in `finish`; a writer dropped
 //! before that leaves nothing behind.
 
@@ -37,6 +37,7 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
             let compressed = spec.format == Format::Laz || name.ends_with(".laz");
             Box::new(las::LasWriter::create(path, spec, compressed)?)
         }
+        Format::E57 => Box::new(super::e57::E57Writer::create(path)?),
     })
 }
 

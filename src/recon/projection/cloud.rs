@@ -42,6 +42,9 @@ pub struct Cloud<'a, H: Neighbourhoods> {
     /// Whether a point may be processed as a centre (its neighbourhood is
     /// complete); others can still be connected to.
     pub centre: &'a [bool],
+    /// Whether a point may be a corner of a new triangle (a lattice job
+    /// adds triangles only inside its window, `lattice.rs`).
+    pub joinable: &'a [bool],
     /// Input ids: the growth order and every tie.
     pub ids: &'a [u64],
     /// Exact kNN over `points`, for checks beyond a neighbour list.

@@ -138,7 +138,10 @@ impl Fan {
             } else {
                 [(star.v, DVec2::ZERO), (next.id, next.q), (cur.id, cur.q)]
             };
-            if !acceptable(star, cloud, s, lim, t) || !self.add(s, t.map(|x| x.0), star.piece) {
+            if !t.iter().all(|x| cloud.joinable[x.0 as usize])
+                || !acceptable(star, cloud, s, lim, t)
+                || !self.add(s, t.map(|x| x.0), star.piece)
+            {
                 break;
             }
             self.used.push(next.id);

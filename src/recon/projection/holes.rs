@@ -84,7 +84,8 @@ impl Star {
         }
         let frame = *self.frame();
         for &x in &path[1..len] {
-            let usable = matches!(s.state[x as usize], State::Fringe | State::Boundary);
+            let usable = matches!(s.state[x as usize], State::Fringe | State::Boundary)
+                && cloud.joinable[x as usize];
             if !usable || self.cands.iter().any(|&c| self.pts[c].id == x) {
                 continue;
             }

@@ -1,76 +1,53 @@
 //! The local-projection tile kernel and its seam policy (ARCHITECTURE.md,
-//! "Interpolating meshes").
+//! "Seams, per kernel"): the growth runs as lattice jobs (`lattice.rs`,
+//! `job.rs`), never per tile, so a tiled run equals an untiled one.
 //!
-//! Greedy growth depends on where it starts and in which order the front
-//! moves, so two tiles grow different meshes near their common face. Each
-//! tile therefore grows over its whole loaded region (core and margin) and
-//! *fixes* only the triangles whose three vertices are core points at least
-//! the band half-width `w` inside its core box; those never overlap another
-//! tile's (the shrunk cores are disjoint and apart by `2w`). The band of
-//! width `2w` along every tile face is left empty and re-grown afterwards
-//! by `seam.rs`, with the fixed triangles as they are (their open vertices
-//! FRINGE with their fans). For that pass each tile hands over its *frame*:
-//! the core points within `w + frame` of a face, with their planes,
-//! spacings and neighbour lists, and its fixed triangles there.
+//! A tile owns the jobs anchored at lattice points in its core (half-open,
+//! so exactly one tile owns a job). An owned job needs the lower jobs
+//! whose windows meet its view, and those theirs: all within a cell of
+//! the anchor, so the tile runs them too (the same bytes as their owners,
+//! since a job is a pure function of what it reads) and hands back only
+//! its own. It asks for more margin when some job it runs would read
+//! beyond the loaded region, or a point there whose list might.
 //!
-//! Orientation pieces are numbered densely per tile (by first appearance
-//! among the fixed triangles), and each fixed triangle is handed over
-//! wound in its piece root's frame, with each piece's signed volume.
+//! Jobs of one level run in parallel (they never meet); levels in order.
 
-use super::cloud::Neighbourhoods;
-use super::orient::{flipped, volume6};
+use super::job::{run_job, Buckets, JobOutput, TileView, ToLocal};
+use super::lattice::{JobKey, Lattice, LEVELS};
+use super::local::local_data;
+use super::orient::volume6;
 use super::params::ProjectionParams;
-use super::surface::{State, NONE};
-use super::triangulate::{triangulate_tile, TileSurface};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::tiling::TilePoints;
 use glam::DVec3;
+use rayon::prelude::*;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
-/// A core point near the tile's faces, for the seam pass.
-#[derive(Clone, Debug)]
-pub struct FramePoint {
-    /// Store index: the output vertex index.
-    pub store: u32,
-    pub id: u64,
-    /// Store-relative position.
-    pub p: DVec3,
-    pub normal: DVec3,
-    pub spacing: f64,
-    pub unused: bool,
-    /// Its neighbour list lies inside the frame, so the seam pass may
-    /// process it.
-    pub centre: bool,
-    /// Where its neighbours (store indices) end in `ProjectionTile::hoods`.
-    pub hood_end: u32,
-}
-
-/// What one tile contributes.
+/// What one tile contributes: its owned jobs' triangles.
 #[derive(Debug, Default)]
 pub struct ProjectionTile {
-    /// Fixed triangles (store indices), wound in their piece's frame.
-    pub fixed: Vec<[u32; 3]>,
-    /// Dense tile-local piece of each fixed triangle.
-    pub fixed_piece: Vec<u32>,
-    /// Six times the signed volume of each piece's fixed triangles, about
+    /// Triangles (store indices), wound in their piece's frame.
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into `names` of each triangle's piece.
+    pub piece: Vec<u32>,
+    /// Piece names (input id of the point that began them).
+    pub names: Vec<u64>,
+    /// Six times the signed volume of each piece's triangles here, about
     /// the store origin.
-    pub piece_volume: Vec<f64>,
-    pub frame: Vec<FramePoint>,
-    pub hoods: Vec<u32>,
-    /// Indices into `fixed` of the triangles with a corner in the frame.
-    pub frame_triangles: Vec<u32>,
-    /// Corners of those triangles beyond the frame (store index, position).
-    pub ghosts: Vec<(u32, DVec3)>,
-    /// Points processed by the growth, margin included.
+    pub volumes: Vec<f64>,
+    /// Relations between pieces the owned jobs found (see `job.rs`).
+    pub relations: Vec<(u64, u64, bool)>,
+    /// Points processed by the owned jobs' growth.
     pub processed: u64,
+    /// Jobs run (owned or not) and owned.
+    pub jobs_run: u64,
+    pub jobs_owned: u64,
 }
 
 pub struct ProjectionKernel {
     pub params: ProjectionParams,
-    /// Half-width of the band re-grown along tile faces.
-    pub band: f64,
-    /// Width of the frame beyond the band.
-    pub frame: f64,
+    pub lattice: Lattice,
     pub initial_margin: f64,
 }
 
@@ -86,24 +63,124 @@ impl TileKernel for ProjectionKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ProjectionTile, KernelError> {
-        let mut grown = triangulate_tile(tile, &self.params)?;
-        let depth: Vec<f64> = (0..tile.n_core)
-            .map(|i| face_distance(&tile.core, tile.points[i]))
+        let (index, hoods, info) = local_data(tile, &self.params)?;
+        drop(index);
+        let lat = &self.lattice;
+        let present = present_jobs(lat, &tile.points);
+        let owned: Vec<JobKey> = present
+            .iter()
+            .copied()
+            .filter(|&k| contains_half_open(&tile.core, lat.anchor(k)))
             .collect();
-        let mut out = ProjectionTile {
-            processed: grown.processed,
-            ..ProjectionTile::default()
+        let required = self.required(tile, &owned, &present)?;
+        let buckets = Buckets::new(&tile.points, lat.cell / 4.0);
+        let view = TileView {
+            points: &tile.points,
+            ids: &tile.ids,
+            info: &info,
+            hoods: &hoods,
+            buckets: &buckets,
         };
-        self.fix_triangles(tile, &mut grown, &depth, &mut out)?;
-        self.hand_over_frame(tile, &grown, &depth, &mut out)?;
+        // Every point a job reads must have the whole cloud's list.
+        let mut members = Vec::new();
+        let mut short = 0.0f64;
+        for &k in &required {
+            members.clear();
+            buckets.inside(&tile.points, &lat.view_box(k), &mut members);
+            for &i in &members {
+                short = short.max(info[i as usize].short_by);
+            }
+        }
+        if short > 0.0 {
+            return Err(more_margin(tile, short));
+        }
+        let mut done: BTreeMap<JobKey, JobOutput> = BTreeMap::new();
+        for level in 0..LEVELS {
+            let keys: Vec<JobKey> = required
+                .iter()
+                .copied()
+                .filter(|k| k.level == level)
+                .collect();
+            let lower = |k: JobKey| done.get(&k);
+            let outputs = keys
+                .par_iter()
+                .map_init(
+                    || ToLocal::new(tile.points.len()),
+                    |local, &k| run_job(k, lat, &view, &lower, &self.params, local),
+                )
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| KernelError::Failed(e.to_string()))?;
+            for (k, out) in keys.into_iter().zip(outputs) {
+                done.insert(k, out);
+            }
+        }
+        let jobs_run = done.len() as u64;
+        let mut out = hand_over(tile, &owned, &mut done)?;
+        out.jobs_run = jobs_run;
         Ok(out)
     }
 }
 
-/// Distance from `p` (in the core) to the nearest face of `core` (faces
-/// at infinity do not count).
-pub fn face_distance(core: &Aabb, p: DVec3) -> f64 {
-    (p - core.min).min(core.max - p).min_element()
+impl ProjectionKernel {
+    /// The owned jobs and every lower job they read, transitively; fails
+    /// when one of them would read beyond the loaded region. Only jobs
+    /// with points in their window are run (the others make nothing).
+    fn required(
+        &self,
+        tile: &TilePoints,
+        owned: &[JobKey],
+        present: &BTreeSet<JobKey>,
+    ) -> Result<BTreeSet<JobKey>, KernelError> {
+        let lat = &self.lattice;
+        let mut all: BTreeSet<JobKey> = owned.iter().copied().collect();
+        for level in (1..LEVELS).rev() {
+            let at: Vec<JobKey> = all.iter().copied().filter(|k| k.level == level).collect();
+            for k in at {
+                let view = lat.view_box(k);
+                for lower in 0..level {
+                    all.extend(lat.jobs_meeting(lower, &view));
+                }
+            }
+        }
+        let mut short = 0.0f64;
+        for &k in &all {
+            let v = lat.view_box(k);
+            let lo = (tile.loaded.min - v.min).max_element();
+            let hi = (v.max - tile.loaded.max).max_element();
+            short = short.max(lo).max(hi);
+        }
+        if short > 0.0 {
+            return Err(more_margin(tile, short));
+        }
+        all.retain(|k| present.contains(k));
+        Ok(all)
+    }
+}
+
+fn more_margin(tile: &TilePoints, short: f64) -> KernelError {
+    let extra = if short.is_finite() {
+        short
+    } else {
+        tile.margin
+    };
+    KernelError::MarginTooSmall {
+        needed: (tile.margin + extra) * 1.0001 + 1e-12,
+    }
+}
+
+/// The jobs whose windows hold a loaded point.
+fn present_jobs(lat: &Lattice, points: &[DVec3]) -> BTreeSet<JobKey> {
+    let mut keys: Vec<JobKey> = points
+        .par_iter()
+        .flat_map_iter(|&p| (0..LEVELS).filter_map(move |l| lat.job_of(p, l)))
+        .collect();
+    keys.par_sort_unstable();
+    keys.dedup();
+    keys.into_iter().collect()
+}
+
+fn contains_half_open(core: &Aabb, p: DVec3) -> bool {
+    (0..3).all(|a| p[a] >= core.min[a] && p[a] < core.max[a])
 }
 
 fn store_u32(tile: &TilePoints, i: u32) -> Result<u32, KernelError> {
@@ -112,93 +189,34 @@ fn store_u32(tile: &TilePoints, i: u32) -> Result<u32, KernelError> {
     })
 }
 
-impl ProjectionKernel {
-    /// Keeps the triangles whose corners are all core points at least
-    /// `band` inside the core, in their piece root's frame.
-    fn fix_triangles(
-        &self,
-        tile: &TilePoints,
-        grown: &mut TileSurface,
-        depth: &[f64],
-        out: &mut ProjectionTile,
-    ) -> Result<(), KernelError> {
-        let s = &mut grown.surface;
-        let mut dense = vec![NONE; tile.points.len()];
-        let inner = |v: u32| depth.get(v as usize).is_some_and(|&d| d >= self.band);
-        for tri in 0..s.tris.len() as u32 {
-            let t = s.tris[tri as usize];
-            if !t.iter().all(|&v| inner(v)) {
-                continue;
-            }
-            let (root, flip) = s.orientation(tri);
-            if dense[root as usize] == NONE {
-                dense[root as usize] = out.piece_volume.len() as u32;
-                out.piece_volume.push(0.0);
-            }
-            let piece = dense[root as usize];
-            let t = if flip { flipped(t) } else { t };
-            out.piece_volume[piece as usize] += volume6(&tile.points, t, DVec3::ZERO);
-            out.fixed.push([
+/// The owned jobs' triangles in store indices, with their pieces' volumes.
+fn hand_over(
+    tile: &TilePoints,
+    owned: &[JobKey],
+    done: &mut BTreeMap<JobKey, JobOutput>,
+) -> Result<ProjectionTile, KernelError> {
+    let mut out = ProjectionTile::default();
+    let mut dense: HashMap<u64, u32> = HashMap::new();
+    for k in owned {
+        let Some(job) = done.remove(k) else { continue };
+        out.jobs_owned += 1;
+        out.processed += job.processed;
+        out.relations.extend_from_slice(&job.relations);
+        for (t, &piece) in job.tris.iter().zip(&job.piece) {
+            let name = job.names[piece as usize];
+            let p = *dense.entry(name).or_insert_with(|| {
+                out.names.push(name);
+                out.volumes.push(0.0);
+                out.names.len() as u32 - 1
+            });
+            out.volumes[p as usize] += volume6(&tile.points, *t, DVec3::ZERO);
+            out.triangles.push([
                 store_u32(tile, t[0])?,
                 store_u32(tile, t[1])?,
                 store_u32(tile, t[2])?,
             ]);
-            out.fixed_piece.push(piece);
-            let near_face = t
-                .iter()
-                .any(|&v| depth[v as usize] < self.band + self.frame);
-            if near_face {
-                out.frame_triangles.push(out.fixed.len() as u32 - 1);
-            }
+            out.piece.push(p);
         }
-        Ok(())
     }
-
-    /// The frame points with their lists, and the far corners of the fixed
-    /// triangles that reach into the frame.
-    fn hand_over_frame(
-        &self,
-        tile: &TilePoints,
-        grown: &TileSurface,
-        depth: &[f64],
-        out: &mut ProjectionTile,
-    ) -> Result<(), KernelError> {
-        let reach = self.band + self.frame;
-        let hoods = &grown.hoods;
-        for (i, &d) in depth.iter().enumerate() {
-            if d >= reach {
-                continue;
-            }
-            let info = grown.info[i];
-            let list = hoods.get(i as u32);
-            let far = list.last().map_or(f64::INFINITY, |&j| {
-                (tile.points[j as usize] - tile.points[i]).length()
-            });
-            for &j in list {
-                out.hoods.push(store_u32(tile, j)?);
-            }
-            out.frame.push(FramePoint {
-                store: store_u32(tile, i as u32)?,
-                id: tile.ids[i],
-                p: tile.points[i],
-                normal: info.normal,
-                spacing: info.spacing,
-                unused: grown.surface.state[i] == State::Unused,
-                centre: info.complete && d + far < reach,
-                hood_end: out.hoods.len() as u32,
-            });
-        }
-        let mut ghost = vec![false; tile.n_core];
-        for k in 0..out.frame_triangles.len() {
-            let t = out.fixed[out.frame_triangles[k] as usize];
-            for v in t {
-                let local = (u64::from(v) - tile.store_first) as usize;
-                if depth[local] >= reach && !ghost[local] {
-                    ghost[local] = true;
-                    out.ghosts.push((v, tile.points[local]));
-                }
-            }
-        }
-        Ok(())
-    }
+    Ok(out)
 }

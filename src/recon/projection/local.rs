@@ -28,6 +28,10 @@ pub struct PointInfo {
     pub thinned: bool,
     /// Its neighbour list is certainly complete within the loaded region.
     pub complete: bool,
+    /// How far its list may reach beyond the loaded region (0 when it is
+    /// exact, so that its plane, spacing and thinning are the whole
+    /// cloud's; infinite when fewer than k points were loaded).
+    pub short_by: f64,
 }
 
 /// The lists of the core points, then those of the margin points.
@@ -87,7 +91,16 @@ fn point_info(
     let normal = fit_plane(&tile.points, i, nbrs).map_or(DVec3::ZERO, |f| f.normal);
     let spacing = local_spacing(nbrs, params.k).unwrap_or(0.0);
     let reach = nbrs.last().map_or(f64::INFINITY, |n| n.dist2.sqrt());
+    let room = tile.room(tile.points[i]);
+    // As the list search reports it: fewer than k loaded is complete only
+    // when nothing lies beyond.
+    let bound = if nbrs.len() >= params.k {
+        reach
+    } else {
+        f64::INFINITY
+    };
     PointInfo {
+        short_by: if bound <= room { 0.0 } else { bound - room },
         normal,
         spacing,
         thinned: spacing > 0.0 && thinned(tile.ids[i], nbrs, &tile.ids, spacing, params.thin),

@@ -9,7 +9,8 @@
 //! visible region, the candidates), [`fan`] (section 2.9), [`grow`] (the
 //! front), [`thin`] and [`local`] (sections 2.4-2.5: lists, planes, local
 //! spacing), [`triangulate`] (one tile, or points in memory), and the
-//! pipeline glue: [`kernel`], [`seam`], [`stitch`], [`reconstruct`].
+//! pipeline glue: [`lattice`] and [`job`] (where the growth runs, so
+//! that tiles do not change it), [`kernel`], [`stitch`], [`reconstruct`].
 //!
 //! Output: every input point is a vertex, in store order (a vertex's index
 //! is its store index; unused points, e.g. thinned ones, are unreferenced
@@ -38,12 +39,13 @@ pub mod fan;
 pub mod frame;
 pub mod grow;
 pub mod holes;
+pub mod job;
 pub mod kernel;
+pub mod lattice;
 pub mod local;
 pub mod orient;
 pub mod params;
 pub mod reconstruct;
-pub mod seam;
 pub mod star;
 pub mod stitch;
 pub mod surface;

@@ -1,11 +1,13 @@
 //! `reconstruct --method projection` end to end over a store: the tile
-//! kernel (`kernel.rs`) over every tile, vertices and fixed triangles
-//! streamed by the stitcher, the seam bands re-grown at the end.
+//! kernel (`kernel.rs`) runs the lattice jobs (`lattice.rs`) each tile
+//! owns, the stitcher streams vertices and triangles and settles the
+//! orientation at the end.
 //!
 //! Normals are the kernel's own PCA planes, oriented while growing
 //! (section 2.6): no normals pass, no Riemannian graph.
 
 use super::kernel::ProjectionKernel;
+use super::lattice::Lattice;
 use super::params::{BadParameter, ProjectionParams};
 use super::stitch::{StitchError, StitchReport, Stitcher};
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
@@ -15,18 +17,50 @@ use crate::store::spacing::ensure_spacing;
 use crate::store::{PointStore, StoreError};
 use std::path::Path;
 
-/// Half-width of the band re-grown along tile faces, in spacings.
-pub const BAND_SPACINGS: f64 = 4.0;
+/// The lattice in lattice units (`lattice_unit`): the band every job of
+/// a higher level re-grows along the planes; the overlap of each level
+/// with the lower ones (a hole up to this size where a lower level
+/// stopped can still be closed: at 4 units the 1M dragon kept 681 loops,
+/// at 8, 56); the spill; and the cell, more than twice the corners'
+/// half-width `BAND + 3 OVERLAP`.
+pub const BAND_UNITS: f64 = 4.0;
+pub const OVERLAP_UNITS: f64 = 9.0;
+pub const CELL_UNITS: f64 = 64.0;
+/// How far a job grows beyond its window (triangles it drops).
+pub const SPILL_UNITS: f64 = 3.0;
+
+/// The lattice for a unit and a neighbour list's reach (both absolute).
+/// A job reads its points' lists and the triangles at their neighbours,
+/// so it sees a reach (and a unit) beyond its spill. The overlap is kept
+/// above spill plus view: then a job reads no lower job beyond the lattice
+/// plane its window stops short of, and a tile's jobs reach a cell beyond
+/// its core, not two (`kernel.rs`).
+pub fn lattice(unit: f64, reach: f64) -> Lattice {
+    let spill = SPILL_UNITS * unit;
+    let view = reach + unit;
+    let overlap = (OVERLAP_UNITS * unit).max(spill + view + unit);
+    let band = BAND_UNITS * unit;
+    Lattice {
+        cell: (CELL_UNITS * unit).max(2.0 * (band + 3.0 * overlap) + 2.0 * unit),
+        band,
+        overlap,
+        spill,
+        view,
+    }
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProjectionReport {
     /// The store's spacing estimate, which sets the band and the margins
     /// (never a result within a tile).
     pub spacing: f64,
-    pub band: f64,
-    pub frame: f64,
+    pub lattice: Lattice,
     /// Points processed by the tiles' growth (margins included).
     pub processed: u64,
+    /// Lattice jobs with points (each owned by one tile), and jobs run in
+    /// all (a tile also runs the lower jobs its own read).
+    pub jobs: u64,
+    pub jobs_run: u64,
     pub stitch: StitchReport,
     pub run: RunStats,
 }
@@ -62,36 +96,64 @@ pub fn reconstruct_projection(
 ) -> Result<ProjectionReport, ProjectionError> {
     params.validate()?;
     let spacing = ensure_spacing(store)?;
-    let reach = match params.neighbourhood {
-        NormalHood::Knn => kth_distance(spacing, params.k),
-        NormalHood::Topological { .. } => 2.0 * kth_distance(spacing, params.k),
+    let hood_factor = match params.neighbourhood {
+        NormalHood::Knn => 1.0,
+        NormalHood::Topological { .. } => 2.0,
     };
-    let band = BAND_SPACINGS * spacing;
-    // A frame point's list must lie in the frame: two reaches leave room
-    // for the lists of the points the band's fans reach.
-    let frame = 2.0 * reach + 2.0 * spacing;
+    let reach = hood_factor * kth_distance(spacing, params.k);
+    let unit = lattice_unit(store, spacing);
+    let lattice = lattice(unit, hood_factor * kth_distance(unit, params.k));
+    // The farthest job a tile runs reads a cell less the band beyond its
+    // core, plus its spill and view, plus the lists of the points there
+    // (twice the typical reach: sparser points have longer lists, and a
+    // reload costs a whole tile).
+    let margin = lattice.cell - lattice.band + lattice.spill + lattice.view + 2.0 * reach;
     let kernel = ProjectionKernel {
         params: *params,
-        band,
-        frame,
-        initial_margin: band + frame + reach,
+        lattice,
+        initial_margin: margin * 1.05,
     };
     let mut stitcher = Stitcher::new(MeshWriter::create(output, format)?)?;
-    let mut processed = 0;
+    let (mut processed, mut jobs, mut jobs_run) = (0, 0, 0);
     let store = &*store;
     let run = run_tiles(store, &kernel, opts, progress, |t, out| {
         processed += out.processed;
+        jobs += out.jobs_owned;
+        jobs_run += out.jobs_run;
         stitcher
             .add_tile(store, t, &store.tiles()[t], &out)
             .map_err(|e| PipelineError::Seam(e.to_string()))
     })?;
-    let stitch = stitcher.finish(params)?;
+    let stitch = stitcher.finish()?;
     Ok(ProjectionReport {
         spacing,
-        band,
-        frame,
+        lattice,
         processed,
+        jobs,
+        jobs_run,
         stitch,
         run,
     })
+}
+
+/// The lattice's unit length: it sets results (where jobs start and stop),
+/// so it must not depend on the tiling, and the store's spacing estimate
+/// samples tiles. The unit is therefore computed from what every tiling
+/// agrees on, the point count and the bounds: `0.8 * extent / sqrt(n)`
+/// (the largest extent; 0.8 makes it about the mean spacing of a scanned
+/// object, 1.2 spacings on the 1M dragon ... see ARCHITECTURE.md). An
+/// outlier far off would blow that up (a cell holding the whole cloud, a
+/// margin to match), so it is kept within a factor 2 of the estimate;
+/// only then does the tiling enter.
+pub fn lattice_unit(store: &PointStore, spacing: f64) -> f64 {
+    let m = &store.manifest;
+    let extent = (0..3)
+        .map(|a| m.bounds_max[a] - m.bounds_min[a])
+        .fold(0.0f64, f64::max);
+    let n = (m.count.max(1)) as f64;
+    let unit = 0.8 * extent / n.sqrt();
+    if !(unit.is_finite() && unit > 0.0) {
+        return spacing;
+    }
+    unit.clamp(0.5 * spacing, 2.0 * spacing)
 }

@@ -353,7 +353,7 @@ impl Star {
         for i in 0..self.pts.len() {
             let p = self.pts[i];
             let u = p.id as usize;
-            if matches!(s.state[u], State::Completed | State::Unused) {
+            if matches!(s.state[u], State::Completed | State::Unused) || !cloud.joinable[u] {
                 continue;
             }
             let d = cloud.points[u] - pv;

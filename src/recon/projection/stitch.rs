@@ -1,22 +1,23 @@
 //! The writer side of the local-projection kernel: vertices stream out tile
 //! by tile (every core point, in store order, so a vertex's index is its
-//! store index), fixed triangles go to a spool with their global piece,
-//! frames go to the seam pass (`seam.rs`). At the end the seam is grown,
-//! the pieces settled (each root turned to a positive signed volume, see
-//! `orient.rs`) and the spool replayed into the mesh writer with every
-//! triangle wound in its root's settled frame.
+//! store index), triangles go to a spool with their piece. At the end the
+//! pieces are settled: a parity union-find over the pieces (a few per
+//! lattice job) joined by the relations the jobs found, each root turned
+//! to a positive signed volume (`orient.rs`); then the spool is replayed
+//! into the mesh writer with every triangle wound in its root's frame.
 //!
-//! Memory: the frames and one spool buffer; triangles wait on disk
-//! (16 bytes each).
+//! Memory: the pieces (name, volume, relations: a few dozen bytes per
+//! lattice job) and one spool buffer; triangles wait on disk (16 bytes
+//! each).
 
 use super::kernel::ProjectionTile;
 use super::orient::flipped;
-use super::params::ProjectionParams;
-use super::seam::{SeamBuilder, SeamResult};
 use crate::io::IoError;
 use crate::mesh::write::scratch_beside;
 use crate::mesh::{MeshError, MeshWriter};
+use crate::normals::unionfind::ParityUnionFind;
 use crate::store::{PointStore, StoreError, TileEntry};
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::PathBuf;
@@ -26,10 +27,10 @@ use std::path::PathBuf;
 pub struct StitchReport {
     pub vertices: u64,
     pub triangles: u64,
-    /// Triangles the seam pass added.
-    pub seam_triangles: u64,
-    pub seam_processed: u64,
     pub pieces: u64,
+    /// Relations between pieces that contradicted earlier ones (a
+    /// non-orientable join no job could see; 0 on the test surfaces).
+    pub contradictions: u64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -40,8 +41,6 @@ pub enum StitchError {
     Store(#[from] StoreError),
     #[error(transparent)]
     Io(#[from] IoError),
-    #[error("seam pass: {0}")]
-    Index(#[from] crate::spatial::IndexError),
     #[error("tile {tile}: its vertices would start at {got}, not at its store index {expected}")]
     VertexOrder {
         tile: usize,
@@ -55,8 +54,10 @@ pub struct Stitcher {
     spool_path: PathBuf,
     spool: BufWriter<File>,
     spooled: u64,
-    seam: SeamBuilder,
+    /// Piece name -> dense piece.
+    pieces: HashMap<u64, u32>,
     piece_volume: Vec<f64>,
+    relations: Vec<(u32, u32, bool)>,
     points: Vec<glam::DVec3>,
 }
 
@@ -71,8 +72,9 @@ impl Stitcher {
             spool_path,
             spool: BufWriter::with_capacity(1 << 20, file),
             spooled: 0,
-            seam: SeamBuilder::default(),
+            pieces: HashMap::new(),
             piece_volume: Vec::new(),
+            relations: Vec::new(),
             points: Vec::new(),
         })
     }
@@ -81,7 +83,7 @@ impl Stitcher {
         StitchError::Io(IoError::os(&self.spool_path, e))
     }
 
-    /// One tile's vertices, fixed triangles and frame, in tile order.
+    /// One tile's vertices, triangles and pieces, in tile order.
     pub fn add_tile(
         &mut self,
         store: &PointStore,
@@ -100,26 +102,56 @@ impl Stitcher {
                 expected: entry.start,
             });
         }
-        let offset = self.piece_volume.len() as u32;
-        for (t, &piece) in tile.fixed.iter().zip(&tile.fixed_piece) {
+        let dense: Vec<u32> = tile.names.iter().map(|&n| self.piece(n)).collect();
+        for (p, &v) in dense.iter().zip(&tile.volumes) {
+            self.piece_volume[*p as usize] += v;
+        }
+        for &(a, b, parity) in &tile.relations {
+            let (a, b) = (self.piece(a), self.piece(b));
+            self.relations.push((a, b, parity));
+        }
+        for (t, &piece) in tile.triangles.iter().zip(&tile.piece) {
             let mut record = [0u8; RECORD];
-            for (k, v) in t.iter().chain([offset + piece].iter()).enumerate() {
+            for (k, v) in t.iter().chain([dense[piece as usize]].iter()).enumerate() {
                 record[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
             }
             self.spool.write_all(&record).map_err(|e| self.io(e))?;
         }
-        self.spooled += tile.fixed.len() as u64;
-        self.seam.add(tile, offset);
-        self.piece_volume.extend_from_slice(&tile.piece_volume);
+        self.spooled += tile.triangles.len() as u64;
         Ok(())
     }
 
-    /// Grows the seam, settles the pieces and writes every triangle.
-    pub fn finish(mut self, params: &ProjectionParams) -> Result<StitchReport, StitchError> {
-        let pieces = self.piece_volume.len() as u32;
-        let seam = std::mem::take(&mut self.seam).grow(params, pieces)?;
-        let flip_root = self.root_flips(&seam);
-        let settled = |root: u32, flip: bool| flip ^ flip_root[root as usize];
+    fn piece(&mut self, name: u64) -> u32 {
+        let next = self.piece_volume.len() as u32;
+        let p = *self.pieces.entry(name).or_insert(next);
+        if p == next {
+            self.piece_volume.push(0.0);
+        }
+        p
+    }
+
+    /// Settles the pieces and writes every triangle.
+    pub fn finish(mut self) -> Result<StitchReport, StitchError> {
+        let pieces = self.piece_volume.len();
+        let mut uf = ParityUnionFind::new(pieces);
+        let mut contradictions = 0;
+        for &(a, b, parity) in &self.relations {
+            if !uf.union(a, b, parity) {
+                let ((ra, pa), (rb, pb)) = (uf.find(a), uf.find(b));
+                contradictions += u64::from(ra == rb && (pa ^ pb) != parity);
+            }
+        }
+        let mut volume = vec![0.0f64; pieces];
+        let mut root = Vec::with_capacity(pieces);
+        for (p, &v) in self.piece_volume.iter().enumerate() {
+            let (r, flip) = uf.find(p as u32);
+            volume[r as usize] += if flip { -v } else { v };
+            root.push((r, flip));
+        }
+        let flip_of: Vec<bool> = root
+            .iter()
+            .map(|&(r, flip)| flip ^ (volume[r as usize] < 0.0))
+            .collect();
         self.spool.flush().map_err(|e| self.io(e))?;
         let mut file = self.spool.get_ref().try_clone().map_err(|e| self.io(e))?;
         file.seek(SeekFrom::Start(0)).map_err(|e| self.io(e))?;
@@ -137,38 +169,23 @@ impl Stitcher {
                 ])
             };
             let t = [word(0), word(1), word(2)];
-            let (root, flip) = seam.piece_roots[word(3) as usize];
-            batch.push(if settled(root, flip) { flipped(t) } else { t });
+            batch.push(if flip_of[word(3) as usize] {
+                flipped(t)
+            } else {
+                t
+            });
             if batch.len() == batch.capacity() {
                 self.writer.add_triangles(&batch)?;
                 batch.clear();
             }
-        }
-        for (&t, &(root, flip)) in seam.triangles.iter().zip(&seam.orientation) {
-            batch.push(if settled(root, flip) { flipped(t) } else { t });
         }
         self.writer.add_triangles(&batch)?;
         let (vertices, triangles) = self.writer.finish()?;
         Ok(StitchReport {
             vertices,
             triangles,
-            seam_triangles: seam.triangles.len() as u64,
-            seam_processed: seam.processed,
-            pieces: u64::from(pieces),
+            pieces: pieces as u64,
+            contradictions,
         })
-    }
-
-    /// Whether each root of the seam's pieces must be flipped: when the
-    /// signed volume of everything it holds is negative.
-    fn root_flips(&self, seam: &SeamResult) -> Vec<bool> {
-        let mut volume = vec![0.0f64; seam.elements];
-        for (p, &(root, flip)) in seam.piece_roots.iter().enumerate() {
-            let v = self.piece_volume[p];
-            volume[root as usize] += if flip { -v } else { v };
-        }
-        for (&(root, _), &v) in seam.orientation.iter().zip(&seam.volumes) {
-            volume[root as usize] += v;
-        }
-        volume.into_iter().map(|v| v < 0.0).collect()
     }
 }

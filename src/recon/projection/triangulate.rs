@@ -29,12 +29,14 @@ pub fn triangulate_tile(
     let normals: Vec<DVec3> = info.iter().map(|p| p.normal).collect();
     let spacing: Vec<f64> = info.iter().map(|p| p.spacing).collect();
     let centre: Vec<bool> = info.iter().map(|p| p.complete).collect();
+    let joinable = vec![true; tile.points.len()];
     let cloud = Cloud {
         points: &tile.points,
         normals: &normals,
         spacing: &spacing,
         hoods: &hoods,
         centre: &centre,
+        joinable: &joinable,
         ids: &tile.ids,
         index: index.as_knn(),
     };

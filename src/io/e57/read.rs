@@ -1,0 +1,337 @@
+//! The streaming E57 point reader: every selected scan in file order, each
+//! point taken into the file's world frame by its scan's pose in f64.
+//!
+//! Records the file flags as not being points (`cartesianInvalidState` or
+//! `sphericalInvalidState` 1, a direction only, or 2, no coordinate) are
+//! skipped under every policy and counted ([`E57Reader::flagged`], part of
+//! [`PointReader::skipped`]); nothing is made up for them. Spherical
+//! records are converted to cartesian in the scan's frame first.
+//!
+//! Decoding runs on a thread of its own (as for LAS): the e57 crate's
+//! point iterator borrows its file reader, so both live on the worker,
+//! which sends blocks of [`BLOCK`] records through a channel of [`AHEAD`]:
+//! memory is a few blocks whatever the file's size. The crate decodes one
+//! data packet (at most 64 KiB) at a time.
+//!
+//! An E57 is bit-packed: reading it again costs a full decode, so the
+//! reader offers no [`PointReader::reopen`] and a store build spills the
+//! points once instead.
+
+use super::scan::{describe, ScanInfo, Transform};
+use super::seekbuf::SeekBuf;
+use crate::io::policy::Admitter;
+use crate::io::{Format, IoError, PointChunk, PointReader, ReadOptions, SourceInfo};
+use ::e57::{CartesianCoordinate, PointCloud};
+use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
+use glam::{DVec3, Vec3};
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::thread::JoinHandle;
+
+/// Records per block sent by the worker.
+const BLOCK: usize = 1 << 15;
+/// Blocks decoded ahead of the consumer.
+const AHEAD: usize = 2;
+
+type File57 = ::e57::E57Reader<SeekBuf<File>>;
+
+/// A block of consecutive records of one scan: `first` is the file-wide
+/// record number of `recs[0]`; `None` is a record flagged invalid.
+struct Block {
+    first: u64,
+    recs: Vec<Option<DVec3>>,
+}
+
+/// A selected scan as the worker reads it.
+struct Planned {
+    cloud: PointCloud,
+    index: usize,
+    /// File-wide record number of the scan's first record.
+    base: u64,
+    transform: Transform,
+}
+
+pub struct E57Reader {
+    info: SourceInfo,
+    scans: Vec<ScanInfo>,
+    blocks: Receiver<Result<Block, IoError>>,
+    recycle: Sender<Vec<Option<DVec3>>>,
+    worker: Option<JoinHandle<()>>,
+    current: Block,
+    pos: usize,
+    admit: Admitter,
+    /// Records of the selected scans, valid or not.
+    declared: u64,
+    consumed: u64,
+    flagged: u64,
+}
+
+/// An e57 crate error as ours (its message already holds its source's).
+pub(crate) fn e57_error(path: &Path, what: &str, e: ::e57::Error) -> IoError {
+    IoError::E57 {
+        path: path.to_path_buf(),
+        reason: format!("{what}: {e}"),
+    }
+}
+
+/// Bytes of the binary header every E57 starts with.
+const HEADER_BYTES: u64 = 48;
+
+/// Opens `path` with the e57 crate and describes every scan.
+pub(crate) fn open_file(path: &Path) -> Result<(File57, Vec<ScanInfo>), IoError> {
+    let os = |e| IoError::os(path, e);
+    let file = File::open(path).map_err(os)?;
+    let len = file.metadata().map_err(os)?.len();
+    if len < HEADER_BYTES {
+        return Err(IoError::E57 {
+            path: path.to_path_buf(),
+            reason: format!("truncated: {len} bytes, less than the {HEADER_BYTES}-byte header"),
+        });
+    }
+    let reader = ::e57::E57Reader::new(SeekBuf::new(file))
+        .map_err(|e| e57_error(path, "cannot read the E57 header and XML", e))?;
+    let scans = reader
+        .pointclouds()
+        .iter()
+        .enumerate()
+        .map(|(i, pc)| describe(path, i, pc))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((reader, scans))
+}
+
+/// Which scans to read: all, or the selection, each at most once and in
+/// file order.
+fn selected(
+    path: &Path,
+    scans: &[ScanInfo],
+    pick: Option<&[usize]>,
+) -> Result<Vec<usize>, IoError> {
+    let Some(pick) = pick else {
+        return Ok((0..scans.len()).collect());
+    };
+    if let Some(&bad) = pick.iter().find(|&&i| i >= scans.len()) {
+        return Err(IoError::E57 {
+            path: path.to_path_buf(),
+            reason: format!(
+                "--scans asks for scan {bad}, but the file has {} (0..{})",
+                scans.len(),
+                scans.len().saturating_sub(1)
+            ),
+        });
+    }
+    let mut out = pick.to_vec();
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}
+
+impl E57Reader {
+    pub(crate) fn open(path: &Path, read: &ReadOptions) -> Result<Self, IoError> {
+        let (file, scans) = open_file(path)?;
+        let picked = selected(path, &scans, read.scans.as_deref())?;
+        let clouds = file.pointclouds();
+        let mut plan = Vec::with_capacity(picked.len());
+        let mut declared = 0u64;
+        for &i in &picked {
+            let base = scans[..i]
+                .iter()
+                .map(|s| s.records)
+                .fold(0u64, u64::saturating_add);
+            declared = declared.saturating_add(scans[i].records);
+            plan.push(Planned {
+                cloud: clouds[i].clone(),
+                index: i,
+                base,
+                transform: scans[i].pose.transform(),
+            });
+        }
+        let (block_tx, block_rx) = bounded(AHEAD);
+        let (recycle_tx, recycle_rx) = unbounded();
+        let owned = path.to_path_buf();
+        let worker = std::thread::Builder::new()
+            .name("e57-decode".into())
+            .spawn(move || decode(owned, file, plan, block_tx, recycle_rx))
+            .map_err(|e| IoError::os(path, e))?;
+        let info = SourceInfo {
+            path: path.to_path_buf(),
+            format: Format::E57,
+            gzip: false,
+            declared_count: Some(declared),
+            has_normals: false,
+            header_bounds: None,
+            las_transform: None,
+        };
+        Ok(E57Reader {
+            info,
+            scans,
+            blocks: block_rx,
+            recycle: recycle_tx,
+            worker: Some(worker),
+            current: Block {
+                first: 0,
+                recs: Vec::new(),
+            },
+            pos: 0,
+            admit: Admitter::new(path.to_path_buf(), read.policy),
+            declared,
+            consumed: 0,
+            flagged: 0,
+        })
+    }
+
+    /// Every scan of the file (selected or not).
+    pub fn scans(&self) -> &[ScanInfo] {
+        &self.scans
+    }
+
+    /// Records skipped so far because the file flags them as no point.
+    pub fn flagged(&self) -> u64 {
+        self.flagged
+    }
+
+    /// Makes `current.recs[pos..]` non-empty (the next block from the worker).
+    fn refill(&mut self) -> Result<(), IoError> {
+        let block = self
+            .blocks
+            .recv()
+            .map_err(|_| worker_died(&self.info.path))??;
+        let old = std::mem::replace(&mut self.current, block);
+        // The worker may be gone already; then the buffer is simply dropped.
+        let _ = self.recycle.send(old.recs);
+        self.pos = 0;
+        match self.current.recs.is_empty() {
+            true => Err(worker_died(&self.info.path)),
+            false => Ok(()),
+        }
+    }
+}
+
+fn worker_died(path: &Path) -> IoError {
+    IoError::E57 {
+        path: path.to_path_buf(),
+        reason: "the decoding thread stopped unexpectedly".into(),
+    }
+}
+
+/// Worker: decodes the planned scans in order until the end, an error, or
+/// until the consumer hangs up.
+fn decode(
+    path: PathBuf,
+    mut file: File57,
+    plan: Vec<Planned>,
+    blocks: Sender<Result<Block, IoError>>,
+    recycle: Receiver<Vec<Option<DVec3>>>,
+) {
+    for scan in plan {
+        if let Err(e) = decode_scan(&path, &mut file, &scan, &blocks, &recycle) {
+            let _ = blocks.send(Err(e));
+            return;
+        }
+    }
+}
+
+/// Sends one scan's records; `Ok` also when the consumer has hung up.
+fn decode_scan(
+    path: &Path,
+    file: &mut File57,
+    scan: &Planned,
+    blocks: &Sender<Result<Block, IoError>>,
+    recycle: &Receiver<Vec<Option<DVec3>>>,
+) -> Result<(), IoError> {
+    let total = scan.cloud.records;
+    if total == 0 {
+        return Ok(());
+    }
+    let what = |done: u64| format!("scan {}: record {done} of {total}", scan.index);
+    let mut points = file
+        .pointcloud_simple(&scan.cloud)
+        .map_err(|e| e57_error(path, &what(0), e))?;
+    // Coordinates only, untouched: the pose is applied here, normalised.
+    points.apply_pose(false);
+    points.spherical_to_cartesian(true);
+    points.intensity_to_color(false);
+    points.normalize_color(false);
+    points.normalize_intensity(false);
+    let mut done = 0u64;
+    while done < total {
+        let mut recs = recycle.try_recv().unwrap_or_default();
+        recs.clear();
+        let want = (total - done).min(BLOCK as u64) as usize;
+        for _ in 0..want {
+            let p = match points.next() {
+                Some(Ok(p)) => p,
+                Some(Err(e)) => return Err(e57_error(path, &what(done), e)),
+                None => return Err(e57_error(path, &what(done), ended_early())),
+            };
+            recs.push(match p.cartesian {
+                CartesianCoordinate::Valid { x, y, z } => {
+                    Some(scan.transform.apply(DVec3::new(x, y, z)))
+                }
+                // A direction without range, or no coordinate at all.
+                CartesianCoordinate::Direction { .. } | CartesianCoordinate::Invalid => None,
+            });
+            done += 1;
+        }
+        let first = scan.base.saturating_add(done - want as u64);
+        if blocks.send(Ok(Block { first, recs })).is_err() {
+            return Ok(());
+        }
+    }
+    Ok(())
+}
+
+fn ended_early() -> ::e57::Error {
+    ::e57::Error::Read {
+        desc: "the point data ended before the declared record count".into(),
+        source: None,
+    }
+}
+
+impl PointReader for E57Reader {
+    fn info(&self) -> &SourceInfo {
+        &self.info
+    }
+
+    /// `max` of 0 is taken as 1, since 0 points read means end of input.
+    fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
+        let max = max.max(1);
+        let first = self.current.first + self.pos as u64;
+        self.admit.begin(chunk, first, false);
+        while chunk.len() < max && self.consumed < self.declared {
+            if self.pos == self.current.recs.len() {
+                self.refill()?;
+                self.admit.jump(chunk, self.current.first);
+            }
+            let block = &self.current;
+            let take = (max - chunk.len()).min(block.recs.len() - self.pos);
+            for (k, rec) in block.recs[self.pos..self.pos + take].iter().enumerate() {
+                let record = block.first + (self.pos + k) as u64;
+                match rec {
+                    Some(p) => self.admit.push(chunk, record, *p, Vec3::ZERO)?,
+                    None => {
+                        self.admit.pass(chunk);
+                        self.flagged += 1;
+                    }
+                }
+            }
+            self.pos += take;
+            self.consumed += take as u64;
+        }
+        Ok(self.admit.end(chunk))
+    }
+
+    fn skipped(&self) -> u64 {
+        self.admit.skipped() + self.flagged
+    }
+}
+
+impl Drop for E57Reader {
+    fn drop(&mut self) {
+        // Hang up first so a worker blocked on a full channel wakes and ends.
+        let (_, dead) = bounded(0);
+        drop(std::mem::replace(&mut self.blocks, dead));
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}

@@ -1,0 +1,162 @@
+//! The E57 point writer: one scan of f64 cartesian coordinates in the
+//! world frame (identity pose), streamed through the e57 crate's writer,
+//! which buffers one data packet (at most 64 KiB) at a time.
+//!
+//! As for reading, the crate's scan writer borrows its file writer, so both
+//! live on a thread of their own; chunks reach it through a channel of
+//! [`AHEAD`]. The file goes through [`AtomicFile`]: it appears under its
+//! name only once the XML section and header are written. Normals and
+//! per-point flags have no field in standard E57 and are not written.
+
+use super::read::e57_error;
+use crate::io::{AtomicFile, IoError, PointChunk, PointWriter};
+use ::e57::{Record, RecordValue};
+use crossbeam::channel::{bounded, Receiver, Sender};
+use glam::DVec3;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::thread::JoinHandle;
+
+/// Chunks queued for the writing thread.
+const AHEAD: usize = 2;
+
+enum Msg {
+    Points(Vec<DVec3>),
+    /// Write the XML section and header: the file is complete.
+    Finish,
+}
+
+pub(crate) struct E57Writer {
+    path: PathBuf,
+    atomic: Option<AtomicFile>,
+    to_worker: Option<Sender<Msg>>,
+    worker: Option<JoinHandle<Result<(), IoError>>>,
+    count: u64,
+}
+
+impl E57Writer {
+    pub fn create(path: &Path) -> Result<Self, IoError> {
+        let mut atomic = AtomicFile::create(path)?;
+        let file = atomic
+            .file()
+            .try_clone()
+            .map_err(|e| IoError::os(path, e))?;
+        let (tx, rx) = bounded(AHEAD);
+        let owned = path.to_path_buf();
+        let worker = std::thread::Builder::new()
+            .name("e57-write".into())
+            .spawn(move || write_scan(&owned, file, rx))
+            .map_err(|e| IoError::os(path, e))?;
+        Ok(E57Writer {
+            path: path.to_path_buf(),
+            atomic: Some(atomic),
+            to_worker: Some(tx),
+            worker: Some(worker),
+            count: 0,
+        })
+    }
+
+    /// The worker's error, once it has stopped early.
+    fn worker_error(&mut self) -> IoError {
+        self.to_worker = None;
+        match self.worker.take().map(|w| w.join()) {
+            Some(Ok(Err(e))) => e,
+            _ => IoError::E57 {
+                path: self.path.clone(),
+                reason: "the writing thread stopped unexpectedly".into(),
+            },
+        }
+    }
+}
+
+/// A GUID for the file and its scan: unique enough across runs (time and
+/// process), which is all E57 asks of it.
+fn guid(kind: &str) -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    format!("{{scanmesh-{kind}-{:x}-{nanos:x}}}", std::process::id())
+}
+
+/// Worker: one scan from the chunks received, finalised on `Finish`; a
+/// hang-up without it leaves the file unfinished (the caller drops it).
+fn write_scan(path: &Path, file: File, chunks: Receiver<Msg>) -> Result<(), IoError> {
+    let err = |what: &'static str| move |e| e57_error(path, what, e);
+    let mut file57 = ::e57::E57Writer::new(file, &guid("file")).map_err(err("cannot start"))?;
+    let prototype = vec![
+        Record::CARTESIAN_X_F64,
+        Record::CARTESIAN_Y_F64,
+        Record::CARTESIAN_Z_F64,
+    ];
+    let mut scan = file57
+        .add_pointcloud(&guid("scan"), prototype)
+        .map_err(err("cannot start the scan"))?;
+    scan.set_name(Some("scanmesh".into()));
+    for msg in chunks.iter() {
+        match msg {
+            Msg::Points(pts) => {
+                for p in pts {
+                    let values = p.to_array().map(RecordValue::Double).to_vec();
+                    scan.add_point(values).map_err(err("cannot add a point"))?;
+                }
+            }
+            Msg::Finish => {
+                scan.finalize().map_err(err("cannot finish the scan"))?;
+                return file57
+                    .finalize()
+                    .map_err(err("cannot write the XML section"));
+            }
+        }
+    }
+    Ok(())
+}
+
+impl PointWriter for E57Writer {
+    fn write_chunk(&mut self, chunk: &PointChunk, _flags: Option<&[u8]>) -> Result<(), IoError> {
+        for (i, p) in chunk.xyz.iter().enumerate() {
+            if let Some(value) = [p.x, p.y, p.z].into_iter().find(|c| !c.is_finite()) {
+                return Err(IoError::NonFinite {
+                    path: self.path.clone(),
+                    record: self.count + i as u64,
+                    value,
+                });
+            }
+        }
+        let sent = match &self.to_worker {
+            Some(tx) => tx.send(Msg::Points(chunk.xyz.clone())).is_ok(),
+            None => false,
+        };
+        if !sent {
+            return Err(self.worker_error());
+        }
+        self.count += chunk.len() as u64;
+        Ok(())
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<u64, IoError> {
+        if let Some(tx) = self.to_worker.take() {
+            // A failed send means the worker stopped: its join says why.
+            let _ = tx.send(Msg::Finish);
+        }
+        match self.worker.take().map(|w| w.join()) {
+            Some(Ok(Ok(()))) => {}
+            Some(Ok(Err(e))) => return Err(e),
+            _ => return Err(self.worker_error()),
+        }
+        if let Some(atomic) = self.atomic.take() {
+            atomic.commit()?;
+        }
+        Ok(self.count)
+    }
+}
+
+impl Drop for E57Writer {
+    fn drop(&mut self) {
+        // Hang up so the worker ends without finishing the file, which the
+        // AtomicFile then removes.
+        self.to_worker = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}

@@ -1,0 +1,364 @@
+//! One lattice job (`lattice.rs`): the growth of paper 2 (`grow.rs`) over
+//! the points of the job's view, with the lower levels' triangles there
+//! fixed (their open vertices FRINGE, in input-id order, then the still
+//! free points of the window as seeds, in input-id order), growing a
+//! little beyond the window and keeping the triangles whose three vertices
+//! lie in it.
+//!
+//! A pure function of the points in the view (positions, ids, planes,
+//! spacings, lists, thinning) and of the lower jobs' outputs there: every
+//! array is built in input-id order, lower triangles in job-key order, so
+//! a tile and the whole cloud run the same job to the same bytes.
+//!
+//! Orientation pieces are named by the input id of the point whose growth
+//! began them, so names mean the same in every tile. A job hands back its
+//! triangles wound in their piece root's frame, and the relations it found
+//! between the pieces it was given (and those its lower jobs recorded).
+
+use super::cloud::{Cloud, Csr, Neighbourhoods};
+use super::grow::Grower;
+use super::lattice::{JobKey, Lattice};
+use super::local::PointInfo;
+use super::orient::flipped;
+use super::params::ProjectionParams;
+use super::surface::{State, Surface, NONE};
+use crate::geom::Aabb;
+use crate::spatial::{GridIndex, IndexError};
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// What a job made.
+#[derive(Debug, Default)]
+pub struct JobOutput {
+    pub key: Option<JobKey>,
+    /// Triangles (tile-local indices), wound in their piece's frame.
+    pub tris: Vec<[u32; 3]>,
+    /// Index into `names` of each triangle's piece.
+    pub piece: Vec<u32>,
+    pub names: Vec<u64>,
+    /// `(a, b, parity)`: pieces `a` and `b` are wound oppositely when
+    /// `parity` is set.
+    pub relations: Vec<(u64, u64, bool)>,
+    pub processed: u64,
+}
+
+/// A tile's points as the jobs read them (tile-local indices).
+pub struct TileView<'a, H: Neighbourhoods> {
+    pub points: &'a [DVec3],
+    pub ids: &'a [u64],
+    pub info: &'a [PointInfo],
+    pub hoods: &'a H,
+    pub buckets: &'a Buckets,
+}
+
+/// Tile points by coarse cell, to find a view's points without a scan.
+pub struct Buckets {
+    size: f64,
+    order: Vec<u32>,
+    ranges: HashMap<[i64; 3], (u32, u32)>,
+}
+
+impl Buckets {
+    pub fn new(points: &[DVec3], size: f64) -> Self {
+        let key = |p: DVec3| [p.x, p.y, p.z].map(|c| (c / size).floor() as i64);
+        let mut keyed: Vec<([i64; 3], u32)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (key(*p), i as u32))
+            .collect();
+        keyed.sort_unstable();
+        let mut ranges = HashMap::new();
+        let mut start = 0;
+        while start < keyed.len() {
+            let mut end = start;
+            while end < keyed.len() && keyed[end].0 == keyed[start].0 {
+                end += 1;
+            }
+            ranges.insert(keyed[start].0, (start as u32, end as u32));
+            start = end;
+        }
+        Buckets {
+            size,
+            order: keyed.into_iter().map(|e| e.1).collect(),
+            ranges,
+        }
+    }
+
+    /// The points inside `b` (closed), in no particular order.
+    pub fn inside(&self, points: &[DVec3], b: &Aabb, out: &mut Vec<u32>) {
+        let lo = (b.min / self.size).floor();
+        let hi = (b.max / self.size).floor();
+        for x in lo.x as i64..=hi.x as i64 {
+            for y in lo.y as i64..=hi.y as i64 {
+                for z in lo.z as i64..=hi.z as i64 {
+                    let Some(&(s, e)) = self.ranges.get(&[x, y, z]) else {
+                        continue;
+                    };
+                    for &i in &self.order[s as usize..e as usize] {
+                        let p = points[i as usize];
+                        if p.cmpge(b.min).all() && p.cmple(b.max).all() {
+                            out.push(i);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A job's points, in input-id order, then the ghosts (far corners of
+/// lower triangles).
+#[derive(Default)]
+struct JobPoints {
+    tile: Vec<u32>,
+    points: Vec<DVec3>,
+    ids: Vec<u64>,
+    normals: Vec<DVec3>,
+    spacing: Vec<f64>,
+    centre: Vec<bool>,
+    joinable: Vec<bool>,
+    keep: Vec<bool>,
+    unused: Vec<bool>,
+}
+
+impl JobPoints {
+    /// A point; `grows`: in the job's growth box, `keep`: in its window.
+    fn push(
+        &mut self,
+        tile: u32,
+        p: DVec3,
+        id: u64,
+        info: Option<&PointInfo>,
+        grows: bool,
+        keep: bool,
+    ) {
+        self.tile.push(tile);
+        self.points.push(p);
+        self.ids.push(id);
+        self.normals.push(info.map_or(DVec3::ZERO, |i| i.normal));
+        self.spacing.push(info.map_or(0.0, |i| i.spacing));
+        self.centre.push(grows && info.is_some_and(|i| i.complete));
+        self.joinable.push(grows);
+        self.keep.push(keep);
+        self.unused
+            .push(info.is_some_and(|i| i.thinned || i.spacing == 0.0));
+    }
+}
+
+/// Tile index -> job index: a tile-sized map (`NONE` where absent) that
+/// each worker reuses, cleared after every job.
+pub struct ToLocal(Vec<u32>);
+
+impl ToLocal {
+    pub fn new(tile_points: usize) -> Self {
+        ToLocal(vec![NONE; tile_points])
+    }
+
+    fn get(&self, tile: u32) -> Option<u32> {
+        let l = self.0[tile as usize];
+        (l != NONE).then_some(l)
+    }
+}
+
+/// Names of pieces, densely numbered in order of appearance.
+#[derive(Default)]
+struct Names {
+    names: Vec<u64>,
+    dense: HashMap<u64, u32>,
+}
+
+impl Names {
+    fn get(&mut self, name: u64) -> u32 {
+        *self.dense.entry(name).or_insert_with(|| {
+            self.names.push(name);
+            self.names.len() as u32 - 1
+        })
+    }
+}
+
+/// Runs job `key`; `lower` gives the output of a lower job already run
+/// (`None`: it has no points).
+pub fn run_job<'a, H: Neighbourhoods>(
+    key: JobKey,
+    lat: &Lattice,
+    tile: &TileView<H>,
+    lower: &dyn Fn(JobKey) -> Option<&'a JobOutput>,
+    params: &ProjectionParams,
+    local: &mut ToLocal,
+) -> Result<JobOutput, IndexError> {
+    let view = lat.view_box(key);
+    let grow = lat.grow_box(key);
+    let mut members = Vec::new();
+    tile.buckets.inside(tile.points, &view, &mut members);
+    members.sort_unstable_by_key(|&i| tile.ids[i as usize]);
+    let mut jp = JobPoints::default();
+    for &i in &members {
+        let p = tile.points[i as usize];
+        let info = &tile.info[i as usize];
+        let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
+        jp.push(
+            i,
+            p,
+            tile.ids[i as usize],
+            Some(info),
+            grows,
+            lat.in_window(key, p),
+        );
+    }
+    for (l, &i) in members.iter().enumerate() {
+        local.0[i as usize] = l as u32;
+    }
+    let result = grow_job(key, lat, tile, lower, params, local, &members, jp);
+    for &i in &members {
+        local.0[i as usize] = NONE;
+    }
+    result
+}
+
+/// The job once its view's points are numbered.
+#[allow(clippy::too_many_arguments)]
+fn grow_job<'a, H: Neighbourhoods>(
+    key: JobKey,
+    lat: &Lattice,
+    tile: &TileView<H>,
+    lower: &dyn Fn(JobKey) -> Option<&'a JobOutput>,
+    params: &ProjectionParams,
+    local: &ToLocal,
+    members: &[u32],
+    mut jp: JobPoints,
+) -> Result<JobOutput, IndexError> {
+    let view = lat.view_box(key);
+    let n_view = members.len();
+    let hoods = remap_lists(members, tile.hoods, local);
+    // The lower jobs' triangles with a corner in the view.
+    let mut names = Names::default();
+    let mut ghosts: HashMap<u32, u32> = HashMap::new();
+    let mut given: Vec<([u32; 3], u32)> = Vec::new();
+    let mut relations: Vec<(u32, u32, bool)> = Vec::new();
+    for level in 0..key.level {
+        for k in lat.jobs_meeting(level, &view) {
+            let Some(out) = lower(k) else { continue };
+            for &(a, b, parity) in &out.relations {
+                relations.push((names.get(a), names.get(b), parity));
+            }
+            for (t, &piece) in out.tris.iter().zip(&out.piece) {
+                let l = t.map(|v| local.get(v));
+                if l.iter().all(Option::is_none) {
+                    continue;
+                }
+                let mut lt = [0u32; 3];
+                for c in 0..3 {
+                    lt[c] = match l[c] {
+                        Some(x) => x,
+                        None => *ghosts.entry(t[c]).or_insert_with(|| {
+                            let v = t[c] as usize;
+                            // Ghosts are never processed; their tie key
+                            // only has to differ from every input id.
+                            let id = u64::MAX - tile.ids[v];
+                            jp.push(t[c], tile.points[v], id, None, false, false);
+                            jp.points.len() as u32 - 1
+                        }),
+                    };
+                }
+                given.push((lt, names.get(out.names[piece as usize])));
+            }
+        }
+    }
+    let n_all = jp.points.len();
+    let mut hoods = hoods;
+    for _ in n_view..n_all {
+        hoods.ends.push(hoods.items.len() as u32);
+    }
+    let pieces = names.names.len() as u32;
+    let mut s = Surface::with_pieces(n_all, pieces);
+    for &(a, b, parity) in &relations {
+        s.pieces.union(a, b, parity);
+    }
+    for &(t, piece) in &given {
+        s.push(t, piece);
+    }
+    let fixed = s.tris.len();
+    let index = GridIndex::new(&jp.points, &jp.ids)?;
+    let cloud = Cloud {
+        points: &jp.points,
+        normals: &jp.normals,
+        spacing: &jp.spacing,
+        hoods: &hoods,
+        centre: &jp.centre,
+        joinable: &jp.joinable,
+        ids: &jp.ids,
+        index: &index,
+    };
+    let mut grower = Grower::new(params, n_all);
+    for i in 0..n_all {
+        s.state[i] = if i >= n_view {
+            State::Completed
+        } else if jp.unused[i] {
+            State::Unused
+        } else if !s.has_triangles(i as u32) {
+            State::Free
+        } else if s.is_closed(i as u32) {
+            State::Completed
+        } else {
+            State::Fringe
+        };
+        if s.state[i] == State::Fringe && jp.centre[i] {
+            grower.enqueue(i as u32);
+        }
+    }
+    // Seeds in the window only: a piece begun in the spill would be
+    // dropped with it.
+    let seeds: Vec<u32> = (0..n_view as u32)
+        .filter(|&i| jp.centre[i as usize] && jp.keep[i as usize])
+        .collect();
+    grower.grow(&cloud, &mut s, &seeds);
+    // Hand back the new triangles, each in its root's frame.
+    let name_of = |root: u32| -> u64 {
+        if root < pieces {
+            names.names[root as usize]
+        } else {
+            jp.ids[(root - pieces) as usize]
+        }
+    };
+    let mut out = JobOutput {
+        key: Some(key),
+        processed: grower.processed,
+        ..JobOutput::default()
+    };
+    let mut out_names = Names::default();
+    for tri in fixed..s.tris.len() {
+        let t = s.tris[tri];
+        if !t.iter().all(|&v| jp.keep[v as usize]) {
+            continue;
+        }
+        let (root, flip) = s.orientation(tri as u32);
+        let t = if flip { flipped(t) } else { t };
+        out.tris.push(t.map(|v| jp.tile[v as usize]));
+        out.piece.push(out_names.get(name_of(root)));
+    }
+    out.names = out_names.names;
+    for p in 0..pieces {
+        let (root, flip) = s.pieces.find(p);
+        if root != p {
+            out.relations
+                .push((names.names[p as usize], name_of(root), flip));
+        }
+    }
+    Ok(out)
+}
+
+/// The view points' lists in job indices; neighbours outside the view are
+/// dropped (only points near the view's edge have any, and they are never
+/// processed).
+fn remap_lists<H: Neighbourhoods>(members: &[u32], hoods: &H, local: &ToLocal) -> Csr {
+    let mut out = Csr::default();
+    for &i in members {
+        for &j in hoods.get(i) {
+            if let Some(l) = local.get(j) {
+                out.items.push(l);
+            }
+        }
+        out.ends.push(out.items.len() as u32);
+    }
+    out
+}
