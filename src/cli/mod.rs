@@ -52,7 +52,7 @@ struct Cli {
 enum Command {
     /// Format, point count, bounding box and spacing of a file or store.
     Info(cmd_info::InfoArgs),
-    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ, PCD).
+    /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ, PCD, E57).
     Convert(cmd_convert::ConvertArgs),
     /// Build a tiled point store (a directory) for repeated runs.
     Tile(cmd_tile::TileArgs),
