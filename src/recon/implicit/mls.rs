@@ -42,6 +42,9 @@ pub struct MlsValue {
     pub normal: DVec3,
     /// The nearest sample (index into the samples).
     pub nearest: u32,
+    /// Mean curvature of the fitted sphere, positive where the surface
+    /// bulges towards the normals' side (1 / radius; 0 for a plane).
+    pub curvature: f64,
 }
 
 /// The MLS value at `p` whatever its projection; `Ok(None)` when nothing
@@ -65,11 +68,12 @@ pub fn mls_value(
         let i = m.index as usize;
         fit.add(w, s.points[i] - p, s.normals[i]);
     }
-    let (f, normal) = fit.distance_at_origin();
+    let (f, normal, curvature) = fit.distance_at_origin();
     Ok(Some(MlsValue {
         f,
         normal,
         nearest: first.index,
+        curvature,
     }))
 }
 
@@ -101,8 +105,8 @@ impl SphereFit {
     }
 
     /// The fitted sphere's signed distance at the origin (positive on the
-    /// normals' side) and its gradient there.
-    fn distance_at_origin(&self) -> (f64, DVec3) {
+    /// normals' side), its gradient there and the sphere's mean curvature.
+    fn distance_at_origin(&self) -> (f64, DVec3, f64) {
         let (p, n) = (self.p / self.w, self.n / self.w);
         let (pn, pp) = (self.pn / self.w, self.pp / self.w);
         let spread = pp - p.dot(p);
@@ -123,9 +127,9 @@ impl SphereFit {
             ul.length()
         };
         if norm > 0.0 {
-            (uc / norm, ul)
+            (uc / norm, ul, 2.0 * uq / norm)
         } else {
-            (0.0, n)
+            (0.0, n, 0.0)
         }
     }
 }
@@ -275,6 +279,39 @@ mod tests {
         // The spacing is about 0.056; the noise 0.01 either way. Curvature
         // bias of a two-spacing width is about h^2 / 2 ~ 0.004.
         assert!(worst < 0.005, "worst radial error {worst}");
+    }
+
+    #[test]
+    fn the_fitted_curvature_is_the_spheres_with_its_sign() {
+        let (points, normals, ids) = noisy_sphere(4000, 0.0);
+        let index = GridIndex::with_cell(&points, &ids, 0.1).expect("index");
+        let s = Samples {
+            points: &points,
+            normals: &normals,
+            index: &index,
+        };
+        let tile = open_tile();
+        let at = |p| {
+            mls_value(&s, &tile, p, &mut Vec::new())
+                .expect("loaded")
+                .expect("value")
+        };
+        let outward = at(DVec3::new(0.3, 0.5, 0.81).normalize());
+        assert!((outward.curvature - 1.0).abs() < 0.02, "{outward:?}");
+        // The same samples with the normals flipped: a concave surface.
+        let inward: Vec<DVec3> = normals.iter().map(|n| -*n).collect();
+        let s = Samples {
+            normals: &inward,
+            ..s
+        };
+        let v = mls_value(
+            &s,
+            &tile,
+            DVec3::new(0.3, 0.5, 0.81).normalize(),
+            &mut Vec::new(),
+        );
+        let v = v.expect("loaded").expect("value");
+        assert!((v.curvature + 1.0).abs() < 0.02, "{v:?}");
     }
 
     #[test]

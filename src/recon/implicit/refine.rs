@@ -8,12 +8,16 @@
 //! error shrinks only with the cell; with the root it is the field's own
 //! error at any cell, so a finer cell only adds triangles.
 //!
+//! The root is then moved off the zero set by a share of the chord error
+//! ([`chord_offset`]), so the flat triangles' mean sits on the surface
+//! rather than inside every convex part.
+//!
 //! Each distinct edge is refined once per tile, from its key and its two
 //! corner values alone, so every tile that meets the edge gets the same
 //! bits.
 
 use super::lattice::{edge_from_key, Lattice};
-use super::mls::edge_root;
+use super::mls::{edge_root, mls_value};
 use super::polygonize::CubeVertex;
 use super::sdf::Samples;
 use crate::pipeline::KernelError;
@@ -54,7 +58,10 @@ pub fn refine_vertices(
             // The formula of marching cubes' own placement.
             let mut pos = p0;
             pos[a] = p0[a] + t * (p1[a] - p0[a]);
-            Ok(Ok(pos))
+            match chord_offset(lattice.cell, s, tile, pos, nbr) {
+                Ok(offset) => Ok(Ok(pos + offset)),
+                Err(short) => Ok(Err(short)),
+            }
         })
         .collect::<Result<_, _>>()?;
     let short = moved
@@ -72,6 +79,42 @@ pub fn refine_vertices(
         }
     }
     Ok(Ok(()))
+}
+
+/// Share of `cell^2 * curvature` a vertex is moved off the zero set along
+/// the field's normal, towards the side the surface bulges to. 1M noisy
+/// dragon, mean distance to the true surface in spacings (both ways), cell
+/// 3 spacings, open: 0.061 without the offset, 0.059 at 0.04, 0.058 at
+/// 0.08, 0.057 at 0.12, 0.057 at 0.18, 0.059 at 0.25; `--closed`: 0.064
+/// without, 0.060 at 0.12 (still watertight, one piece). A flat triangle
+/// with its corners on a sphere of radius R lies inside it by L^2 / 8R on
+/// average (edge L); marching cubes' edges average about the cell, so
+/// about 1/8 shifts the facets' mean onto the surface.
+pub const CHORD_OFFSET: f64 = 0.12;
+
+/// The offset that moves the piecewise-linear mesh's mean onto the curved
+/// field (the chord error's bias), from the fitted sphere's curvature at
+/// `pos`, capped at a tenth of the cell so a vertex stays near its edge
+/// (marching cubes' topology and orientation hold).
+///
+/// Deviation from paper 1 section 2.6 (vertices on the zero set): an
+/// interpolating mesh is biased towards the inside of every convex part by
+/// the chord error; the offset halves the gap to the finer cell's accuracy
+/// at no extra lattice (1M dragon, open: 0.061 -> 0.057 spacings at 3
+/// spacings; 0.0534 -> 0.0530 at 1.5, where the cell^2 makes it small, so
+/// a finer cell stays more accurate).
+fn chord_offset(
+    cell: f64,
+    s: &Samples,
+    tile: &TilePoints,
+    pos: DVec3,
+    nbr: &mut Vec<crate::spatial::Neighbour>,
+) -> Result<DVec3, f64> {
+    let Some(v) = mls_value(s, tile, pos, nbr)? else {
+        return Ok(DVec3::ZERO);
+    };
+    let shift = (CHORD_OFFSET * cell * cell * v.curvature).clamp(-0.1 * cell, 0.1 * cell);
+    Ok(shift * v.normal.normalize_or_zero())
 }
 
 /// The defined value at corner `c`.
