@@ -10,7 +10,8 @@
 
 use super::Command;
 use anyhow::{anyhow, bail, Context, Result};
-use scanmesh::store::{Checkpoints, Job};
+use scanmesh::io::atomic::AtomicFile;
+use scanmesh::store::{checkpoint, Checkpoints, Job};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -205,7 +206,7 @@ fn sampled_hash(path: &Path, len: u64) -> Result<u64> {
     let mut offsets = vec![(0, 65_536)];
     offsets.extend((1..=16).map(|i| (len / 17 * i, 4096)));
     offsets.push((len.saturating_sub(65_536), 65_536));
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut h = checkpoint::FNV_SEED;
     let mut buf = Vec::new();
     for (at, n) in offsets {
         buf.clear();
@@ -382,15 +383,13 @@ fn difference(old: &RunIdentity, new: &RunIdentity) -> String {
     )
 }
 
+/// Writes `bytes` to `path` whole or not at all.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_data()?;
-        std::fs::rename(&tmp, path)
-    };
-    write().with_context(|| format!("writing {}", path.display()))
+    let mut file = AtomicFile::create(path)?;
+    file.file()
+        .write_all(bytes)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(file.commit()?)
 }
 
 #[cfg(test)]

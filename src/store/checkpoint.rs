@@ -11,6 +11,7 @@
 //! damaged on disk is found, removed and its tile recomputed.
 
 use super::StoreError;
+use crate::io::atomic::AtomicFile;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
@@ -138,20 +139,18 @@ impl Checkpoints {
         let dir = self.stage_dir(stage);
         std::fs::create_dir_all(&dir).map_err(|e| StoreError::os(&dir, e))?;
         let path = self.tile_path(stage, tile);
-        let tmp = dir.join(format!("{tile:07}.tmp-{}", std::process::id()));
-        let write = || -> std::io::Result<()> {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(MAGIC)?;
-            f.write_all(&(payload.len() as u64).to_le_bytes())?;
-            f.write_all(&fnv1a(payload).to_le_bytes())?;
-            f.write_all(payload)?;
-            f.sync_data()?;
-            std::fs::rename(&tmp, &path)
+        let mut file = AtomicFile::create(&path)?;
+        let header = [
+            *MAGIC,
+            (payload.len() as u64).to_le_bytes(),
+            fnv1a(FNV_SEED, payload).to_le_bytes(),
+        ];
+        let write = |f: &mut std::fs::File| -> std::io::Result<()> {
+            header.iter().try_for_each(|h| f.write_all(h))?;
+            f.write_all(payload)
         };
-        write().map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            StoreError::os(&path, e)
-        })
+        write(file.file()).map_err(|e| StoreError::os(&path, e))?;
+        Ok(file.commit()?)
     }
 
     /// How many of `n` tiles of `stage` have a saved result.
@@ -170,7 +169,8 @@ impl Checkpoints {
                 continue;
             };
             for f in files.flatten() {
-                if f.file_name().to_string_lossy().contains(".tmp-") {
+                // Anything but a whole tile is a killed writer's temporary.
+                if !f.file_name().to_string_lossy().ends_with(".tile") {
                     remove(&f.path())?;
                     removed += 1;
                 }
@@ -196,15 +196,19 @@ fn payload(bytes: &[u8]) -> Option<&[u8]> {
     let len = u64::from_le_bytes(bytes[8..16].try_into().ok()?);
     let sum = u64::from_le_bytes(bytes[16..24].try_into().ok()?);
     let body = &bytes[HEADER..];
-    (body.len() as u64 == len && fnv1a(body) == sum).then_some(body)
+    (body.len() as u64 == len && fnv1a(FNV_SEED, body) == sum).then_some(body)
 }
 
-/// FNV-1a, 64 bits: a checksum against torn and damaged files, not an
-/// adversary (a run directory is the user's own).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
+/// The FNV-1a offset basis: the hash of no bytes.
+pub const FNV_SEED: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// FNV-1a, 64 bits, continuing from `h` (start at [`FNV_SEED`]): a
+/// checksum against torn and damaged files, not an adversary (a run
+/// directory is the user's own).
+pub fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+    bytes
+        .iter()
+        .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
 }
 
 #[cfg(test)]
