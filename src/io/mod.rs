@@ -13,6 +13,7 @@ pub mod e57;
 pub mod error;
 pub mod inspect;
 pub mod las;
+mod las_extra;
 pub mod memory;
 pub mod obj;
 pub mod open;
