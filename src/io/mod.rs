@@ -68,8 +68,8 @@ impl Format {
             | Format::Las
             | Format::Laz
             | Format::Pcd => AttributeSet::all(),
-            // The E57 writer writes one scan of positions.
-            Format::E57 | Format::Xyz => AttributeSet::EMPTY,
+            Format::E57 => AttributeSet::of(&[Attribute::Intensity, Attribute::Rgb]),
+            Format::Xyz => AttributeSet::EMPTY,
         }
     }
 }
