@@ -38,6 +38,11 @@ struct Args {
     tolerance: f64,
     #[arg(long)]
     json: bool,
+    /// Also print where the missed length lies: missed true length by its
+    /// distance to the end of its true segment and to the nearest line
+    /// found, and the unmatched found length by its distance to the truth.
+    #[arg(long)]
+    breakdown: bool,
 }
 
 fn main() -> Result<()> {
@@ -82,7 +87,42 @@ fn main() -> Result<()> {
             );
         }
     }
+    if a.breakdown {
+        print_breakdown(&found, &truth, tol, sp);
+    }
     Ok(())
+}
+
+fn print_breakdown(found: &LineGraph, truth: &LineGraph, tol: f64, sp: f64) {
+    use scanmesh::features::score::{kind_segments, misses, Misses, END_BUCKETS};
+    use scanmesh::synth::LineKind;
+    let step = tol / 4.0;
+    let len = |m: &Misses, e: usize, n: usize| m.counts[e][n] as f64 * step / sp;
+    for (name, kind, other) in [
+        ("ridge", LineKind::Ridge, LineKind::Valley),
+        ("valley", LineKind::Valley, LineKind::Ridge),
+    ] {
+        let (t, f) = (kind_segments(truth, kind), kind_segments(found, kind));
+        let (tw, fw) = (kind_segments(truth, other), kind_segments(found, other));
+        for (side, m) in [
+            ("missed true", misses(&t, &f, &fw, tol, step)),
+            ("unmatched found", misses(&f, &t, &tw, tol, step)),
+        ] {
+            let total = m.samples as f64 * step / sp;
+            println!(
+                "{name} {side} length (sp; of {total:.1}), rows: distance to own segment end < {END_BUCKETS:?} tol / beyond; columns: nearest other side <= 2, <= 4, > 4 tol; {:.1} sp within tol of the other kind",
+                m.other_kind as f64 * step / sp
+            );
+            for e in 0..5 {
+                println!(
+                    "  {:>6.1} {:>6.1} {:>6.1}",
+                    len(&m, e, 0),
+                    len(&m, e, 1),
+                    len(&m, e, 2)
+                );
+            }
+        }
+    }
 }
 
 /// Exact mean nearest-neighbour distance of a point file.

@@ -67,6 +67,12 @@ struct Thresholds {
     /// Relaxation passes (paper: 1-2).
     #[arg(long)]
     relax: Option<usize>,
+    /// Across-line refinement of the line vertices: radius (d; 0 = off, the paper's growth points as they are).
+    #[arg(long)]
+    refine: Option<f64>,
+    /// Across-line refinement: width of the strip around the line (d).
+    #[arg(long)]
+    refine_width: Option<f64>,
     /// Side of the cells polylines grow in (d).
     #[arg(long)]
     cell: Option<f64>,
@@ -89,6 +95,8 @@ impl FeaturesArgs {
             cone_length: t.cone_length.unwrap_or(d.cone_length),
             cone_angle: t.cone_angle.map_or(d.cone_angle, f64::to_radians),
             relax_passes: t.relax.unwrap_or(d.relax_passes),
+            refine: t.refine.unwrap_or(d.refine),
+            refine_width: t.refine_width.unwrap_or(d.refine_width),
             cell: t.cell.unwrap_or(d.cell),
             ..d
         };

@@ -105,7 +105,7 @@ pub fn extract_lines(
         length: resolved.cone_length,
         half_angle: resolved.cone_angle,
     };
-    let mut graph = repair(&polylines, &corner_points, cone);
+    let mut graph = repair(&polylines, &corner_points, cone, resolved.gamma_max);
     graph.relax(resolved.relax_passes);
     let report = FeaturesReport {
         points: store.len(),

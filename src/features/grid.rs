@@ -92,9 +92,38 @@ impl<'a> BallGrid<'a> {
         // Cells each way that a ball of `radius` can reach (a far larger
         // radius than the cell is the caller's mistake, and is capped).
         let span = (radius * self.inv).ceil().clamp(1.0, 8.0) as i64;
+        // Cells whose box lies beyond the radius are skipped (a third of
+        // the 27 for a radius of one cell): exact, they hold no answer.
+        // Not near the clamp, where a key no longer stands for its box.
+        let exact = c.iter().all(|v| v.abs() < CLAMP - 2 * span - 2);
+        let f = [q.x, q.y, q.z].map(|v| v * self.inv);
+        let gap = |a: usize, d: i64| -> f64 {
+            let frac = f[a] - c[a] as f64;
+            match d {
+                0 => 0.0,
+                d if d > 0 => (d as f64 - frac).max(0.0),
+                d => (frac - d as f64 - 1.0).max(0.0),
+            }
+        };
+        let rr = if exact {
+            (radius * self.inv).powi(2) * (1.0 + 1e-9) + 1e-12
+        } else {
+            f64::INFINITY
+        };
         for dz in -span..=span {
+            let gz = gap(2, dz).powi(2);
+            if gz > rr {
+                continue;
+            }
             for dy in -span..=span {
+                let gyz = gz + gap(1, dy).powi(2);
+                if gyz > rr {
+                    continue;
+                }
                 for dx in -span..=span {
+                    if gyz + gap(0, dx).powi(2) > rr {
+                        continue;
+                    }
                     let key = pack([c[0] + dx, c[1] + dy, c[2] + dz]);
                     let Some(&(s, e)) = self.cells.get(&key) else {
                         continue;
@@ -135,9 +164,12 @@ impl<'a> BallGrid<'a> {
 /// +-2^20 cells from the origin, which stays exact because every candidate
 /// is still tested by distance).
 fn cell_of(p: DVec3, inv: f64) -> [i64; 3] {
-    const LIM: f64 = (1 << 20) as f64;
+    const LIM: f64 = CLAMP as f64;
     [p.x, p.y, p.z].map(|c| (c * inv).floor().clamp(-LIM, LIM) as i64)
 }
+
+/// Cell coordinates are clamped to +-`CLAMP` (see [`cell_of`]).
+const CLAMP: i64 = 1 << 20;
 
 fn pack(c: [i64; 3]) -> u64 {
     let f = |v: i64| ((v + (1 << 21)) as u64) & ((1 << 22) - 1);

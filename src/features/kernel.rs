@@ -158,7 +158,7 @@ impl TileKernel for FeaturesKernel {
                         .push((*s, entries.ids[e], prio));
                 }
             }
-            out.cells.extend(grow_cells(groups, kind, p.gamma_max));
+            out.cells.extend(grow_cells(groups, kind, p));
             entries.count(kind, &smoothed, &owned, &mut out.counts);
             for (c, &src) in corners.source.iter().enumerate() {
                 if owned(src as usize) {
@@ -427,7 +427,7 @@ type CellPoints = Vec<(DVec3, u64, f64)>;
 fn grow_cells(
     groups: BTreeMap<[i64; 3], CellPoints>,
     kind: LineKind,
-    gamma: f64,
+    p: &Resolved,
 ) -> Vec<CellLines> {
     let groups: Vec<([i64; 3], CellPoints)> = groups.into_iter().collect();
     groups
@@ -439,7 +439,7 @@ fn grow_cells(
             CellLines {
                 key,
                 kind,
-                lines: grow_polylines(&pos, &ids, &prio, gamma),
+                lines: grow_polylines(&pos, &ids, &prio, p.gamma_max, (p.refine, p.refine_width)),
             }
         })
         .collect()

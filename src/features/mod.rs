@@ -26,6 +26,7 @@ pub mod order;
 pub mod params;
 pub mod polyline;
 pub mod quadric;
+pub mod refine;
 pub mod repair;
 pub mod score;
 pub mod seams;

@@ -39,6 +39,12 @@ pub struct FeatureParams {
     pub cone_angle: f64,
     /// Relaxation passes (paper: 1-2).
     pub relax_passes: usize,
+    /// Across-line refinement of the polyline vertices (`refine.rs`):
+    /// radius (0: off) and width, in `d`. 10 d measured best of 5, 7.5,
+    /// 10 (100k points, seed 1, noise 0.1 sp, ridge recall: stepped block
+    /// 94.2 / 94.5 / 95.4 %, wavy sheet 93.6 / 93.3 / 93.3 %).
+    pub refine: f64,
+    pub refine_width: f64,
     /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
     pub cell: f64,
 }
@@ -61,6 +67,8 @@ impl Default for FeatureParams {
             cone_length: 3.0,
             cone_angle: PI / 6.0,
             relax_passes: 2,
+            refine: 10.0,
+            refine_width: 2.5,
             // 16 d: the tiles' margin holds a cell beyond the core, and
             // 32 d made the margin (75 d) four times a 256 MiB plan's
             // tile at 10M points; the synthetic figures are the same at
@@ -87,6 +95,8 @@ pub struct Resolved {
     pub cone_length: f64,
     pub cone_angle: f64,
     pub relax_passes: usize,
+    pub refine: f64,
+    pub refine_width: f64,
     pub cell: f64,
     /// The curvature neighbourhood, to recompute a feature point's quadric.
     pub hood: CurvatureHood,
@@ -129,11 +139,18 @@ impl FeatureParams {
             ("cone length", self.cone_length),
             ("cone angle", self.cone_angle),
             ("cell", self.cell),
+            ("refine width", self.refine_width),
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
                 return Err(bad(format!("{name} must be positive and finite, not {v}")));
             }
+        }
+        if !(self.refine.is_finite() && self.refine >= 0.0) {
+            return Err(bad(format!(
+                "refine radius must be finite and >= 0, not {}",
+                self.refine
+            )));
         }
         if let Some(a) = self.alpha {
             if !(a.is_finite() && a >= 0.0) {
@@ -179,6 +196,8 @@ impl FeatureParams {
             cone_length: self.cone_length * self.gamma_max * d,
             cone_angle: self.cone_angle,
             relax_passes: self.relax_passes,
+            refine: self.refine * d,
+            refine_width: self.refine_width * d,
             cell: self.cell * d,
             hood: meta.resolved,
             spacing: d,

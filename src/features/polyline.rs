@@ -14,18 +14,22 @@
 //! longer keeps growth away from corners, which is its purpose.
 
 use super::grid::BallGrid;
+use super::refine::refine_lines;
 use super::smooth::elongation;
 use crate::spatial::Neighbour;
 use glam::DVec3;
 
 /// Grows the polylines through `points` (tie keys `ids`) with radius
 /// `gamma`, seeds ordered by `priority` (higher first; ties by id).
-/// Returns each polyline's vertices, in growth order from one end.
+/// Returns each polyline's vertices, in growth order from one end, each
+/// vertex refined across the line (`refine.rs`; `refine.0` the radius,
+/// 0 for none, `refine.1` the width).
 pub fn grow_polylines(
     points: &[DVec3],
     ids: &[u64],
     priority: &[f64],
     gamma: f64,
+    refine: (f64, f64),
 ) -> Vec<Vec<DVec3>> {
     let Some(grid) = BallGrid::new(points, ids, gamma) else {
         return Vec::new();
@@ -63,6 +67,7 @@ pub fn grow_polylines(
             lines.push(back);
         }
     }
+    refine_lines(&mut lines, &grid, refine.0, refine.1);
     lines
 }
 
@@ -154,7 +159,7 @@ mod tests {
             .collect();
         let ids: Vec<u64> = (0..400).collect();
         let prio = vec![0.0; 400];
-        let lines = grow_polylines(&pts, &ids, &prio, 0.1);
+        let lines = grow_polylines(&pts, &ids, &prio, 0.1, (0.0, 0.0));
         assert_eq!(lines.len(), 1, "{} lines", lines.len());
         let l = &lines[0];
         let xs: Vec<f64> = l.iter().map(|p| p.x).collect();

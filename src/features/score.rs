@@ -65,6 +65,73 @@ fn covered(lines: &[(DVec3, DVec3)], other: &[(DVec3, DVec3)], tol: f64, step: f
     (all > 0).then(|| near as f64 / all as f64)
 }
 
+/// Where the missed length of one side lies: `counts[e][n]` counts the
+/// samples (each `step` long) not within `tol` of the other side, by their
+/// distance to the nearest end of their own segment (`e`: below 1, 2, 4, 8
+/// tolerances, beyond) and to the nearest segment of the other side (`n`:
+/// below 2, 4 tolerances, beyond); `other_kind` counts the missed samples
+/// within `tol` of a line of the other kind.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Misses {
+    pub counts: [[u64; 3]; 5],
+    pub other_kind: u64,
+    pub samples: u64,
+}
+
+/// The end-distance bucket bounds of [`Misses`], in tolerances.
+pub const END_BUCKETS: [f64; 4] = [1.0, 2.0, 4.0, 8.0];
+
+/// [`Misses`] of `lines` against `other` (same kind) and `wrong` (the
+/// other kind), sampled as [`score`] does.
+pub fn misses(
+    lines: &[(DVec3, DVec3)],
+    other: &[(DVec3, DVec3)],
+    wrong: &[(DVec3, DVec3)],
+    tol: f64,
+    step: f64,
+) -> Misses {
+    let near = SegmentGrid::new(other, 4.0 * tol);
+    let wrong = SegmentGrid::new(wrong, tol);
+    let mut m = Misses::default();
+    for &(a, b) in lines {
+        let len = a.distance(b);
+        let n = (len / step).ceil().max(1.0) as usize;
+        for k in 0..n {
+            let t = (k as f64 + 0.5) / n as f64;
+            let p = a + (b - a) * t;
+            m.samples += 1;
+            let d = near.nearest(p).unwrap_or(f64::INFINITY);
+            if d <= tol {
+                continue;
+            }
+            let to_end = len * t.min(1.0 - t);
+            let e = END_BUCKETS
+                .iter()
+                .position(|b| to_end < b * tol)
+                .unwrap_or(END_BUCKETS.len());
+            let nb = if d <= 2.0 * tol {
+                0
+            } else if d <= 4.0 * tol {
+                1
+            } else {
+                2
+            };
+            m.counts[e][nb] += 1;
+            m.other_kind += u64::from(wrong.within(p, tol));
+        }
+    }
+    m
+}
+
+/// Segments of `kind` in `g`.
+pub fn kind_segments(g: &LineGraph, kind: LineKind) -> Vec<(DVec3, DVec3)> {
+    g.edges
+        .iter()
+        .filter(|e| e.2 == kind)
+        .map(|e| (g.vertices[e.0 as usize], g.vertices[e.1 as usize]))
+        .collect()
+}
+
 /// Segments bucketed into cubic cells of side `tol` by their bounds grown
 /// by `tol`, so a point's own cell lists every segment within `tol`.
 struct SegmentGrid<'a> {
@@ -89,6 +156,20 @@ impl<'a> SegmentGrid<'a> {
             }
         }
         SegmentGrid { segs, cell, cells }
+    }
+
+    /// Distance from `p` to the nearest segment if it is within the
+    /// grid's cell, else `None`.
+    fn nearest(&self, p: DVec3) -> Option<f64> {
+        let key = [p.x, p.y, p.z].map(|c| (c / self.cell).floor() as i64);
+        let list = self.cells.get(&key)?;
+        list.iter()
+            .map(|&i| {
+                let (a, b) = self.segs[i as usize];
+                segment_distance(p, a, b)
+            })
+            .filter(|d| *d <= self.cell)
+            .min_by(f64::total_cmp)
     }
 
     fn within(&self, p: DVec3, tol: f64) -> bool {
