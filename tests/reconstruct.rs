@@ -269,8 +269,9 @@ fn normals_made_with_other_parameters_are_recomputed() {
 
 /// The embedded dragon's sample leaves holes in `--closed` where its
 /// mis-oriented normals draw the zero set out of the band; their
-/// least-area patches used to cut through the mesh beside them (the demo:
-/// 176 self-intersecting pairs). Patches must avoid the mesh.
+/// least-area patches used to cut through the mesh beside them (this
+/// sample: 10 self-intersecting pairs without `hole_guard`). Patches must
+/// avoid the mesh.
 #[test]
 fn closed_dragon_patches_do_not_cross_the_mesh() {
     let (scan, _, _) = scanmesh::demo::dragon_scan(60_000, 0.1, 1).expect("dragon");
