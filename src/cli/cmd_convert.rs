@@ -11,7 +11,8 @@ pub struct ConvertArgs {
     /// Input point file.
     input: PathBuf,
     /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz, .pcd,
-    /// .e57: one scan, positions only).
+    /// .e57: one scan). Intensity, colour, classification, return number and GPS time
+    /// are carried where the output format holds them.
     output: PathBuf,
     #[command(flatten)]
     pub common: super::CommonArgs,
@@ -23,10 +24,18 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let stats = convert(&a.input, &a.output, s.read_options(), progress.as_ref())?;
+    if !stats.dropped.is_empty() && !s.quiet {
+        eprintln!(
+            "note: {} cannot hold the input's {}: not written",
+            a.output.display(),
+            stats.dropped.describe()
+        );
+    }
     super::report::summary(format!(
-        "convert: {} points ({} skipped) in {:.2} s, peak {} -> {}",
+        "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
         stats.points,
         stats.skipped,
+        stats.carried.describe(),
         t0.elapsed().as_secs_f64(),
         super::peak(),
         a.output.display()

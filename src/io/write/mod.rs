@@ -9,7 +9,7 @@ mod xyz;
 
 pub use las::choose_las_transform;
 
-use super::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
+use super::{AtomicFile, Attributes, Format, IoError, PointChunk, PointWriter, WriterSpec};
 use glam::Vec3;
 use std::fs::File;
 use std::io::BufWriter;
@@ -28,6 +28,13 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
             reason: "gzip output is not supported; compress the finished file".into(),
         });
     }
+    let unheld = spec.attributes.without(spec.format.attributes());
+    if !unheld.is_empty() {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!("this format cannot hold {}", unheld.describe()),
+        });
+    }
     Ok(match spec.format {
         Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd => {
             Box::new(ply::PlyWriter::create(path, spec)?)
@@ -37,7 +44,7 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
             let compressed = spec.format == Format::Laz || name.ends_with(".laz");
             Box::new(las::LasWriter::create(path, spec, compressed)?)
         }
-        Format::E57 => Box::new(super::e57::E57Writer::create(path)?),
+        Format::E57 => Box::new(super::e57::E57Writer::create(path, spec)?),
     })
 }
 
@@ -54,14 +61,18 @@ fn open_output(path: &Path) -> Result<(AtomicFile, BufWriter<File>), IoError> {
 
 /// What a chunk carries for the spec: normals and flags, each present
 /// exactly when the spec asks for it.
-struct Checked<'a> {
+pub(crate) struct Checked<'a> {
     normals: Option<&'a [Vec3]>,
     flags: Option<&'a [u8]>,
+    /// The chunk's attributes, when the spec asks for some (the spec's
+    /// set says which to write).
+    attrs: Option<&'a Attributes>,
+    set: super::AttributeSet,
 }
 
 /// Checks `chunk` against `spec`; `written` is the number of points already
 /// written, so errors name the output record.
-fn check_chunk<'a>(
+pub(crate) fn check_chunk<'a>(
     path: &Path,
     spec: &WriterSpec,
     chunk: &'a PointChunk,
@@ -83,6 +94,19 @@ fn check_chunk<'a>(
         (true, Some(f)) if f.len() == n => Some(f),
         (true, _) => return Err(misuse(format!("writer needs {n} flags for this chunk"))),
     };
+    let attrs = match spec.attributes.is_empty() {
+        true => None,
+        false => Some(&chunk.attrs),
+    };
+    for a in spec.attributes.iter() {
+        if chunk.attrs.len_of(a) != n {
+            return Err(misuse(format!(
+                "writer needs {n} {} values for this chunk, it has {}",
+                a.name(),
+                chunk.attrs.len_of(a)
+            )));
+        }
+    }
     for (i, p) in chunk.xyz.iter().enumerate() {
         if let Some(value) = [p.x, p.y, p.z].into_iter().find(|c| !c.is_finite()) {
             return Err(IoError::NonFinite {
@@ -92,5 +116,10 @@ fn check_chunk<'a>(
             });
         }
     }
-    Ok(Checked { normals, flags })
+    Ok(Checked {
+        normals,
+        flags,
+        attrs,
+        set: spec.attributes,
+    })
 }
