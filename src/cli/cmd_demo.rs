@@ -13,6 +13,7 @@ use scanmesh::mesh::{quality, Mesh, MeshFormat};
 use scanmesh::normals::evaluate::{accuracy, normals_in_input_order};
 use scanmesh::recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
 use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams};
+use scanmesh::render::scene::{Scene, Style};
 use scanmesh::store::{build::scratch_store_dir, build_store};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -22,6 +23,10 @@ pub struct DemoArgs {
     /// Where to write the mesh.
     #[arg(short, long, default_value = "scanmesh-demo.ply")]
     output: PathBuf,
+    /// Where to write a picture of the mesh (PNG, the project's own
+    /// renderer).
+    #[arg(long, default_value = "scanmesh-demo.png")]
+    picture: PathBuf,
     /// Points to sample from the embedded dragon.
     #[arg(short, default_value_t = 200_000)]
     n: usize,
@@ -113,17 +118,20 @@ pub fn run(a: DemoArgs) -> Result<()> {
         println!("{}", quality(&mesh));
         println!("{}", angle_report(&mesh));
         println!("{}", self_intersections(&mesh));
+        picture(&mesh, &a.picture)?;
         let truth = Mesh::new(dragon.vertices.clone(), dragon.faces.clone());
         let d = compare(&mesh, Reference::Mesh(&truth));
-        // One unit throughout: the sample's spacing (`eval`'s own report
-        // uses the reference's, a different number for the same distance).
+        // One unit throughout: sp, the sample's mean nearest-neighbour
+        // distance (`eval`'s own report uses the reference's, a different
+        // number for the same distance).
         if let (Some(there), Some(back), Some(h)) = (
             d.mesh_to_reference.absolute,
             d.reference_to_mesh.absolute,
             d.hausdorff,
         ) {
             println!(
-                "demo: distance to the dragon in sample spacings ({spacing:.3e}): mesh to dragon mean {:.3}, dragon to mesh mean {:.3}, Hausdorff {:.3}",
+                "demo: distance to the dragon in sp (the sample's mean nearest-neighbour distance, {spacing:.3e}): mean {:.3} sp (mesh to dragon {:.3}, dragon to mesh {:.3}), Hausdorff {:.2} sp",
+                0.5 * (there.mean + back.mean) / spacing,
                 there.mean / spacing,
                 back.mean / spacing,
                 h / spacing
@@ -133,4 +141,27 @@ pub fn run(a: DemoArgs) -> Result<()> {
     })();
     let _ = std::fs::remove_dir_all(&dir);
     result
+}
+
+/// Draws `mesh` seen from the front (the dragon's +z side, y up) into a
+/// PNG at `path`.
+fn picture(mesh: &Mesh, path: &std::path::Path) -> Result<()> {
+    let scene = Scene {
+        mesh: Some((mesh.vertices.clone(), mesh.triangles.clone())),
+        ..Scene::default()
+    };
+    let style = Style {
+        width: 1200,
+        height: 900,
+        forward: glam::DVec3::new(0.0, 0.0, -1.0),
+        up: glam::DVec3::Y,
+        point_radius: 1.0,
+        line_width: 2.0,
+    };
+    let canvas = scene
+        .draw(&style)
+        .ok_or_else(|| anyhow::anyhow!("the demo mesh has nothing to draw"))?;
+    canvas.write_png(path)?;
+    println!("demo: picture of the mesh -> {}", path.display());
+    Ok(())
 }

@@ -24,6 +24,7 @@
 //! vertices is incomplete (a later tile may name it, [`super::owners`]) or
 //! both are on the boundary.
 
+use super::hole_guard::{placed, NearHoles, MAX_TRIES};
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 
@@ -56,6 +57,8 @@ pub struct BoundaryEdges {
     edges_near_holes: HashMap<(u32, u32), [u32; 2]>,
     /// The vertices of `settled`.
     settled_vertices: HashSet<u32>,
+    /// Mesh triangles near the boundary, which patches must not cross.
+    near: NearHoles,
 }
 
 /// What [`BoundaryEdges::fill`] did.
@@ -63,7 +66,7 @@ pub struct BoundaryEdges {
 pub struct HoleReport {
     pub filled: u64,
     /// Loops longer than [`MAX_FILLED_LOOP`], passing a vertex twice, or
-    /// whose every patch would repeat a mesh edge.
+    /// whose every patch would repeat a mesh edge or cross the mesh.
     pub left_open: u64,
 }
 
@@ -72,6 +75,7 @@ impl BoundaryEdges {
     /// comes once in each direction).
     pub fn add_tile(&mut self, triangles: &[StitchedTriangle]) {
         let mut local: HashMap<(u32, u32), [DVec3; 2]> = HashMap::new();
+        let mut now_waiting = Vec::new();
         for t in triangles {
             for i in 0..3 {
                 let j = (i + 1) % 3;
@@ -81,12 +85,24 @@ impl BoundaryEdges {
                 } else {
                     &mut local
                 };
+                let seam = t.on_seam[i] && t.on_seam[j];
                 if map.remove(&(b.0, a.0)).is_none() {
                     map.insert((a.0, b.0), [a.1, b.1]);
+                    if seam {
+                        now_waiting.push((a.0, b.0));
+                    }
                 }
             }
         }
         let at_hole: HashSet<u32> = local.keys().flat_map(|&(a, b)| [a, b]).collect();
+        let mut boundary = at_hole.clone();
+        boundary.extend(
+            now_waiting
+                .into_iter()
+                .filter(|e| self.waiting.contains_key(e))
+                .flat_map(|(a, b)| [a, b]),
+        );
+        self.near.add_tile(triangles, &boundary);
         for t in triangles {
             for i in 0..3 {
                 let j = (i + 1) % 3;
@@ -114,6 +130,8 @@ impl BoundaryEdges {
             |v: u32, last: u32| last <= tile && !settled.contains(&v) && !waiting.contains(&v);
         self.edges_near_holes
             .retain(|&(a, b), &mut [la, lb]| !(final_inside(a, la) || final_inside(b, lb)));
+        self.near
+            .retain(|v| settled.contains(&v) || waiting.contains(&v));
     }
 
     /// Edges kept that no patch can use (0 when every tile retired its own).
@@ -143,13 +161,15 @@ impl BoundaryEdges {
         let mut report = HoleReport::default();
         let mut triangles = Vec::new();
         let is_edge = |a: u32, b: u32| self.edges_near_holes.contains_key(&(a.min(b), a.max(b)));
+        let mut near = self.near;
         for lp in chain_loops(edges) {
             let patch = lp
                 .filter(|l| l.len() <= MAX_FILLED_LOOP)
-                .and_then(|l| least_area_patch(&l, is_edge));
+                .and_then(|l| patch_clear_of_mesh(&l, is_edge, &near));
             match patch {
                 Some(p) => {
-                    triangles.extend(p);
+                    near.add_patch(&p);
+                    triangles.extend(p.iter().map(|t| t.0));
                     report.filled += 1;
                 }
                 None => report.left_open += 1,
@@ -216,20 +236,60 @@ fn start_at_least_position(mut lp: Vec<LoopVertex>) -> Vec<LoopVertex> {
     lp
 }
 
-/// The triangulation of least total area of the polygon `lp` over its own
-/// vertices, wound against the polygon's direction (the mesh around a hole
-/// runs along it, so the patch must run the other way). A diagonal that
-/// `is_edge` of the mesh already would make that edge non-manifold, so it
-/// is never used; `None` if no triangulation avoids them.
+/// The least-area patch of `lp` ([`least_area_triangles`]) whose triangles
+/// cross neither the mesh `near` holds nor each other: a crossing triangle
+/// is banned and the programme run again, [`MAX_TRIES`] times at most.
+fn patch_clear_of_mesh(
+    lp: &[LoopVertex],
+    is_edge: impl Fn(u32, u32) -> bool,
+    near: &NearHoles,
+) -> Option<Vec<super::hole_guard::Placed>> {
+    let mut banned = HashSet::new();
+    for _ in 0..MAX_TRIES {
+        let tris = least_area_triangles(lp, &is_edge, &banned)?;
+        let patch: Vec<_> = tris.iter().map(|&t| placed(lp, t)).collect();
+        let crossing = near.crossing(&patch);
+        if crossing.is_empty() {
+            return Some(patch);
+        }
+        for i in crossing {
+            let mut key = tris[i];
+            key.sort_unstable();
+            banned.insert(key);
+        }
+    }
+    None
+}
+
+/// [`least_area_triangles`] as vertex indices.
+#[cfg(test)]
 fn least_area_patch(
     lp: &[LoopVertex],
     is_edge: impl Fn(u32, u32) -> bool,
 ) -> Option<Vec<[u32; 3]>> {
+    let tris = least_area_triangles(lp, is_edge, &HashSet::new())?;
+    Some(tris.into_iter().map(|t| t.map(|i| lp[i].0)).collect())
+}
+
+/// The triangulation of least total area of the polygon `lp` over its own
+/// vertices, wound against the polygon's direction (the mesh around a hole
+/// runs along it, so the patch must run the other way), as positions in
+/// `lp`. A diagonal that `is_edge` of the mesh already would make that
+/// edge non-manifold, so it is never used, nor a triangle in `banned`
+/// (positions ascending); `None` if no triangulation avoids them.
+fn least_area_triangles(
+    lp: &[LoopVertex],
+    is_edge: impl Fn(u32, u32) -> bool,
+    banned: &HashSet<[usize; 3]>,
+) -> Option<Vec<[usize; 3]>> {
     let n = lp.len();
     if n < 3 {
         return None;
     }
     let area = |i: usize, m: usize, j: usize| {
+        if banned.contains(&[i, m, j]) {
+            return f64::INFINITY;
+        }
         let (a, b, c) = (lp[i].1, lp[m].1, lp[j].1);
         0.5 * (b - a).cross(c - a).length()
     };
@@ -263,7 +323,7 @@ fn least_area_patch(
             continue;
         }
         let m = split[i * n + j];
-        out.push([lp[j].0, lp[m].0, lp[i].0]);
+        out.push([j, m, i]);
         stack.push((i, m));
         stack.push((m, j));
     }

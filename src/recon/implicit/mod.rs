@@ -7,6 +7,7 @@
 //! (one cube, and a reference driver over a set of cubes).
 
 pub mod dilate;
+pub mod hole_guard;
 pub mod holes;
 pub mod kernel;
 pub mod lattice;

@@ -56,10 +56,13 @@ pub fn refine_vertices(
                 Err(short) => return Ok(Err(short)),
             };
             // The formula of marching cubes' own placement.
-            let mut pos = p0;
-            pos[a] = p0[a] + t * (p1[a] - p0[a]);
-            match chord_offset(lattice.cell, s, tile, pos, nbr) {
-                Ok(offset) => Ok(Ok(pos + offset)),
+            let at = |t: f64| {
+                let mut pos = p0;
+                pos[a] = p0[a] + t * (p1[a] - p0[a]);
+                pos
+            };
+            match chord_offset(lattice.cell, s, tile, at(t), a, nbr) {
+                Ok(dt) => Ok(Ok(at((t + dt).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON)))),
                 Err(short) => Ok(Err(short)),
             }
         })
@@ -94,8 +97,8 @@ pub const CHORD_OFFSET: f64 = 0.12;
 
 /// The offset that moves the piecewise-linear mesh's mean onto the curved
 /// field (the chord error's bias), from the fitted sphere's curvature at
-/// `pos`, capped at a tenth of the cell so a vertex stays near its edge
-/// (marching cubes' topology and orientation hold).
+/// `pos`, as a move along the vertex's lattice edge (axis `axis`), in
+/// cells: the move whose component along the field's normal is the bias.
 ///
 /// Deviation from paper 1 section 2.6 (vertices on the zero set): an
 /// interpolating mesh is biased towards the inside of every convex part by
@@ -103,19 +106,41 @@ pub const CHORD_OFFSET: f64 = 0.12;
 /// at no extra lattice (1M dragon, open: 0.061 -> 0.057 spacings at 3
 /// spacings; 0.0534 -> 0.0530 at 1.5, where the cell^2 makes it small, so
 /// a finer cell stays more accurate).
+///
+/// Why along the edge rather than along the normal: a vertex off its edge
+/// can pass a neighbouring vertex of a sliver near a lattice corner, and
+/// the mesh folds (the 1M dragon had 3 self-intersecting pairs, all there);
+/// on its edge, strictly inside it ([`EDGE_EPSILON`]), every cube's
+/// triangles stay inside the cube, as marching cubes' are. The move is
+/// capped at [`MAX_EDGE_MOVE`] of the edge, so where the edge runs nearly
+/// tangent to the surface the vertex does not slide far along it.
 fn chord_offset(
     cell: f64,
     s: &Samples,
     tile: &TilePoints,
     pos: DVec3,
+    axis: usize,
     nbr: &mut Vec<crate::spatial::Neighbour>,
-) -> Result<DVec3, f64> {
+) -> Result<f64, f64> {
     let Some(v) = mls_value(s, tile, pos, nbr)? else {
-        return Ok(DVec3::ZERO);
+        return Ok(0.0);
     };
-    let shift = (CHORD_OFFSET * cell * cell * v.curvature).clamp(-0.1 * cell, 0.1 * cell);
-    Ok(shift * v.normal.normalize_or_zero())
+    let along = v.normal.normalize_or_zero()[axis];
+    if along.abs() < 1e-6 {
+        return Ok(0.0);
+    }
+    let shift = CHORD_OFFSET * cell * v.curvature;
+    Ok((shift / along).clamp(-MAX_EDGE_MOVE, MAX_EDGE_MOVE))
 }
+
+/// Largest move along the edge [`chord_offset`] makes, as a share of it.
+const MAX_EDGE_MOVE: f64 = 0.1;
+
+/// A vertex's least distance from either end of its edge, as a share of
+/// the edge: a vertex at a lattice corner would coincide with the vertices
+/// of the corner's other cut edges, and their triangles would touch without
+/// sharing a vertex.
+const EDGE_EPSILON: f64 = 1e-4;
 
 /// The defined value at corner `c`.
 fn value(corners: &[CornerValue], c: [i64; 3]) -> Result<f64, KernelError> {
