@@ -7,7 +7,7 @@
 
 use super::cleanup::{Cleanup, CleanupReport};
 use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
-use super::holes::small_hole_patches;
+use super::holes::{small_hole_patches, PATCH_RINGS};
 use super::triangulation::{Delaunay, DelaunayError};
 use super::umbrella::{nearest_distances, umbrella, Region};
 use glam::DVec3;
@@ -108,13 +108,21 @@ pub fn select(
     let mut cleanup = Cleanup::new(d.points(), tris);
     report.cleanup = cleanup.run(&second.interior, &mut doubt);
     let mut kept: Vec<[u32; 3]> = cleanup.alive_triangles().collect();
-    let patches = small_hole_patches(d.points(), &kept);
+    let patches = small_hole_patches(
+        d.points(),
+        &kept,
+        match hole {
+            Hole::Absolute(h) => Some(h),
+            Hole::Local(_) => None,
+        },
+    );
     report.patches = patches.len() as u64;
     kept.extend(patches);
     if !doubt.is_empty() {
-        // A patch reads the triangles two rings around it.
-        cleanup.dilate(&mut doubt);
-        cleanup.dilate(&mut doubt);
+        // A patch reads the triangles PATCH_RINGS rings around it.
+        for _ in 0..PATCH_RINGS {
+            cleanup.dilate(&mut doubt);
+        }
     }
     Ok(to_input(
         &d,
