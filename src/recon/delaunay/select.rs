@@ -8,7 +8,7 @@
 use super::cleanup::{Cleanup, CleanupReport};
 use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
 use super::holes::{small_hole_patches, PATCH_RINGS};
-use super::pieces::{drop_extra_fans, drop_floating_pieces, PIECE_RINGS};
+use super::pieces::{drop_extra_fans, drop_small_pieces, PIECE_RINGS};
 use super::triangulation::{Delaunay, DelaunayError};
 use super::umbrella::{nearest_distances, umbrella, Region};
 use glam::DVec3;
@@ -40,7 +40,7 @@ pub struct SelectionReport {
     pub cleanup: CleanupReport,
     /// Triangles added to close small holes.
     pub patches: u64,
-    /// Triangles dropped as floating pieces.
+    /// Triangles dropped as small pieces (and extra fans).
     pub floating: u64,
 }
 
@@ -111,7 +111,7 @@ pub fn select(
     let mut cleanup = Cleanup::new(d.points(), tris);
     report.cleanup = cleanup.run(&second.interior, &mut doubt);
     let alive: Vec<[u32; 3]> = cleanup.alive_triangles().collect();
-    let mut kept = drop_floating_pieces(&drop_extra_fans(&alive));
+    let mut kept = drop_small_pieces(&drop_extra_fans(&alive));
     report.floating = (alive.len() - kept.len()) as u64;
     let patches = small_hole_patches(
         d.points(),
