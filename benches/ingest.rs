@@ -42,6 +42,7 @@ fn cloud() -> PointChunk {
         xyz,
         normals: Some(normals),
         indices: None,
+        attrs: Default::default(),
     }
 }
 

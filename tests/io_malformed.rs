@@ -418,6 +418,7 @@ fn point_chunk(n: usize) -> PointChunk {
         xyz: (0..n).map(|i| DVec3::new(i as f64, 0.5, -1.0)).collect(),
         normals: None,
         indices: None,
+        attrs: Default::default(),
     }
 }
 
@@ -431,6 +432,7 @@ fn spec(format: Format) -> WriterSpec {
             DVec3::new(100.0, 1.0, 0.0),
         )),
         las_transform: None,
+        attributes: Default::default(),
     }
 }
 

@@ -66,6 +66,7 @@ fn spec(format: Format, with_normals: bool, with_flags: bool, b: Option<Aabb>) -
         with_flags,
         bounds: b,
         las_transform: None,
+        attributes: Default::default(),
     }
 }
 
@@ -79,6 +80,7 @@ fn write_cloud(path: &Path, spec: &WriterSpec, c: &Cloud, step: usize) -> u64 {
             xyz: c.xyz[start..end].to_vec(),
             normals: Some(c.normals[start..end].to_vec()),
             indices: None,
+            attrs: Default::default(),
         };
         w.write_chunk(&chunk, Some(&c.flags[start..end])).unwrap();
     }

@@ -85,7 +85,7 @@ fn main() -> Result<()> {
         with_normals: a.normals,
         with_flags: false,
         bounds,
-        las_transform: None,
+        ..WriterSpec::new(format)
     };
     let mut writer = create_writer(&a.output, &spec)?;
     let mut samples = stream(&shape, a.n, noise, a.seed)?;

@@ -23,10 +23,18 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let stats = convert(&a.input, &a.output, s.read_options(), progress.as_ref())?;
+    if !stats.dropped.is_empty() && !s.quiet {
+        eprintln!(
+            "note: {} cannot hold the input's {}: not written",
+            a.output.display(),
+            stats.dropped.describe()
+        );
+    }
     super::report::summary(format!(
-        "convert: {} points ({} skipped) in {:.2} s, peak {} -> {}",
+        "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
         stats.points,
         stats.skipped,
+        stats.carried.describe(),
         t0.elapsed().as_secs_f64(),
         super::peak(),
         a.output.display()

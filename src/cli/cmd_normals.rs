@@ -4,7 +4,7 @@ use super::HoodKind;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use glam::DVec3;
-use scanmesh::io::{format_from_name, Format, WriterSpec};
+use scanmesh::io::{format_from_name, AttributeSet, Format, WriterSpec};
 use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
 };
@@ -163,7 +163,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let params = a.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
-    let spec = output_spec(&a.output, a.ascii)?;
+    let mut spec = output_spec(&a.output, a.ascii)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
@@ -183,6 +183,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
             report
         }
     };
+    spec.attributes = carried_attributes(store.attributes(), &spec, &a.output, s.quiet);
     let window = run.plan.window_points;
     export_points(store, &a.output, &spec, window, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
@@ -220,15 +221,33 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
         format = Format::PlyAscii;
     }
     Ok(WriterSpec {
-        format,
         with_normals: true,
         with_flags: matches!(
             format,
             Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd
         ),
-        bounds: None,
-        las_transform: None,
+        ..WriterSpec::new(format)
     })
+}
+
+/// The input's attributes that `output`'s format can hold; says which it
+/// cannot (unless `quiet`).
+pub fn carried_attributes(
+    input: AttributeSet,
+    spec: &WriterSpec,
+    output: &Path,
+    quiet: bool,
+) -> AttributeSet {
+    let carried = input.intersect(spec.format.attributes());
+    let dropped = input.without(carried);
+    if !dropped.is_empty() && !quiet {
+        eprintln!(
+            "note: {} cannot hold the input's {}: not written",
+            output.display(),
+            dropped.describe()
+        );
+    }
+    carried
 }
 
 pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {

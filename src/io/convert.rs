@@ -3,8 +3,8 @@
 //! the first point, so a source without header bounds is read twice.
 
 use super::{
-    create_writer, format_from_name, open_reader, Format, IoError, PointChunk, ReadOptions,
-    WriterSpec, DEFAULT_CHUNK,
+    create_writer, format_from_name, open_reader, AttributeSet, Format, IoError, PointChunk,
+    ReadOptions, WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
 use crate::pipeline::Progress;
@@ -14,6 +14,10 @@ use std::path::Path;
 pub struct ConvertStats {
     pub points: u64,
     pub skipped: u64,
+    /// Attributes carried from the input to the output.
+    pub carried: AttributeSet,
+    /// Attributes of the input the output format cannot hold.
+    pub dropped: AttributeSet,
 }
 
 /// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
@@ -38,6 +42,7 @@ pub fn convert(
         format,
         with_normals: info.has_normals,
         with_flags: false,
+        attributes: info.attributes.intersect(format.attributes()),
         bounds,
         las_transform: info.las_transform,
     };
@@ -53,7 +58,12 @@ pub fn convert(
     progress.end();
     let skipped = reader.skipped();
     writer.finish()?;
-    Ok(ConvertStats { points, skipped })
+    Ok(ConvertStats {
+        points,
+        skipped,
+        carried: spec.attributes,
+        dropped: info.attributes.without(spec.attributes),
+    })
 }
 
 /// Bounding box of all points of `path`, by one streaming pass.

@@ -12,7 +12,10 @@
 
 use super::policy::Admitter;
 use super::source::BUF_CAPACITY;
-use super::{Format, InvalidPolicy, IoError, LasTransform, PointChunk, PointReader, SourceInfo};
+use super::{
+    Attribute, AttributeSet, Attributes, Format, InvalidPolicy, IoError, LasTransform, PointChunk,
+    PointReader, SourceInfo,
+};
 use crate::geom::Aabb;
 use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
@@ -27,14 +30,21 @@ const BLOCK_POINTS: u64 = 1 << 16;
 /// Blocks decoded ahead of the consumer.
 const AHEAD: usize = 2;
 
-type Block = Result<Vec<DVec3>, IoError>;
+/// Decoded points of one block and their attributes.
+#[derive(Default)]
+struct Decoded {
+    xyz: Vec<DVec3>,
+    attrs: Attributes,
+}
+
+type Block = Result<Decoded, IoError>;
 
 pub struct LasReader {
     info: SourceInfo,
     blocks: Receiver<Block>,
-    recycle: Sender<Vec<DVec3>>,
+    recycle: Sender<Decoded>,
     worker: Option<JoinHandle<()>>,
-    current: Vec<DVec3>,
+    current: Decoded,
     pos: usize,
     admit: Admitter,
     declared: u64,
@@ -89,12 +99,26 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
         }
     }
     let t = header.transforms();
+    let format = header.point_format();
+    // Every LAS record has intensity, return number and classification.
+    let mut attributes = AttributeSet::of(&[
+        Attribute::Intensity,
+        Attribute::Classification,
+        Attribute::ReturnNumber,
+    ]);
+    if format.has_gps_time {
+        attributes = attributes.with(Attribute::GpsTime);
+    }
+    if format.has_color {
+        attributes = attributes.with(Attribute::Rgb);
+    }
     let info = SourceInfo {
         path: path.to_path_buf(),
         format: if compressed { Format::Laz } else { Format::Las },
         gzip: false,
         declared_count: Some(declared),
         has_normals: false,
+        attributes,
         header_bounds: header_bounds(&header.bounds()),
         las_transform: Some(LasTransform {
             scale: DVec3::new(t.x.scale, t.y.scale, t.z.scale),
@@ -109,8 +133,9 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
 fn decode_blocks(
     path: PathBuf,
     mut reader: Reader,
+    set: AttributeSet,
     blocks: Sender<Block>,
-    recycle: Receiver<Vec<DVec3>>,
+    recycle: Receiver<Decoded>,
 ) {
     let declared = reader.header().number_of_points();
     let mut data = PointDataBuilder::new().for_header(reader.header()).build();
@@ -119,11 +144,13 @@ fn decode_blocks(
         let n = (declared - done).min(BLOCK_POINTS);
         let block = match reader.fill_points(n, &mut data) {
             Ok(got) if got == n => {
-                let mut xyz = recycle.try_recv().unwrap_or_default();
-                xyz.clear();
+                let mut d = recycle.try_recv().unwrap_or_default();
+                d.xyz.clear();
                 let (x, y, z) = (data.x(), data.y(), data.z());
-                xyz.extend(x.zip(y).zip(z).map(|((x, y), z)| DVec3::new(x, y, z)));
-                Ok(xyz)
+                d.xyz
+                    .extend(x.zip(y).zip(z).map(|((x, y), z)| DVec3::new(x, y, z)));
+                decode_attributes(&data, set, &mut d.attrs);
+                Ok(d)
             }
             Ok(got) => Err(truncated(&path, declared, done + got)),
             Err(e) if ends_early(&e) => Err(truncated(&path, declared, done)),
@@ -134,6 +161,20 @@ fn decode_blocks(
         if blocks.send(block).is_err() || failed {
             return;
         }
+    }
+}
+
+/// The attribute columns of a decoded block.
+fn decode_attributes(data: &las::PointData, set: AttributeSet, out: &mut Attributes) {
+    out.reset(set);
+    out.intensity.extend(data.intensity());
+    out.classification.extend(data.classification());
+    out.return_number.extend(data.return_number());
+    if let Some(t) = data.gps_time() {
+        out.gps_time.extend(t);
+    }
+    if let Some(c) = data.rgb() {
+        out.rgb.extend(c.map(|(r, g, b)| [r, g, b]));
     }
 }
 
@@ -168,7 +209,7 @@ impl LasReader {
     pub(crate) fn open(path: &Path, policy: InvalidPolicy) -> Result<Self, IoError> {
         let (info_tx, info_rx) = bounded::<Result<SourceInfo, IoError>>(1);
         let (block_tx, block_rx) = bounded::<Block>(AHEAD);
-        let (recycle_tx, recycle_rx) = unbounded::<Vec<DVec3>>();
+        let (recycle_tx, recycle_rx) = unbounded::<Decoded>();
         let owned = path.to_path_buf();
         let worker = std::thread::Builder::new()
             .name("las-decode".into())
@@ -177,8 +218,9 @@ impl LasReader {
                     let _ = info_tx.send(Err(e));
                 }
                 Ok((reader, info)) => {
+                    let set = info.attributes;
                     if info_tx.send(Ok(info)).is_ok() {
-                        decode_blocks(owned, reader, block_tx, recycle_rx);
+                        decode_blocks(owned, reader, set, block_tx, recycle_rx);
                     }
                 }
             })
@@ -193,7 +235,7 @@ impl LasReader {
             blocks: block_rx,
             recycle: recycle_tx,
             worker: Some(worker),
-            current: Vec::new(),
+            current: Decoded::default(),
             pos: 0,
             admit: Admitter::new(path.to_path_buf(), policy),
             next: 0,
@@ -210,7 +252,7 @@ impl LasReader {
         // The worker may be gone already; then the buffer is simply dropped.
         let _ = self.recycle.send(old);
         self.pos = 0;
-        match self.current.is_empty() {
+        match self.current.xyz.is_empty() {
             true => Err(worker_died(&self.info.path)),
             false => Ok(()),
         }
@@ -232,14 +274,15 @@ impl PointReader for LasReader {
     /// `max` of 0 is taken as 1, since 0 points read means end of input.
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
-        self.admit.begin(chunk, self.next, false);
+        self.admit.begin(chunk, self.next, &self.info);
         while chunk.len() < max && self.next < self.declared {
-            if self.pos == self.current.len() {
+            if self.pos == self.current.xyz.len() {
                 self.refill()?;
             }
-            let take = (max - chunk.len()).min(self.current.len() - self.pos);
-            for &p in &self.current[self.pos..self.pos + take] {
-                self.admit.push(chunk, self.next, p, Vec3::ZERO)?;
+            let take = (max - chunk.len()).min(self.current.xyz.len() - self.pos);
+            for k in self.pos..self.pos + take {
+                let (p, a) = (self.current.xyz[k], self.current.attrs.get(k));
+                self.admit.push_with(chunk, self.next, p, Vec3::ZERO, &a)?;
                 self.next += 1;
             }
             self.pos += take;

@@ -20,6 +20,7 @@ impl MemoryReader {
             gzip: false,
             declared_count: Some(xyz.len() as u64),
             has_normals: normals.is_some(),
+            attributes: crate::io::AttributeSet::EMPTY,
             header_bounds: None,
             las_transform: None,
         };
@@ -40,6 +41,7 @@ impl PointReader for MemoryReader {
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         chunk.clear();
         chunk.indices = None;
+        chunk.attrs.reset(self.info.attributes);
         let end = (self.pos + max).min(self.xyz.len());
         chunk.first_index = self.pos as u64;
         for (i, p) in self.xyz[self.pos..end].iter().enumerate() {

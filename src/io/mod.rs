@@ -6,6 +6,7 @@
 //! consistent with headers), so nothing downstream checks again.
 
 pub mod atomic;
+pub mod attributes;
 pub mod cleanup;
 pub mod convert;
 pub mod e57;
@@ -26,6 +27,7 @@ pub mod write;
 pub mod xyz;
 
 pub use atomic::AtomicFile;
+pub use attributes::{Attribute, AttributeSet, AttributeValues, Attributes};
 pub use error::IoError;
 pub use obj::read_obj_mesh;
 pub use open::{open_reader, read_mesh_any};
@@ -56,6 +58,22 @@ pub enum Format {
     E57,
 }
 
+impl Format {
+    /// The attributes this format can hold (README "Attributes").
+    pub fn attributes(self) -> AttributeSet {
+        match self {
+            Format::PlyAscii
+            | Format::PlyBinaryLe
+            | Format::PlyBinaryBe
+            | Format::Las
+            | Format::Laz
+            | Format::Pcd => AttributeSet::all(),
+            // The E57 writer writes one scan of positions.
+            Format::E57 | Format::Xyz => AttributeSet::EMPTY,
+        }
+    }
+}
+
 /// A bounded batch of consecutive input records.
 ///
 /// `first_index` is the 0-based input index of `xyz[0]`; the reader counts
@@ -70,6 +88,9 @@ pub struct PointChunk {
     /// Input index of each point when some records were skipped; `None`
     /// means `first_index + position`.
     pub indices: Option<Vec<u64>>,
+    /// Intensity, colour and the other attributes the source carries
+    /// ([`SourceInfo::attributes`]), one value per point each.
+    pub attrs: Attributes,
 }
 
 impl PointChunk {
@@ -87,6 +108,7 @@ impl PointChunk {
         if let Some(i) = &mut self.indices {
             i.clear();
         }
+        self.attrs.clear();
     }
     /// Input index of the `i`-th point of this chunk.
     pub fn index_of(&self, i: usize) -> u64 {
@@ -106,6 +128,8 @@ pub struct SourceInfo {
     /// Point count the header declares (PLY, LAS); `None` for text formats.
     pub declared_count: Option<u64>,
     pub has_normals: bool,
+    /// Per-point attributes the records carry (intensity, colour, ...).
+    pub attributes: AttributeSet,
     /// Bounding box from the header, where the format stores one (LAS).
     pub header_bounds: Option<crate::geom::Aabb>,
     /// LAS scale and offset, so a LAS output can reuse them.
@@ -180,6 +204,9 @@ pub struct WriterSpec {
     pub with_normals: bool,
     /// Write a per-point `flags` byte (u8) property where the format allows.
     pub with_flags: bool,
+    /// Attributes to write; each must be one the format can hold
+    /// ([`Format::attributes`]) and every chunk must carry.
+    pub attributes: AttributeSet,
     /// Bounds of all points to be written, needed by LAS to choose its
     /// quantisation when no `las_transform` is given.
     pub bounds: Option<crate::geom::Aabb>,
@@ -194,6 +221,7 @@ impl WriterSpec {
             format,
             with_normals: false,
             with_flags: false,
+            attributes: AttributeSet::EMPTY,
             bounds: None,
             las_transform: None,
         }

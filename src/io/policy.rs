@@ -2,7 +2,7 @@
 //! enforces finite coordinates and keeps input indices right when
 //! [`InvalidPolicy::Skip`] drops records.
 
-use super::{InvalidPolicy, IoError, PointChunk};
+use super::{AttributeValues, InvalidPolicy, IoError, PointChunk, SourceInfo};
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 
@@ -30,12 +30,13 @@ impl Admitter {
     }
 
     /// Clears `chunk` for records starting at input index `first`, keeping
-    /// its allocations.
-    pub fn begin(&self, chunk: &mut PointChunk, first: u64, with_normals: bool) {
+    /// its allocations, ready for the normals and attributes of `info`.
+    pub fn begin(&self, chunk: &mut PointChunk, first: u64, info: &SourceInfo) {
         chunk.xyz.clear();
         chunk.first_index = first;
         chunk.indices = None;
-        if with_normals {
+        chunk.attrs.reset(info.attributes);
+        if info.has_normals {
             match &mut chunk.normals {
                 Some(n) => n.clear(),
                 None => chunk.normals = Some(Vec::new()),
@@ -54,10 +55,25 @@ impl Admitter {
         p: DVec3,
         normal: Vec3,
     ) -> Result<(), IoError> {
+        self.push_with(chunk, record, p, normal, &AttributeValues::default())
+    }
+
+    /// [`Admitter::push`] with the record's attribute values (those of the
+    /// chunk's set are kept).
+    #[inline]
+    pub fn push_with(
+        &mut self,
+        chunk: &mut PointChunk,
+        record: u64,
+        p: DVec3,
+        normal: Vec3,
+        attrs: &AttributeValues,
+    ) -> Result<(), IoError> {
         if !p.is_finite() {
             return self.reject(chunk, record, p);
         }
         chunk.xyz.push(p);
+        chunk.attrs.push(attrs);
         if let Some(n) = &mut chunk.normals {
             n.push(normal);
         }

@@ -63,6 +63,7 @@ impl XyzReader {
             gzip,
             declared_count: None,
             has_normals: false,
+            attributes: crate::io::AttributeSet::EMPTY,
             header_bounds: None,
             las_transform: None,
         };
@@ -161,7 +162,7 @@ impl PointReader for XyzReader {
     /// `max` of 0 is taken as 1, since 0 points read means end of input.
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
-        self.admit.begin(chunk, self.next, self.info.has_normals);
+        self.admit.begin(chunk, self.next, &self.info);
         let Some(columns) = self.columns else {
             return Ok(0);
         };

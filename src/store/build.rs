@@ -10,6 +10,7 @@
 //! 5. sort: order each tile along a Morton curve, count exact duplicates,
 //!    record block bounds.
 
+use super::attributes::AttributeSink;
 use super::cells::CellCounts;
 use super::manifest::{GridSpec, Manifest, STORE_VERSION};
 use super::replay::{first_pass, Replay};
@@ -108,7 +109,10 @@ fn build_with_spill(
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Manifest, StoreError> {
-    let (count, bounds, again) = first_pass(reader, spill_path, progress)?;
+    let attributes = reader.info().attributes;
+    let mut sink = AttributeSink::create(dir, attributes)?;
+    let (count, bounds, again) = first_pass(reader, spill_path, &mut sink, progress)?;
+    sink.finish()?;
     if count == 0 {
         return Err(StoreError::Empty {
             path: reader.info().path.clone(),
@@ -140,6 +144,7 @@ fn build_with_spill(
         grid,
         tiles,
         columns: Vec::new(),
+        attributes: attributes.to_vec(),
         source: String::new(),
         source_has_normals: reader.info().has_normals,
         sampling: None,

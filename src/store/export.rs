@@ -54,7 +54,7 @@ pub fn export_points(
     let writer = create_writer(path, &spec)?;
     let n = store.len();
     // Two windows of half the size: one filled while the other is written.
-    let window = (window_points / 2).clamp(1, n.max(1));
+    let window = (attribute_window(window_points, spec.attributes) / 2).clamp(1, n.max(1));
     progress.begin("write", n);
     let buckets = if window < n {
         Some(Reorder::build(store, &cols, window)?)
@@ -70,7 +70,13 @@ pub fn export_points(
         let with_flags = cols.flags.is_some();
         let writing =
             s.spawn(move || write_windows(writer, with_flags, full_rx, empty_tx, progress));
-        let filled = fill_windows(store, &cols, buckets.as_ref(), window, empty_rx, full_tx);
+        let fill = Fill {
+            cols: &cols,
+            buckets: buckets.as_ref(),
+            attributes: spec.attributes,
+            window,
+        };
+        let filled = fill_windows(store, &fill, empty_rx, full_tx);
         (filled, writing.join())
     });
     progress.end();
@@ -90,16 +96,34 @@ struct Window {
     flags: Vec<u8>,
 }
 
+/// Bytes per point of an export window the plan assumes (positions,
+/// normal, flags and encoding); the input's attributes come on top.
+const WINDOW_BYTES_PER_POINT: u64 = 48;
+
+/// Points of a window planned at `window_points` without attributes, shrunk
+/// so that a window carrying `attributes` takes no more memory.
+fn attribute_window(window_points: u64, attributes: crate::io::AttributeSet) -> u64 {
+    let extra = attributes.bytes_per_point() as u64;
+    window_points * WINDOW_BYTES_PER_POINT / (WINDOW_BYTES_PER_POINT + extra)
+}
+
+/// What the windows are filled from.
+struct Fill<'a> {
+    cols: &'a Columns,
+    buckets: Option<&'a Reorder>,
+    attributes: crate::io::AttributeSet,
+    window: u64,
+}
+
 /// Fills consecutive windows of `window` input ids, each in a buffer that
 /// comes back on `empty`, and sends it on `full` to be written.
 fn fill_windows(
     store: &PointStore,
-    cols: &Columns,
-    buckets: Option<&Reorder>,
-    window: u64,
+    fill: &Fill,
     empty: Receiver<Window>,
     full: Sender<Window>,
 ) -> Result<(), StoreError> {
+    let (cols, buckets, window) = (fill.cols, fill.buckets, fill.window);
     let n = store.len();
     let mut w0 = 0;
     while w0 < n {
@@ -132,6 +156,8 @@ fn fill_windows(
             Some(b) => b.fill(store.origin(), slots)?,
             None => fill_window(store, cols, slots)?,
         }
+        // Attribute columns are in input order already: read, not placed.
+        store.read_attributes(w0, len as u64, fill.attributes, &mut chunk.attrs)?;
         if full.send(win).is_err() {
             return Err(writer_gone());
         }

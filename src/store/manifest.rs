@@ -28,6 +28,9 @@ pub struct Manifest {
     pub tiles: Vec<TileEntry>,
     /// Attribute columns present besides coordinates and indices.
     pub columns: Vec<String>,
+    /// The input's own per-point attributes, kept in input order.
+    #[serde(default)]
+    pub attributes: Vec<crate::io::Attribute>,
     pub source: String,
     pub source_has_normals: bool,
     /// Sampling density and noise, once a normals pass measured them.

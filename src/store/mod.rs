@@ -6,7 +6,10 @@
 //! [`BLOCK`] consecutive points of a tile, to find margin points without
 //! reading whole neighbour tiles), and attribute columns later passes add
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
+//! The input's own attributes (intensity, colour, ...) are kept in input
+//! order beside them (`intensity.input`, ...; see [`attributes`]).
 
+mod attributes;
 pub mod build;
 mod cells;
 pub mod checkpoint;
@@ -20,6 +23,7 @@ mod sort;
 pub mod source;
 pub mod spacing;
 
+pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};
 pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
@@ -135,6 +139,7 @@ impl PointStore {
             _lock: lock,
         };
         store.validate()?;
+        store.check_attribute_columns()?;
         // Later passes size their state by the count: it must be the data's.
         for column in [&store.xyz, &store.index] {
             if column.items()? != store.manifest.count {

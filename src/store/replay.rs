@@ -7,6 +7,7 @@
 //! which saves writing and reading back a copy as large as the input
 //! (2.4 GB at 100M points).
 
+use super::attributes::AttributeSink;
 use super::StoreError;
 use crate::geom::Aabb;
 use crate::io::{IoError, PointChunk, PointReader, DEFAULT_CHUNK};
@@ -35,6 +36,7 @@ pub(super) enum Replay {
 pub(super) fn first_pass(
     reader: &mut dyn PointReader,
     spill: &Path,
+    attributes: &mut AttributeSink,
     progress: &dyn Progress,
 ) -> Result<(u64, Aabb, Replay), StoreError> {
     let reopens = matches!(reader.reopen(), Some(Ok(_)));
@@ -57,6 +59,7 @@ pub(super) fn first_pass(
         if let Some(out) = &mut out {
             write_points(out, &chunk.xyz).map_err(|e| StoreError::os(spill, e))?;
         }
+        attributes.write(chunk)?;
         count += chunk.len() as u64;
         if count > MAX_POINTS {
             return Err(StoreError::TooMany {
@@ -285,8 +288,9 @@ mod tests {
         let path = dir.path().join("in.ply");
         write_ply(&path, &pts);
         let mut file = open_reader(&path, InvalidPolicy::Skip).unwrap();
+        let mut sink = AttributeSink::create(dir.path(), Default::default()).unwrap();
         let (count, _, replay) =
-            first_pass(file.as_mut(), &dir.path().join("s"), &NoProgress).unwrap();
+            first_pass(file.as_mut(), &dir.path().join("s"), &mut sink, &NoProgress).unwrap();
         assert!(matches!(replay, Replay::Input(Some(_))));
         write_ply(&path, &pts[..2000]);
         let err = replay

@@ -158,6 +158,7 @@ impl E57Reader {
             gzip: false,
             declared_count: Some(declared),
             has_normals: false,
+            attributes: crate::io::AttributeSet::EMPTY,
             header_bounds: None,
             las_transform: None,
         };
@@ -296,7 +297,7 @@ impl PointReader for E57Reader {
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
         let first = self.current.first + self.pos as u64;
-        self.admit.begin(chunk, first, false);
+        self.admit.begin(chunk, first, &self.info);
         while chunk.len() < max && self.consumed < self.declared {
             if self.pos == self.current.recs.len() {
                 self.refill()?;

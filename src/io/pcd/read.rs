@@ -1,6 +1,9 @@
 //! The streaming PCD point reader: `x y z` (and `normal_x normal_y
 //! normal_z` when present) out of ASCII lines, binary records, or the
-//! columns of a `binary_compressed` body.
+//! columns of a `binary_compressed` body; with the attributes PCL's point
+//! types carry (`intensity`; `rgb` or `rgba` packed 0x(AA)RRGGBB, 8 bits a
+//! channel, widened to 16) and those scanmesh writes (`classification`,
+//! `return_number`, `gps_time`).
 //!
 //! A compressed body is one LZF block of whole columns (all x, then all y,
 //! ...), so no point can be decoded before the block ends. It is
@@ -12,10 +15,14 @@
 
 use super::header::{parse_header, Data, PcdHeader, Scalar};
 use super::lzf;
+use crate::io::attributes::{to_unsigned, widen_8bit};
 use crate::io::policy::Admitter;
 use crate::io::source::{read_full, Input};
 use crate::io::text::{self, Line};
-use crate::io::{Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo};
+use crate::io::{
+    Attribute, AttributeSet, AttributeValues, Format, InvalidPolicy, IoError, PointChunk,
+    PointReader, SourceInfo,
+};
 use byteorder::{ByteOrder, LittleEndian};
 use glam::{DVec3, Vec3};
 use std::fs::File;
@@ -26,9 +33,16 @@ use std::path::Path;
 /// Raw bytes read per binary block.
 const BLOCK_BYTES: usize = 1 << 20;
 
-/// Where the fields of interest sit: `[x, y, z, nx, ny, nz]`, as field
-/// indices into the header.
-type Wanted = [Option<usize>; 6];
+/// Where the fields of interest sit, as field indices into the header:
+/// `[x, y, z, nx, ny, nz]`, then the attributes of [`ATTRIBUTE_FIELDS`].
+type Wanted = [Option<usize>; SLOTS];
+
+/// The decoded values of one record, by slot of [`Wanted`]; the packed
+/// colour as its 32 bits.
+type Values = [f64; SLOTS];
+
+const SLOTS: usize = 11;
+const RGB_SLOT: usize = 7;
 
 enum Body {
     Ascii { line: Vec<u8>, line_no: u64 },
@@ -77,6 +91,7 @@ impl PcdReader {
             gzip,
             declared_count: Some(header.points),
             has_normals: wanted[3].is_some(),
+            attributes: attribute_set(&wanted),
             header_bounds: None,
             las_transform: None,
         };
@@ -104,6 +119,7 @@ impl PcdReader {
             return Ok(());
         };
         let cols = self.wanted.map(|f| f.map(|i| self.header.column(i)));
+        let names = slot_names();
         for _ in 0..want {
             let got = text::read_line(&mut self.input, line)
                 .map_err(|e| IoError::os(&self.info.path, e))?;
@@ -120,16 +136,18 @@ impl PcdReader {
             }
             let s = text::as_text(line).map_err(bad)?;
             let tokens: Vec<&str> = s.split_ascii_whitespace().collect();
-            let mut v = [0.0f64; 6];
+            let mut v = [0.0f64; SLOTS];
             for (k, col) in cols.iter().enumerate() {
                 let Some(c) = col else { continue };
                 let tok = tokens
                     .get(*c)
                     .ok_or_else(|| bad(format!("{} values, expected more", tokens.len())))?;
-                v[k] = text::parse_f64(tok, FIELD_NAMES[k]).map_err(bad)?;
+                v[k] = text::parse_f64(tok, names[k]).map_err(bad)?;
             }
+            v[RGB_SLOT] = f64::from(ascii_rgb_bits(v[RGB_SLOT]));
             let (p, n) = point(&v);
-            self.admit.push(chunk, self.next, p, n)?;
+            self.admit
+                .push_with(chunk, self.next, p, n, &attribute_values(&v))?;
             self.next += 1;
         }
         Ok(())
@@ -148,9 +166,14 @@ impl PcdReader {
             .wanted
             .map(|f| f.map(|i| (self.header.offset(i), self.header.fields[i].scalar)));
         for (k, rec) in buf[..complete * size].chunks_exact(size).enumerate() {
-            let v = at.map(|f| f.map_or(0.0, |(o, s)| value(&rec[o..], s)));
+            let mut v = at.map(|f| f.map_or(0.0, |(o, s)| value(&rec[o..], s)));
+            if let Some((o, s)) = at[RGB_SLOT] {
+                v[RGB_SLOT] = f64::from(rgb_bits(&rec[o..], s));
+            }
             let (p, nrm) = point(&v);
-            self.admit.push(chunk, self.next + k as u64, p, nrm)?;
+            let a = attribute_values(&v);
+            self.admit
+                .push_with(chunk, self.next + k as u64, p, nrm, &a)?;
         }
         self.next += complete as u64;
         if complete < n {
@@ -164,7 +187,7 @@ impl PcdReader {
             return Ok(());
         };
         let n = want.min(BLOCK_BYTES as u64 / 8) as usize;
-        let mut v = vec![[0.0f64; 6]; n];
+        let mut v = vec![[0.0f64; SLOTS]; n];
         let os = |e| IoError::os(&self.info.path, e);
         for (k, field) in self.wanted.iter().enumerate() {
             let Some(i) = *field else { continue };
@@ -176,12 +199,17 @@ impl PcdReader {
             file.read_exact_at(buf, start + self.next * size as u64)
                 .map_err(os)?;
             for (slot, b) in v.iter_mut().zip(buf.chunks_exact(size)) {
-                slot[k] = value(b, f.scalar);
+                slot[k] = match k {
+                    RGB_SLOT => f64::from(rgb_bits(b, f.scalar)),
+                    _ => value(b, f.scalar),
+                };
             }
         }
         for (k, vals) in v.iter().enumerate() {
             let (p, nrm) = point(vals);
-            self.admit.push(chunk, self.next + k as u64, p, nrm)?;
+            let a = attribute_values(vals);
+            self.admit
+                .push_with(chunk, self.next + k as u64, p, nrm, &a)?;
         }
         self.next += n as u64;
         Ok(())
@@ -190,18 +218,88 @@ impl PcdReader {
 
 const FIELD_NAMES: [&str; 6] = ["x", "y", "z", "normal_x", "normal_y", "normal_z"];
 
+/// Field names of the attribute slots, each with the names it goes by.
+const ATTRIBUTE_FIELDS: [(Attribute, &[&str]); 5] = [
+    (Attribute::Intensity, &["intensity"]),
+    (Attribute::Rgb, &["rgb", "rgba"]),
+    (Attribute::Classification, &["classification"]),
+    (Attribute::ReturnNumber, &["return_number"]),
+    (Attribute::GpsTime, &["gps_time"]),
+];
+
+fn slot_names() -> [&'static str; SLOTS] {
+    let mut names = [""; SLOTS];
+    names[..6].copy_from_slice(&FIELD_NAMES);
+    for (k, (_, n)) in ATTRIBUTE_FIELDS.iter().enumerate() {
+        names[6 + k] = n[0];
+    }
+    names
+}
+
 fn wanted_fields(h: &PcdHeader) -> Result<Wanted, String> {
-    let mut w: Wanted = FIELD_NAMES.map(|n| h.scalar_field(n));
+    let mut w: Wanted = [None; SLOTS];
+    for (k, name) in FIELD_NAMES.iter().enumerate() {
+        w[k] = h.scalar_field(name);
+    }
     if w[..3].iter().any(Option::is_none) {
         return Err("no x, y and z fields of one value each".into());
     }
-    if w[3..].iter().any(Option::is_none) {
-        w[3..].fill(None);
+    if w[3..6].iter().any(Option::is_none) {
+        w[3..6].fill(None);
+    }
+    for (k, (_, names)) in ATTRIBUTE_FIELDS.iter().enumerate() {
+        w[6 + k] = names.iter().find_map(|n| h.scalar_field(n));
+    }
+    // A packed colour is 4 bytes; any other `rgb` is not PCL's.
+    if let Some(i) = w[RGB_SLOT] {
+        if h.fields[i].scalar.size() != 4 {
+            w[RGB_SLOT] = None;
+        }
     }
     Ok(w)
 }
 
-fn point(v: &[f64; 6]) -> (DVec3, Vec3) {
+fn attribute_set(w: &Wanted) -> AttributeSet {
+    let present: Vec<Attribute> = ATTRIBUTE_FIELDS
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| w[6 + k].is_some())
+        .map(|(_, (a, _))| *a)
+        .collect();
+    AttributeSet::of(&present)
+}
+
+fn attribute_values(v: &Values) -> AttributeValues {
+    let bits = v[RGB_SLOT] as u32;
+    let channel = |shift: u32| widen_8bit((bits >> shift) as u8);
+    AttributeValues {
+        intensity: to_unsigned(v[6], u16::MAX),
+        rgb: [channel(16), channel(8), channel(0)],
+        classification: to_unsigned(v[8], 255) as u8,
+        return_number: to_unsigned(v[9], 255) as u8,
+        gps_time: v[10],
+    }
+}
+
+/// The 32 bits of a packed colour field (PCL stores them in an F 4 or U 4).
+fn rgb_bits(b: &[u8], s: Scalar) -> u32 {
+    match s.size() {
+        4 => LittleEndian::read_u32(b),
+        _ => 0,
+    }
+}
+
+/// A packed colour written as text: PCL prints it as the unsigned integer
+/// of its bits; older writers printed the float those bits make.
+fn ascii_rgb_bits(v: f64) -> u32 {
+    let integral = v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&v);
+    match integral {
+        true => v as u32,
+        false => (v as f32).to_bits(),
+    }
+}
+
+fn point(v: &Values) -> (DVec3, Vec3) {
     (
         DVec3::new(v[0], v[1], v[2]),
         Vec3::new(v[3] as f32, v[4] as f32, v[5] as f32),
@@ -263,7 +361,7 @@ impl PointReader for PcdReader {
     /// `max` of 0 is taken as 1, since 0 points read means end of input.
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
-        self.admit.begin(chunk, self.next, self.info.has_normals);
+        self.admit.begin(chunk, self.next, &self.info);
         while chunk.len() < max && self.next < self.header.points {
             let want = ((max - chunk.len()) as u64).min(self.header.points - self.next);
             match self.body {

@@ -38,6 +38,8 @@ pub(crate) struct FixedLayout {
     pub size: usize,
     xyz: [Slot; 3],
     normals: Option<[Slot; 3]>,
+    /// Every property, for the attributes ([`FixedLayout::prop`]).
+    props: Vec<Slot>,
 }
 
 impl FixedLayout {
@@ -45,25 +47,21 @@ impl FixedLayout {
     /// `xyz` and `normals` are property indices into `element.props`.
     pub fn new(element: &Element, xyz: [usize; 3], normals: Option<[usize; 3]>) -> Option<Self> {
         let size = element.fixed_size()?;
-        let mut offsets = Vec::with_capacity(element.props.len());
-        let mut types = Vec::with_capacity(element.props.len());
+        let mut props = Vec::with_capacity(element.props.len());
         let mut at = 0;
         for p in &element.props {
-            let super::header::PropertyKind::Scalar(t) = p.kind else {
+            let super::header::PropertyKind::Scalar(ty) = p.kind else {
                 return None;
             };
-            offsets.push(at);
-            types.push(t);
-            at += t.size();
+            props.push(Slot { offset: at, ty });
+            at += ty.size();
         }
-        let slot = |i: usize| Slot {
-            offset: offsets[i],
-            ty: types[i],
-        };
+        let slot = |i: usize| props[i];
         Some(FixedLayout {
             size,
             xyz: xyz.map(slot),
             normals: normals.map(|n| n.map(slot)),
+            props,
         })
     }
 
@@ -81,6 +79,12 @@ impl FixedLayout {
             None => Vec3::ZERO,
         };
         (p, n)
+    }
+
+    /// Property `i` of one record.
+    #[inline(always)]
+    pub fn prop<B: ByteOrder>(&self, rec: &[u8], i: usize) -> f64 {
+        slot::<B>(rec, self.props[i])
     }
 }
 

@@ -4,6 +4,7 @@
 
 pub mod header;
 
+mod attrs;
 mod binary;
 mod mesh;
 mod read;

@@ -10,12 +10,15 @@
 //! garbage, or a count that is too small) but is not looked for in binary
 //! files, where writers are known to pad.
 
+use super::attrs::AttrProps;
 use super::binary::FixedLayout;
 use super::header::{parse_header, Element, Encoding, PlyHeader};
 use super::record::{skip_element, RecordDecoder, RecordError};
 use crate::io::policy::Admitter;
 use crate::io::source::{read_full, Input};
-use crate::io::{Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo};
+use crate::io::{
+    AttributeValues, Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo,
+};
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
 use glam::{DVec3, Vec3};
 use std::path::Path;
@@ -39,6 +42,7 @@ enum Body {
 
 pub struct PlyPointReader {
     info: SourceInfo,
+    attrs: AttrProps,
     input: Input,
     admit: Admitter,
     body: Body,
@@ -67,18 +71,20 @@ impl PlyPointReader {
             .ok_or_else(|| bad("no 'vertex' element".into()))?;
         let vertex = &header.elements[v];
         let (xyz, normals) = vertex_props(vertex).map_err(bad)?;
+        let attrs = AttrProps::find(vertex);
         let mut line_no = header.lines;
         for el in &header.elements[..v] {
             skip_element(&mut input, el, header.encoding, &mut line_no)
                 .map_err(|(k, e)| element_error(path, el, k, e))?;
         }
-        let body = make_body(&header, vertex, xyz, normals, line_no);
+        let body = make_body(&header, vertex, (xyz, normals), &attrs, line_no);
         let info = SourceInfo {
             path: path.to_path_buf(),
             format: format_of(header.encoding),
             gzip,
             declared_count: Some(vertex.count),
             has_normals: normals.is_some(),
+            attributes: attrs.set(),
             header_bounds: None,
             las_transform: None,
         };
@@ -88,6 +94,7 @@ impl PlyPointReader {
             next: 0,
             check_trailing: header.encoding == Encoding::Ascii && v + 1 == header.elements.len(),
             info,
+            attrs,
             input,
             body,
         })
@@ -117,11 +124,13 @@ impl PlyPointReader {
         let complete = got / size;
         let records = buf[..complete * size].chunks_exact(size);
         let first = self.next;
-        let admit = &mut self.admit;
-        let push = |k: usize, (p, nrm): (DVec3, Vec3)| admit.push(chunk, first + k as u64, p, nrm);
+        let (admit, attrs) = (&mut self.admit, &self.attrs);
+        let push = |k: usize, (p, nrm): (DVec3, Vec3), a: &AttributeValues| {
+            admit.push_with(chunk, first + k as u64, p, nrm, a)
+        };
         let decoded: Result<(), IoError> = match *big_endian {
-            false => decode_all::<LittleEndian>(layout, records, push),
-            true => decode_all::<BigEndian>(layout, records, push),
+            false => decode_all::<LittleEndian>(layout, attrs, records, push),
+            true => decode_all::<BigEndian>(layout, attrs, records, push),
         };
         decoded?;
         self.next += complete as u64;
@@ -153,7 +162,8 @@ impl PlyPointReader {
             let n = normals.map_or(Vec3::ZERO, |n| {
                 Vec3::new(v[n[0]] as f32, v[n[1]] as f32, v[n[2]] as f32)
             });
-            self.admit.push(chunk, record, p, n)?;
+            let a = self.attrs.values(|i| v[i]);
+            self.admit.push_with(chunk, record, p, n, &a)?;
             self.next += 1;
         }
         Ok(())
@@ -189,7 +199,7 @@ impl PointReader for PlyPointReader {
     /// `max` of 0 is taken as 1, since 0 points read means end of input.
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
-        self.admit.begin(chunk, self.next, self.info.has_normals);
+        self.admit.begin(chunk, self.next, &self.info);
         while chunk.len() < max && self.next < self.declared {
             let want = ((max - chunk.len()) as u64).min(self.declared - self.next);
             match self.body {
@@ -220,11 +230,17 @@ impl PointReader for PlyPointReader {
 
 fn decode_all<'a, B: ByteOrder>(
     layout: &FixedLayout,
+    attrs: &AttrProps,
     records: impl Iterator<Item = &'a [u8]>,
-    mut push: impl FnMut(usize, (DVec3, Vec3)) -> Result<(), IoError>,
+    mut push: impl FnMut(usize, (DVec3, Vec3), &AttributeValues) -> Result<(), IoError>,
 ) -> Result<(), IoError> {
+    let none = attrs.set().is_empty();
     for (k, rec) in records.enumerate() {
-        push(k, layout.decode::<B>(rec))?;
+        let a = match none {
+            true => AttributeValues::default(),
+            false => attrs.values(|i| layout.prop::<B>(rec, i)),
+        };
+        push(k, layout.decode::<B>(rec), &a)?;
     }
     Ok(())
 }
@@ -251,8 +267,8 @@ pub(crate) fn vertex_props(vertex: &Element) -> Result<PropIndices, String> {
 fn make_body(
     header: &PlyHeader,
     vertex: &Element,
-    xyz: [usize; 3],
-    normals: Option<[usize; 3]>,
+    (xyz, normals): PropIndices,
+    attrs: &AttrProps,
     line_no: u64,
 ) -> Body {
     let fixed = match header.encoding {
@@ -268,6 +284,7 @@ fn make_body(
         None => {
             let mut wanted = xyz.to_vec();
             wanted.extend(normals.iter().flatten());
+            wanted.extend(attrs.indices());
             let dec = RecordDecoder::new(vertex, header.encoding, &wanted, None, line_no);
             Body::General { dec, xyz, normals }
         }

@@ -1,6 +1,12 @@
-//! LAS 1.2 / LAZ point writer, point data format 0 (x y z as scaled i32; the
-//! per-point flags, when asked for, go to the "user data" byte; LAS format 0
-//! has no place for normals, so asking for them is an error).
+//! LAS 1.2 / LAZ point writer, point data format 0 to 3 (x y z as scaled
+//! i32; format 1 adds GPS time, 2 colour, 3 both: the smallest that holds the
+//! attributes asked for). Intensity, classification and return number are in
+//! every format; classification takes 5 bits in formats 0-3, so a larger
+//! class is an error naming the point, never truncated. The number of
+//! returns is not carried: it is written equal to the return number (1 when
+//! there is none), the least value valid beside it. The per-point flags,
+//! when asked for, go to the "user data" byte; formats 0-3 have no place for
+//! normals, so asking for them is an error.
 //!
 //! Quantisation follows the ASPRS LAS 1.2 specification (sec. 2.2, "X, Y and
 //! Z scale factors / offsets"): `X = round((x - offset) / scale)` must fit an
@@ -10,7 +16,9 @@
 use super::{check_chunk, open_output};
 use crate::geom::Aabb;
 use crate::io::las::las_error;
-use crate::io::{AtomicFile, IoError, LasTransform, PointChunk, PointWriter, WriterSpec};
+use crate::io::{
+    AtomicFile, Attribute, AttributeSet, IoError, LasTransform, PointChunk, PointWriter, WriterSpec,
+};
 use byteorder::{ByteOrder, LittleEndian};
 use glam::DVec3;
 use las::{point::Format, Builder, PointData, PointDataBuilder, Transform, Vector, Writer};
@@ -26,12 +34,38 @@ const REACH: f64 = (1u64 << 30) as f64;
 /// Finest scale chosen automatically (1 nm for metres); finer buys nothing
 /// at the magnitudes where f64 coordinates have ~1e-10 relative precision.
 const MIN_SCALE_EXP: i32 = -9;
-/// Point format 0 record: x y z i32, intensity u16, return bits, class,
-/// scan angle, user data, point source id.
-const RECORD_LEN: usize = 20;
+/// Point format 0-3 records: x y z i32, intensity u16, return bits, class,
+/// scan angle, user data, point source id; then GPS time (formats 1, 3) and
+/// colour (2 at 20, 3 at 28).
+const INTENSITY_AT: usize = 12;
+const RETURNS_AT: usize = 14;
+const CLASS_AT: usize = 15;
 const USER_DATA_AT: usize = 17;
-/// Return number 1 of 1 (bits 0-2 and 3-5).
-const SINGLE_RETURN: u8 = 1 | (1 << 3);
+const GPS_AT: usize = 20;
+/// Largest class formats 0-3 hold (5 bits).
+const MAX_CLASS: u8 = 31;
+
+/// The point format for `set`, and where its GPS time and colour sit.
+fn point_format(set: AttributeSet) -> (u8, Option<usize>, Option<usize>) {
+    match (
+        set.contains(Attribute::GpsTime),
+        set.contains(Attribute::Rgb),
+    ) {
+        (false, false) => (0, None, None),
+        (true, false) => (1, Some(GPS_AT), None),
+        (false, true) => (2, None, Some(20)),
+        (true, true) => (3, Some(GPS_AT), Some(28)),
+    }
+}
+
+/// Largest return number a LAS 1.2 header counts (points by return 1-5).
+const MAX_RETURN: u8 = 5;
+
+/// Return number r of r (bits 0-2 and 3-5); 1 of 1 when unknown.
+fn returns_byte(r: Option<u8>) -> u8 {
+    let r = r.unwrap_or(1);
+    r | (r << 3)
+}
 
 /// A transform for points within `bounds`: offset = the centre rounded to
 /// whole units, scale = the smallest power of ten that keeps every point of
@@ -116,6 +150,9 @@ pub(crate) struct LasWriter {
     abandoned: Arc<AtomicBool>,
     transform: LasTransform,
     data: PointData,
+    record_len: usize,
+    gps_at: Option<usize>,
+    rgb_at: Option<usize>,
     count: u64,
 }
 
@@ -159,7 +196,8 @@ impl LasWriter {
         if !valid {
             return Err(las_fail("scale must be finite and positive, offset finite"));
         }
-        let fmt = Format::new(0).map_err(|e| las_error(path, e))?;
+        let (number, gps_at, rgb_at) = point_format(spec.attributes);
+        let fmt = Format::new(number).map_err(|e| las_error(path, e))?;
         let mut builder = Builder::from((1, 2));
         builder.point_format = fmt;
         builder.point_format.is_compressed = compressed;
@@ -187,6 +225,9 @@ impl LasWriter {
             abandoned,
             transform,
             data,
+            record_len: usize::from(fmt.len()),
+            gps_at,
+            rgb_at,
             count: 0,
         })
     }
@@ -211,17 +252,41 @@ fn quantise(t: &LasTransform, path: &Path, p: DVec3, record: u64) -> Result<[i32
 impl PointWriter for LasWriter {
     fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
         let c = check_chunk(&self.path, &self.spec, chunk, flags, self.count)?;
+        let set = self.spec.attributes;
         let bytes = self.data.resize_for(chunk.len());
         for (i, (rec, p)) in bytes
-            .chunks_exact_mut(RECORD_LEN)
+            .chunks_exact_mut(self.record_len)
             .zip(&chunk.xyz)
             .enumerate()
         {
-            let q = quantise(&self.transform, &self.path, *p, self.count + i as u64)?;
+            let record = self.count + i as u64;
+            let q = quantise(&self.transform, &self.path, *p, record)?;
             rec.fill(0);
             LittleEndian::write_i32_into(&q, &mut rec[..12]);
-            rec[14] = SINGLE_RETURN;
             rec[USER_DATA_AT] = c.flags.map_or(0, |f| f[i]);
+            let a = chunk.attrs.get(i);
+            let has = |x| set.contains(x);
+            rec[RETURNS_AT] = returns_byte(has(Attribute::ReturnNumber).then_some(a.return_number));
+            if has(Attribute::Intensity) {
+                LittleEndian::write_u16(&mut rec[INTENSITY_AT..], a.intensity);
+            }
+            if a.classification > MAX_CLASS || a.return_number > MAX_RETURN {
+                return Err(IoError::Las {
+                    path: self.path.clone(),
+                    reason: format!(
+                        "point {record} has class {} and return number {}; LAS point formats 0-3 \
+                         hold classes up to {MAX_CLASS}, LAS 1.2 return numbers up to {MAX_RETURN}",
+                        a.classification, a.return_number
+                    ),
+                });
+            }
+            rec[CLASS_AT] = a.classification;
+            if let Some(at) = self.gps_at {
+                LittleEndian::write_f64(&mut rec[at..], a.gps_time);
+            }
+            if let Some(at) = self.rgb_at {
+                LittleEndian::write_u16_into(&a.rgb, &mut rec[at..at + 6]);
+            }
         }
         let written = match &mut self.writer {
             Some(w) => w.write_points(&self.data),
@@ -242,6 +307,10 @@ impl PointWriter for LasWriter {
         };
         if let Err(e) = writer.close() {
             self.abandoned.store(true, Ordering::Relaxed);
+            // The las writer closes itself again on drop and panics when
+            // that fails, as it would here (a header it cannot write): it
+            // is leaked instead, once, on this error path.
+            std::mem::forget(writer);
             return Err(las_error(&path, e));
         }
         let guarded = writer.into_inner().map_err(|e| las_error(&path, e))?;

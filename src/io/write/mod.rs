@@ -9,7 +9,7 @@ mod xyz;
 
 pub use las::choose_las_transform;
 
-use super::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
+use super::{AtomicFile, Attributes, Format, IoError, PointChunk, PointWriter, WriterSpec};
 use glam::Vec3;
 use std::fs::File;
 use std::io::BufWriter;
@@ -26,6 +26,13 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
         return Err(IoError::Unsupported {
             path: path.to_path_buf(),
             reason: "gzip output is not supported; compress the finished file".into(),
+        });
+    }
+    let unheld = spec.attributes.without(spec.format.attributes());
+    if !unheld.is_empty() {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!("this format cannot hold {}", unheld.describe()),
         });
     }
     Ok(match spec.format {
@@ -57,6 +64,10 @@ fn open_output(path: &Path) -> Result<(AtomicFile, BufWriter<File>), IoError> {
 struct Checked<'a> {
     normals: Option<&'a [Vec3]>,
     flags: Option<&'a [u8]>,
+    /// The chunk's attributes, when the spec asks for some (the spec's
+    /// set says which to write).
+    attrs: Option<&'a Attributes>,
+    set: super::AttributeSet,
 }
 
 /// Checks `chunk` against `spec`; `written` is the number of points already
@@ -83,6 +94,19 @@ fn check_chunk<'a>(
         (true, Some(f)) if f.len() == n => Some(f),
         (true, _) => return Err(misuse(format!("writer needs {n} flags for this chunk"))),
     };
+    let attrs = match spec.attributes.is_empty() {
+        true => None,
+        false => Some(&chunk.attrs),
+    };
+    for a in spec.attributes.iter() {
+        if chunk.attrs.len_of(a) != n {
+            return Err(misuse(format!(
+                "writer needs {n} {} values for this chunk, it has {}",
+                a.name(),
+                chunk.attrs.len_of(a)
+            )));
+        }
+    }
     for (i, p) in chunk.xyz.iter().enumerate() {
         if let Some(value) = [p.x, p.y, p.z].into_iter().find(|c| !c.is_finite()) {
             return Err(IoError::NonFinite {
@@ -92,5 +116,10 @@ fn check_chunk<'a>(
             });
         }
     }
-    Ok(Checked { normals, flags })
+    Ok(Checked {
+        normals,
+        flags,
+        attrs,
+        set: spec.attributes,
+    })
 }

@@ -3,12 +3,22 @@
 //! as a fixed-width placeholder and patched in `finish`, so the points
 //! stream straight to disk.
 //!
+//! Attributes follow: `intensity` ushort, `red green blue` uchar (the type
+//! every PLY viewer reads; 16-bit colour keeps its high byte),
+//! `classification` and `return_number` uchar, `gps_time` double.
+//!
 //! Binary PCD (PCL's format) has the same records under another header
 //! (`FIELDS x y z normal_x normal_y normal_z flags`, `DATA binary`, counts
-//! in `WIDTH` and `POINTS`), so this writer writes it too.
+//! in `WIDTH` and `POINTS`), so this writer writes it too; its attributes
+//! take PCL's types where PCL has one (`intensity` F 4 as in `PointXYZI`,
+//! `rgb` packed 0x00RRGGBB in an F 4 as in `PointXYZRGB`).
 
 use super::{check_chunk, open_output, Checked};
-use crate::io::{AtomicFile, Format, IoError, PointChunk, PointWriter, WriterSpec};
+use crate::io::attributes::narrow_16bit;
+use crate::io::{
+    AtomicFile, Attribute, AttributeSet, Attributes, Format, IoError, PointChunk, PointWriter,
+    WriterSpec,
+};
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
 use rayon::prelude::*;
 use std::fs::File;
@@ -52,6 +62,15 @@ fn header(spec: &WriterSpec) -> (String, Vec<u64>) {
     if spec.with_flags {
         h += "property uchar flags\n";
     }
+    for a in spec.attributes.iter() {
+        h += match a {
+            Attribute::Intensity => "property ushort intensity\n",
+            Attribute::Rgb => "property uchar red\nproperty uchar green\nproperty uchar blue\n",
+            Attribute::Classification => "property uchar classification\n",
+            Attribute::ReturnNumber => "property uchar return_number\n",
+            Attribute::GpsTime => "property double gps_time\n",
+        };
+    }
     h += "end_header\n";
     (h, vec![count_at])
 }
@@ -76,6 +95,15 @@ fn pcd_header(spec: &WriterSpec) -> (String, Vec<u64>) {
     }
     if spec.with_flags {
         add("flags", "1", "U");
+    }
+    for a in spec.attributes.iter() {
+        match a {
+            Attribute::Intensity => add("intensity", "4", "F"),
+            Attribute::Rgb => add("rgb", "4", "F"),
+            Attribute::Classification => add("classification", "1", "U"),
+            Attribute::ReturnNumber => add("return_number", "1", "U"),
+            Attribute::GpsTime => add("gps_time", "8", "F"),
+        }
     }
     let mut h = format!(
         "# .PCD v0.7 - Point Cloud Data file format (written by scanmesh)\nVERSION 0.7\n\
@@ -129,10 +157,11 @@ fn encode_parts(bufs: &mut Vec<Vec<u8>>, chunk: &PointChunk, c: &Checked, format
         if range.is_empty() {
             return;
         }
+        let pcd = format == Format::Pcd;
         match format {
             Format::PlyAscii => encode_text(buf, chunk, c, range),
-            Format::PlyBinaryBe => encode_binary::<BigEndian>(buf, chunk, c, range),
-            _ => encode_binary::<LittleEndian>(buf, chunk, c, range),
+            Format::PlyBinaryBe => encode_binary::<BigEndian>(buf, chunk, c, range, pcd),
+            _ => encode_binary::<LittleEndian>(buf, chunk, c, range, pcd),
         }
     });
 }
@@ -142,6 +171,7 @@ fn encode_binary<B: ByteOrder>(
     chunk: &PointChunk,
     c: &Checked,
     range: Range<usize>,
+    pcd: bool,
 ) {
     let mut b8 = [0u8; 8];
     for (i, p) in range.clone().zip(&chunk.xyz[range]) {
@@ -158,7 +188,51 @@ fn encode_binary<B: ByteOrder>(
         if let Some(f) = c.flags {
             buf.push(f[i]);
         }
+        if let Some(a) = c.attrs {
+            match pcd {
+                false => encode_attrs_ply::<B>(buf, a, c.set, i),
+                true => encode_attrs_pcd(buf, a, c.set, i),
+            }
+        }
     }
+}
+
+fn encode_attrs_ply<B: ByteOrder>(buf: &mut Vec<u8>, a: &Attributes, set: AttributeSet, i: usize) {
+    let mut b8 = [0u8; 8];
+    for attr in set.iter() {
+        match attr {
+            Attribute::Intensity => {
+                B::write_u16(&mut b8, a.intensity[i]);
+                buf.extend_from_slice(&b8[..2]);
+            }
+            Attribute::Rgb => buf.extend(a.rgb[i].map(narrow_16bit)),
+            Attribute::Classification => buf.push(a.classification[i]),
+            Attribute::ReturnNumber => buf.push(a.return_number[i]),
+            Attribute::GpsTime => {
+                B::write_f64(&mut b8, a.gps_time[i]);
+                buf.extend_from_slice(&b8);
+            }
+        }
+    }
+}
+
+/// PCD is little-endian only; the record layout of [`pcd_header`].
+fn encode_attrs_pcd(buf: &mut Vec<u8>, a: &Attributes, set: AttributeSet, i: usize) {
+    for attr in set.iter() {
+        match attr {
+            Attribute::Intensity => buf.extend(f32::from(a.intensity[i]).to_le_bytes()),
+            Attribute::Rgb => buf.extend(pack_rgb(a.rgb[i]).to_le_bytes()),
+            Attribute::Classification => buf.push(a.classification[i]),
+            Attribute::ReturnNumber => buf.push(a.return_number[i]),
+            Attribute::GpsTime => buf.extend(a.gps_time[i].to_le_bytes()),
+        }
+    }
+}
+
+/// PCL's packed colour: 0x00RRGGBB, 8 bits per channel.
+pub(crate) fn pack_rgb(rgb: [u16; 3]) -> u32 {
+    let [r, g, b] = rgb.map(|v| u32::from(narrow_16bit(v)));
+    (r << 16) | (g << 8) | b
 }
 
 /// One line per point; `{}` prints the shortest text that parses back to
@@ -173,7 +247,25 @@ pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked, ra
         if let Some(f) = c.flags {
             let _ = write!(buf, " {}", f[i]);
         }
+        if let Some(a) = c.attrs {
+            encode_attrs_text(buf, a, c.set, i);
+        }
         buf.push(b'\n');
+    }
+}
+
+fn encode_attrs_text(buf: &mut Vec<u8>, a: &Attributes, set: AttributeSet, i: usize) {
+    for attr in set.iter() {
+        let _ = match attr {
+            Attribute::Intensity => write!(buf, " {}", a.intensity[i]),
+            Attribute::Rgb => {
+                let [r, g, b] = a.rgb[i].map(narrow_16bit);
+                write!(buf, " {r} {g} {b}")
+            }
+            Attribute::Classification => write!(buf, " {}", a.classification[i]),
+            Attribute::ReturnNumber => write!(buf, " {}", a.return_number[i]),
+            Attribute::GpsTime => write!(buf, " {}", a.gps_time[i]),
+        };
     }
 }
 

@@ -1,0 +1,344 @@
+//! Per-point attributes scanners record besides positions (intensity, RGB
+//! colour, classification, return number, GPS time): their types, the set a
+//! source carries or a writer writes, and a chunk's columns of them.
+//!
+//! One representation serves every format, so a value survives any pair of
+//! formats that can hold it (README "Attributes"): intensity as u16 (LAS),
+//! colour as three u16 (LAS, E57; 8-bit sources are widened by x257, so
+//! 255 becomes 65535 and narrowing back by `>> 8` is exact), classification
+//! and return number as u8 (LAS), GPS time as f64 seconds.
+
+use serde::{Deserialize, Serialize};
+
+/// One kind of per-point attribute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Attribute {
+    Intensity,
+    Rgb,
+    Classification,
+    ReturnNumber,
+    GpsTime,
+}
+
+impl Attribute {
+    pub const ALL: [Attribute; 5] = [
+        Attribute::Intensity,
+        Attribute::Rgb,
+        Attribute::Classification,
+        Attribute::ReturnNumber,
+        Attribute::GpsTime,
+    ];
+
+    /// The name used in messages, the manifest and `info`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Attribute::Intensity => "intensity",
+            Attribute::Rgb => "rgb",
+            Attribute::Classification => "classification",
+            Attribute::ReturnNumber => "return_number",
+            Attribute::GpsTime => "gps_time",
+        }
+    }
+
+    /// Bytes of one value, little-endian, in a store column.
+    pub fn item_bytes(self) -> usize {
+        match self {
+            Attribute::Intensity => 2,
+            Attribute::Rgb => 6,
+            Attribute::Classification | Attribute::ReturnNumber => 1,
+            Attribute::GpsTime => 8,
+        }
+    }
+
+    fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+}
+
+/// A set of attribute kinds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct AttributeSet(u8);
+
+impl AttributeSet {
+    pub const EMPTY: AttributeSet = AttributeSet(0);
+
+    pub fn of(attrs: &[Attribute]) -> Self {
+        AttributeSet(attrs.iter().fold(0, |m, a| m | a.bit()))
+    }
+
+    pub fn all() -> Self {
+        Self::of(&Attribute::ALL)
+    }
+
+    pub fn contains(self, a: Attribute) -> bool {
+        self.0 & a.bit() != 0
+    }
+
+    pub fn with(self, a: Attribute) -> Self {
+        AttributeSet(self.0 | a.bit())
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Those of `self` that are also in `other`.
+    pub fn intersect(self, other: AttributeSet) -> Self {
+        AttributeSet(self.0 & other.0)
+    }
+
+    /// Those of `self` that are not in `other`.
+    pub fn without(self, other: AttributeSet) -> Self {
+        AttributeSet(self.0 & !other.0)
+    }
+
+    pub fn iter(self) -> impl Iterator<Item = Attribute> {
+        Attribute::ALL
+            .into_iter()
+            .filter(move |a| self.contains(*a))
+    }
+
+    pub fn to_vec(self) -> Vec<Attribute> {
+        self.iter().collect()
+    }
+
+    /// The names, comma-separated ("none" when empty).
+    pub fn describe(self) -> String {
+        match self.is_empty() {
+            true => "none".into(),
+            false => self
+                .iter()
+                .map(Attribute::name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        }
+    }
+
+    /// Bytes of one point's values of every attribute in the set.
+    pub fn bytes_per_point(self) -> usize {
+        self.iter().map(Attribute::item_bytes).sum()
+    }
+}
+
+/// One point's attribute values (those outside a set are ignored).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AttributeValues {
+    pub intensity: u16,
+    pub rgb: [u16; 3],
+    pub classification: u8,
+    pub return_number: u8,
+    pub gps_time: f64,
+}
+
+/// Widens an 8-bit colour channel to 16 bits (0 -> 0, 255 -> 65535).
+pub fn widen_8bit(v: u8) -> u16 {
+    u16::from(v) * 257
+}
+
+/// Narrows a 16-bit colour channel to 8 bits (exact for widened values).
+pub fn narrow_16bit(v: u16) -> u8 {
+    (v >> 8) as u8
+}
+
+/// Rounds `v` into `0..=max`: for formats that store attributes as floats.
+pub fn to_unsigned(v: f64, max: u16) -> u16 {
+    match v.is_nan() {
+        true => 0,
+        false => v.round().clamp(0.0, f64::from(max)) as u16,
+    }
+}
+
+/// A chunk's attribute columns: for each attribute of [`Attributes::set`],
+/// one value per point; the others are empty.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Attributes {
+    set: AttributeSet,
+    pub intensity: Vec<u16>,
+    pub rgb: Vec<[u16; 3]>,
+    pub classification: Vec<u8>,
+    pub return_number: Vec<u8>,
+    pub gps_time: Vec<f64>,
+}
+
+impl Attributes {
+    /// Empties the columns (keeping their allocations) for points carrying
+    /// the attributes of `set`.
+    pub fn reset(&mut self, set: AttributeSet) {
+        self.set = set;
+        self.clear();
+    }
+
+    pub fn clear(&mut self) {
+        self.intensity.clear();
+        self.rgb.clear();
+        self.classification.clear();
+        self.return_number.clear();
+        self.gps_time.clear();
+    }
+
+    pub fn set(&self) -> AttributeSet {
+        self.set
+    }
+
+    /// Appends one point's values of the set's attributes.
+    #[inline]
+    pub fn push(&mut self, v: &AttributeValues) {
+        if self.set.is_empty() {
+            return;
+        }
+        let s = self.set;
+        if s.contains(Attribute::Intensity) {
+            self.intensity.push(v.intensity);
+        }
+        if s.contains(Attribute::Rgb) {
+            self.rgb.push(v.rgb);
+        }
+        if s.contains(Attribute::Classification) {
+            self.classification.push(v.classification);
+        }
+        if s.contains(Attribute::ReturnNumber) {
+            self.return_number.push(v.return_number);
+        }
+        if s.contains(Attribute::GpsTime) {
+            self.gps_time.push(v.gps_time);
+        }
+    }
+
+    /// Point `i`'s values (zero for attributes outside the set).
+    #[inline]
+    pub fn get(&self, i: usize) -> AttributeValues {
+        let s = self.set;
+        let pick = |yes: bool| yes.then_some(i);
+        AttributeValues {
+            intensity: pick(s.contains(Attribute::Intensity)).map_or(0, |i| self.intensity[i]),
+            rgb: pick(s.contains(Attribute::Rgb)).map_or([0; 3], |i| self.rgb[i]),
+            classification: pick(s.contains(Attribute::Classification))
+                .map_or(0, |i| self.classification[i]),
+            return_number: pick(s.contains(Attribute::ReturnNumber))
+                .map_or(0, |i| self.return_number[i]),
+            gps_time: pick(s.contains(Attribute::GpsTime)).map_or(0.0, |i| self.gps_time[i]),
+        }
+    }
+
+    /// Values held for `a` (0 when `a` is not in the set).
+    pub fn len_of(&self, a: Attribute) -> usize {
+        match a {
+            Attribute::Intensity => self.intensity.len(),
+            Attribute::Rgb => self.rgb.len(),
+            Attribute::Classification => self.classification.len(),
+            Attribute::ReturnNumber => self.return_number.len(),
+            Attribute::GpsTime => self.gps_time.len(),
+        }
+    }
+
+    /// Appends the little-endian bytes of `a`'s values (as a store column
+    /// holds them).
+    pub fn encode_le(&self, a: Attribute, out: &mut Vec<u8>) {
+        match a {
+            Attribute::Intensity => self
+                .intensity
+                .iter()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes())),
+            Attribute::Rgb => self
+                .rgb
+                .iter()
+                .flatten()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes())),
+            Attribute::Classification => out.extend_from_slice(&self.classification),
+            Attribute::ReturnNumber => out.extend_from_slice(&self.return_number),
+            Attribute::GpsTime => self
+                .gps_time
+                .iter()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes())),
+        }
+    }
+
+    /// Appends `a`'s values decoded from little-endian `bytes` (whole items).
+    pub fn decode_le(&mut self, a: Attribute, bytes: &[u8]) {
+        let u16_at = |c: &[u8], k: usize| u16::from_le_bytes([c[2 * k], c[2 * k + 1]]);
+        match a {
+            Attribute::Intensity => self
+                .intensity
+                .extend(bytes.chunks_exact(2).map(|c| u16_at(c, 0))),
+            Attribute::Rgb => self.rgb.extend(
+                bytes
+                    .chunks_exact(6)
+                    .map(|c| [u16_at(c, 0), u16_at(c, 1), u16_at(c, 2)]),
+            ),
+            Attribute::Classification => self.classification.extend_from_slice(bytes),
+            Attribute::ReturnNumber => self.return_number.extend_from_slice(bytes),
+            Attribute::GpsTime => self.gps_time.extend(
+                bytes
+                    .chunks_exact(8)
+                    .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])),
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(k: u16) -> AttributeValues {
+        AttributeValues {
+            intensity: 1000 + k,
+            rgb: [k, 65535 - k, 257 * (k % 256)],
+            classification: (k % 32) as u8,
+            return_number: (k % 5) as u8 + 1,
+            gps_time: 1.5e8 + f64::from(k) * 1e-6,
+        }
+    }
+
+    #[test]
+    fn le_columns_round_trip_every_attribute() {
+        let mut a = Attributes::default();
+        a.reset(AttributeSet::all());
+        (0..100).for_each(|k| a.push(&sample(k)));
+        let mut b = Attributes::default();
+        b.reset(AttributeSet::all());
+        for attr in Attribute::ALL {
+            let mut bytes = Vec::new();
+            a.encode_le(attr, &mut bytes);
+            assert_eq!(bytes.len(), 100 * attr.item_bytes(), "{attr:?}");
+            b.decode_le(attr, &bytes);
+        }
+        assert_eq!(a, b);
+        assert_eq!(b.get(7), sample(7));
+    }
+
+    #[test]
+    fn a_set_keeps_only_its_attributes() {
+        let set = AttributeSet::of(&[Attribute::Rgb, Attribute::GpsTime]);
+        let mut a = Attributes::default();
+        a.reset(set);
+        a.push(&sample(3));
+        assert_eq!(
+            (a.intensity.len(), a.rgb.len(), a.gps_time.len()),
+            (0, 1, 1)
+        );
+        let got = a.get(0);
+        assert_eq!(
+            (got.intensity, got.rgb, got.gps_time),
+            (0, sample(3).rgb, sample(3).gps_time)
+        );
+        assert_eq!(set.describe(), "rgb, gps_time");
+        assert_eq!(set.bytes_per_point(), 14);
+        assert_eq!(
+            set.without(AttributeSet::of(&[Attribute::Rgb])).to_vec(),
+            [Attribute::GpsTime]
+        );
+    }
+
+    #[test]
+    fn eight_bit_colour_survives_widening() {
+        for v in 0..=255u8 {
+            assert_eq!(narrow_16bit(widen_8bit(v)), v);
+        }
+        assert_eq!(widen_8bit(255), 65535);
+        assert_eq!(to_unsigned(f64::NAN, 255), 0);
+        assert_eq!(to_unsigned(300.4, 255), 255);
+        assert_eq!(to_unsigned(-3.0, 255), 0);
+    }
+}

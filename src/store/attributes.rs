@@ -1,0 +1,115 @@
+//! The store's attribute columns (intensity, colour, classification, return
+//! number, GPS time): one file per attribute the input carries, written
+//! during the first read of the input and kept in *input* order, unlike the
+//! tile-sorted coordinates. No kernel reads them; only the export does, and
+//! it writes in input order, so a window of output is one sequential read
+//! of each column and the build never sorts or scatters them.
+
+use super::{Column, PointStore, StoreError};
+use crate::io::{Attribute, AttributeSet, Attributes, PointChunk};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// File name of attribute `a`'s column.
+pub fn column_file(a: Attribute) -> String {
+    format!("{}.input", a.name())
+}
+
+/// Writes the attribute columns as the input's chunks arrive.
+pub(super) struct AttributeSink {
+    columns: Vec<(Attribute, PathBuf, BufWriter<File>)>,
+    bytes: Vec<u8>,
+}
+
+impl AttributeSink {
+    pub fn create(dir: &Path, set: AttributeSet) -> Result<Self, StoreError> {
+        let mut columns = Vec::new();
+        for a in set.iter() {
+            let path = dir.join(column_file(a));
+            let file = File::create(&path).map_err(|e| StoreError::os(&path, e))?;
+            columns.push((a, path, BufWriter::with_capacity(1 << 16, file)));
+        }
+        Ok(AttributeSink {
+            columns,
+            bytes: Vec::new(),
+        })
+    }
+
+    /// Appends the chunk's values (its points are the next in input order).
+    pub fn write(&mut self, chunk: &PointChunk) -> Result<(), StoreError> {
+        for (a, path, out) in &mut self.columns {
+            self.bytes.clear();
+            chunk.attrs.encode_le(*a, &mut self.bytes);
+            if self.bytes.len() != chunk.len() * a.item_bytes() {
+                return Err(StoreError::Corrupt {
+                    path: path.clone(),
+                    reason: format!("the reader gave no {} for some points", a.name()),
+                });
+            }
+            out.write_all(&self.bytes)
+                .map_err(|e| StoreError::os(path.as_path(), e))?;
+        }
+        Ok(())
+    }
+
+    pub fn finish(self) -> Result<(), StoreError> {
+        for (_, path, out) in self.columns {
+            out.into_inner()
+                .map_err(|e| StoreError::os(&path, e.into_error()))?;
+        }
+        Ok(())
+    }
+}
+
+impl PointStore {
+    /// The attributes the store keeps for its points.
+    pub fn attributes(&self) -> AttributeSet {
+        AttributeSet::of(&self.manifest.attributes)
+    }
+
+    /// Values of the attributes `set` (a subset of [`PointStore::attributes`])
+    /// for the points of input-order ranks `[first, first + count)`, into
+    /// `out`.
+    pub fn read_attributes(
+        &self,
+        first: u64,
+        count: u64,
+        set: AttributeSet,
+        out: &mut Attributes,
+    ) -> Result<(), StoreError> {
+        out.reset(set);
+        for a in set.iter() {
+            let col = self.attribute_column(a)?;
+            col.with_bytes(first, count, |b| out.decode_le(a, b))?;
+        }
+        Ok(())
+    }
+
+    fn attribute_column(&self, a: Attribute) -> Result<Column, StoreError> {
+        if !self.attributes().contains(a) {
+            return Err(StoreError::MissingColumn {
+                column: column_file(a),
+            });
+        }
+        Column::open(&self.dir.join(column_file(a)), a.item_bytes(), false)
+    }
+
+    /// Checks that every attribute column holds a value per point.
+    pub(super) fn check_attribute_columns(&self) -> Result<(), StoreError> {
+        for a in self.attributes().iter() {
+            let col = self.attribute_column(a)?;
+            if col.items()? != self.manifest.count {
+                return Err(StoreError::Corrupt {
+                    path: col.path().to_path_buf(),
+                    reason: format!(
+                        "holds {} values, the store has {} points",
+                        col.items()?,
+                        self.manifest.count
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
