@@ -127,18 +127,24 @@ pub fn drop_small_pieces(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
 mod tests {
     use super::*;
 
+    /// The triangles of a `w` x `w` vertex grid.
+    fn grid(w: u32) -> Vec<[u32; 3]> {
+        let mut tris = Vec::new();
+        for y in 0..w - 1 {
+            for x in 0..w - 1 {
+                let (a, b, c, d) = (y * w + x, y * w + x + 1, y * w + x + w, y * w + x + w + 1);
+                tris.extend([[a, b, d], [a, c, d]]);
+            }
+        }
+        tris
+    }
+
     /// A 5x5 vertex grid (32 triangles) with a triangle across it (corners
     /// on three grid vertices, edges no grid edge) and a lone triangle
     /// elsewhere: both go, the grid stays.
     #[test]
     fn a_triangle_across_a_surface_is_dropped() {
-        let mut big = Vec::new();
-        for y in 0..4u32 {
-            for x in 0..4u32 {
-                let (a, b, c, d) = (y * 5 + x, y * 5 + x + 1, y * 5 + x + 5, y * 5 + x + 6);
-                big.extend([[a, b, d], [a, c, d]]);
-            }
-        }
+        let big = grid(5);
         let mut with_lone = big.clone();
         with_lone.extend([[40, 41, 42], [0, 4, 20]]);
         assert_eq!(drop_small_pieces(&with_lone), big);
@@ -148,13 +154,7 @@ mod tests {
     /// a triangular hole elsewhere keeps its own disc only.
     #[test]
     fn the_smaller_fan_of_a_pinched_vertex_is_dropped() {
-        let mut grid = Vec::new();
-        for y in 0..3u32 {
-            for x in 0..3u32 {
-                let (a, b, c, d) = (y * 4 + x, y * 4 + x + 1, y * 4 + x + 4, y * 4 + x + 5);
-                grid.extend([[a, b, d], [a, c, d]]);
-            }
-        }
+        let grid = grid(4);
         // Vertex 5's disc is whole; the tent joins it to 20, 21, 22.
         let tent = [[5, 20, 21], [5, 21, 22], [5, 20, 22]];
         let mut tris = grid.clone();
