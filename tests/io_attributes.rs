@@ -72,7 +72,7 @@ fn read(path: &Path) -> (Vec<DVec3>, Attributes) {
 }
 
 fn assert_same_attributes(a: &Attributes, b: &Attributes, set: AttributeSet, what: &str) {
-    assert_eq!(b.set(), set, "{what}: attribute set");
+    assert_eq!(b.set().intersect(set), set, "{what}: attribute set");
     let n = a.len_of(Attribute::Intensity).max(a.len_of(Attribute::Rgb));
     for i in 0..n {
         let (x, y) = (a.get(i), b.get(i));
@@ -296,4 +296,69 @@ fn normals_write_the_inputs_attributes_in_input_order_for_any_tiling() {
         AttributeSet::all(),
         "store -> pcd",
     );
+}
+
+#[test]
+fn e57_carries_intensity_and_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = cloud(2000, 4, false);
+    let las = dir.path().join("s.las");
+    write(&las, &src, Format::Las, AttributeSet::all());
+    let held = AttributeSet::of(&[Attribute::Intensity, Attribute::Rgb]);
+    let e57 = dir.path().join("s.e57");
+    let stats = convert(&las, &e57, InvalidPolicy::Reject, &NoProgress).unwrap();
+    assert_eq!(
+        (stats.carried, stats.dropped),
+        (held, AttributeSet::all().without(held))
+    );
+    let (xyz, back) = read(&e57);
+    assert_eq!((xyz.len(), back.set()), (src.len(), held));
+    assert_same_attributes(&src.attrs, &back, held, "las -> e57");
+    let las2 = dir.path().join("t.las");
+    convert(&e57, &las2, InvalidPolicy::Reject, &NoProgress).unwrap();
+    assert_same_attributes(&src.attrs, &read(&las2).1, held, "e57 -> las");
+}
+
+/// Normals of a file, in file order.
+fn normals_of(path: &Path) -> Vec<glam::Vec3> {
+    let mut r = open_reader(path, InvalidPolicy::Reject).unwrap();
+    let mut out = Vec::new();
+    let mut chunk = PointChunk::default();
+    while r.read_chunk(&mut chunk, 1000).unwrap() > 0 {
+        out.extend(chunk.normals.as_ref().expect("normals"));
+    }
+    out
+}
+
+#[test]
+fn a_las_keeps_its_attributes_after_gaining_normals_in_las() {
+    let dir = tempfile::tempdir().unwrap();
+    let las = dir.path().join("scan.las");
+    write(&las, &sheet(4000), Format::Las, AttributeSet::all());
+    let (in_xyz, in_attrs) = read(&las);
+    let (ply, out) = (dir.path().join("n.ply"), dir.path().join("n.laz"));
+    for o in [&ply, &out] {
+        scanmesh(&[
+            "normals",
+            las.to_str().unwrap(),
+            "-o",
+            o.to_str().unwrap(),
+            "-q",
+        ]);
+    }
+    let (xyz, attrs) = read(&out);
+    assert_same_attributes(&in_attrs, &attrs, AttributeSet::all(), "normals -> laz");
+    // Positions pass through the store's f32 coordinates and a new LAS
+    // quantisation chosen from the bounds.
+    assert_eq!(xyz.len(), in_xyz.len());
+    for (a, b) in xyz.iter().zip(&in_xyz) {
+        assert!(a.distance(*b) < 1e-5, "{a} vs {b}");
+    }
+    let (a, b) = (normals_of(&ply), normals_of(&out));
+    assert!(a == b, "LAS extra-byte normals differ from the PLY's");
+    assert!(a.iter().all(|n| (n.length() - 1.0).abs() < 1e-5));
+    // And they survive a conversion back to PLY.
+    let back = dir.path().join("back.ply");
+    convert(&out, &back, InvalidPolicy::Reject, &NoProgress).unwrap();
+    assert!(normals_of(&back) == a);
 }

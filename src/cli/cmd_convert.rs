@@ -11,7 +11,8 @@ pub struct ConvertArgs {
     /// Input point file.
     input: PathBuf,
     /// Output point file; its extension picks the format (.ply, .xyz, .csv, .las, .laz, .pcd,
-    /// .e57: one scan, positions only).
+    /// .e57: one scan). Intensity, colour, classification, return number and GPS time
+    /// are carried where the output format holds them.
     output: PathBuf,
     #[command(flatten)]
     pub common: super::CommonArgs,

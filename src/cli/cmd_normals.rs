@@ -204,13 +204,6 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
             path.display()
         );
     }
-    if matches!(format, Format::Las | Format::Laz) {
-        // Point format 0 has no normal fields; extra bytes are not written yet.
-        bail!(
-            "{}: LAS/LAZ output cannot carry normals yet; write .ply or .xyz",
-            path.display()
-        );
-    }
     if format == Format::E57 {
         bail!(
             "{}: E57 has no standard field for normals; write .ply, .xyz or .pcd",
@@ -224,7 +217,12 @@ pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
         with_normals: true,
         with_flags: matches!(
             format,
-            Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd
+            Format::PlyAscii
+                | Format::PlyBinaryLe
+                | Format::PlyBinaryBe
+                | Format::Pcd
+                | Format::Las
+                | Format::Laz
         ),
         ..WriterSpec::new(format)
     })

@@ -17,6 +17,7 @@ use super::{
     PointReader, SourceInfo,
 };
 use crate::geom::Aabb;
+use byteorder::{ByteOrder, LittleEndian};
 use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
 use las::{PointDataBuilder, Reader};
@@ -30,10 +31,12 @@ const BLOCK_POINTS: u64 = 1 << 16;
 /// Blocks decoded ahead of the consumer.
 const AHEAD: usize = 2;
 
-/// Decoded points of one block and their attributes.
+/// Decoded points of one block, their normals (when the file has them in
+/// its extra bytes) and their attributes.
 #[derive(Default)]
 struct Decoded {
     xyz: Vec<DVec3>,
+    normals: Vec<Vec3>,
     attrs: Attributes,
 }
 
@@ -117,7 +120,7 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
         format: if compressed { Format::Laz } else { Format::Las },
         gzip: false,
         declared_count: Some(declared),
-        has_normals: false,
+        has_normals: crate::io::las_extra::find_normals(header).is_some(),
         attributes,
         header_bounds: header_bounds(&header.bounds()),
         las_transform: Some(LasTransform {
@@ -138,6 +141,12 @@ fn decode_blocks(
     recycle: Receiver<Decoded>,
 ) {
     let declared = reader.header().number_of_points();
+    let format = reader.header().point_format();
+    // Normal offsets within a record: after the standard fields.
+    let normals = crate::io::las_extra::find_normals(reader.header()).map(|n| {
+        let base = usize::from(format.len() - format.extra_bytes);
+        n.map(|at| base + at)
+    });
     let mut data = PointDataBuilder::new().for_header(reader.header()).build();
     let mut done = 0u64;
     while done < declared {
@@ -150,6 +159,14 @@ fn decode_blocks(
                 d.xyz
                     .extend(x.zip(y).zip(z).map(|((x, y), z)| DVec3::new(x, y, z)));
                 decode_attributes(&data, set, &mut d.attrs);
+                d.normals.clear();
+                if let Some(at) = normals {
+                    let records = data.raw_bytes().chunks_exact(data.record_len());
+                    d.normals
+                        .extend(records.map(|r| {
+                            Vec3::from_array(at.map(|o| LittleEndian::read_f32(&r[o..])))
+                        }));
+                }
                 Ok(d)
             }
             Ok(got) => Err(truncated(&path, declared, done + got)),
@@ -282,7 +299,8 @@ impl PointReader for LasReader {
             let take = (max - chunk.len()).min(self.current.xyz.len() - self.pos);
             for k in self.pos..self.pos + take {
                 let (p, a) = (self.current.xyz[k], self.current.attrs.get(k));
-                self.admit.push_with(chunk, self.next, p, Vec3::ZERO, &a)?;
+                let n = self.current.normals.get(k).copied().unwrap_or(Vec3::ZERO);
+                self.admit.push_with(chunk, self.next, p, n, &a)?;
                 self.next += 1;
             }
             self.pos += take;

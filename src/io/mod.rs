@@ -13,6 +13,7 @@ pub mod e57;
 pub mod error;
 pub mod inspect;
 pub mod las;
+mod las_extra;
 pub mod memory;
 pub mod obj;
 pub mod open;
@@ -68,8 +69,8 @@ impl Format {
             | Format::Las
             | Format::Laz
             | Format::Pcd => AttributeSet::all(),
-            // The E57 writer writes one scan of positions.
-            Format::E57 | Format::Xyz => AttributeSet::EMPTY,
+            Format::E57 => AttributeSet::of(&[Attribute::Intensity, Attribute::Rgb]),
+            Format::Xyz => AttributeSet::EMPTY,
         }
     }
 }

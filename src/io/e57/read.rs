@@ -13,14 +13,23 @@
 //! memory is a few blocks whatever the file's size. The crate decodes one
 //! data packet (at most 64 KiB) at a time.
 //!
+//! Intensity and colour are carried when every selected scan has them,
+//! normalised by the scan's limits (the crate's default) and scaled to
+//! 16 bits; a point whose own value is flagged invalid gets 0, the value
+//! LAS and PLY would hold for "none".
+//!
 //! An E57 is bit-packed: reading it again costs a full decode, so the
 //! reader offers no [`PointReader::reopen`] and a store build spills the
 //! points once instead.
 
 use super::scan::{describe, ScanInfo, Transform};
 use super::seekbuf::SeekBuf;
+use crate::io::attributes::to_unsigned;
 use crate::io::policy::Admitter;
-use crate::io::{Format, IoError, PointChunk, PointReader, ReadOptions, SourceInfo};
+use crate::io::{
+    Attribute, AttributeSet, AttributeValues, Format, IoError, PointChunk, PointReader,
+    ReadOptions, SourceInfo,
+};
 use ::e57::{CartesianCoordinate, PointCloud};
 use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
@@ -36,10 +45,13 @@ const AHEAD: usize = 2;
 type File57 = ::e57::E57Reader<SeekBuf<File>>;
 
 /// A block of consecutive records of one scan: `first` is the file-wide
-/// record number of `recs[0]`; `None` is a record flagged invalid.
+/// record number of `recs[0]`; `None` is a record flagged invalid;
+/// `values` are the records' attributes.
+#[derive(Default)]
 struct Block {
     first: u64,
     recs: Vec<Option<DVec3>>,
+    values: Vec<AttributeValues>,
 }
 
 /// A selected scan as the worker reads it.
@@ -55,7 +67,7 @@ pub struct E57Reader {
     info: SourceInfo,
     scans: Vec<ScanInfo>,
     blocks: Receiver<Result<Block, IoError>>,
-    recycle: Sender<Vec<Option<DVec3>>>,
+    recycle: Sender<Block>,
     worker: Option<JoinHandle<()>>,
     current: Block,
     pos: usize,
@@ -158,7 +170,7 @@ impl E57Reader {
             gzip: false,
             declared_count: Some(declared),
             has_normals: false,
-            attributes: crate::io::AttributeSet::EMPTY,
+            attributes: common_attributes(&picked.iter().map(|&i| &scans[i]).collect::<Vec<_>>()),
             header_bounds: None,
             las_transform: None,
         };
@@ -168,10 +180,7 @@ impl E57Reader {
             blocks: block_rx,
             recycle: recycle_tx,
             worker: Some(worker),
-            current: Block {
-                first: 0,
-                recs: Vec::new(),
-            },
+            current: Block::default(),
             pos: 0,
             admit: Admitter::new(path.to_path_buf(), read.policy),
             declared,
@@ -198,7 +207,7 @@ impl E57Reader {
             .map_err(|_| worker_died(&self.info.path))??;
         let old = std::mem::replace(&mut self.current, block);
         // The worker may be gone already; then the buffer is simply dropped.
-        let _ = self.recycle.send(old.recs);
+        let _ = self.recycle.send(old);
         self.pos = 0;
         match self.current.recs.is_empty() {
             true => Err(worker_died(&self.info.path)),
@@ -221,7 +230,7 @@ fn decode(
     mut file: File57,
     plan: Vec<Planned>,
     blocks: Sender<Result<Block, IoError>>,
-    recycle: Receiver<Vec<Option<DVec3>>>,
+    recycle: Receiver<Block>,
 ) {
     for scan in plan {
         if let Err(e) = decode_scan(&path, &mut file, &scan, &blocks, &recycle) {
@@ -237,7 +246,7 @@ fn decode_scan(
     file: &mut File57,
     scan: &Planned,
     blocks: &Sender<Result<Block, IoError>>,
-    recycle: &Receiver<Vec<Option<DVec3>>>,
+    recycle: &Receiver<Block>,
 ) -> Result<(), IoError> {
     let total = scan.cloud.records;
     if total == 0 {
@@ -251,12 +260,13 @@ fn decode_scan(
     points.apply_pose(false);
     points.spherical_to_cartesian(true);
     points.intensity_to_color(false);
-    points.normalize_color(false);
-    points.normalize_intensity(false);
+    points.normalize_color(true);
+    points.normalize_intensity(true);
     let mut done = 0u64;
     while done < total {
-        let mut recs = recycle.try_recv().unwrap_or_default();
-        recs.clear();
+        let mut block = recycle.try_recv().unwrap_or_default();
+        block.recs.clear();
+        block.values.clear();
         let want = (total - done).min(BLOCK as u64) as usize;
         for _ in 0..want {
             let p = match points.next() {
@@ -264,7 +274,8 @@ fn decode_scan(
                 Some(Err(e)) => return Err(e57_error(path, &what(done), e)),
                 None => return Err(e57_error(path, &what(done), ended_early())),
             };
-            recs.push(match p.cartesian {
+            block.values.push(values_of(&p));
+            block.recs.push(match p.cartesian {
                 CartesianCoordinate::Valid { x, y, z } => {
                     Some(scan.transform.apply(DVec3::new(x, y, z)))
                 }
@@ -273,12 +284,38 @@ fn decode_scan(
             });
             done += 1;
         }
-        let first = scan.base.saturating_add(done - want as u64);
-        if blocks.send(Ok(Block { first, recs })).is_err() {
+        block.first = scan.base.saturating_add(done - want as u64);
+        if blocks.send(Ok(block)).is_err() {
             return Ok(());
         }
     }
     Ok(())
+}
+
+/// A point's intensity and colour, from the crate's 0-1 values.
+fn values_of(p: &::e57::Point) -> AttributeValues {
+    let scale = |v: f32| to_unsigned(f64::from(v) * 65535.0, u16::MAX);
+    AttributeValues {
+        intensity: p.intensity.map_or(0, scale),
+        rgb: p
+            .color
+            .as_ref()
+            .map_or([0; 3], |c| [c.red, c.green, c.blue].map(scale)),
+        ..AttributeValues::default()
+    }
+}
+
+/// The attributes every one of `scans` carries.
+fn common_attributes(scans: &[&ScanInfo]) -> AttributeSet {
+    let all = |name: &str| scans.iter().all(|s| s.attributes.contains(&name));
+    let mut set = AttributeSet::EMPTY;
+    if all("intensity") {
+        set = set.with(Attribute::Intensity);
+    }
+    if all("color") {
+        set = set.with(Attribute::Rgb);
+    }
+    set
 }
 
 fn ended_early() -> ::e57::Error {
@@ -308,7 +345,10 @@ impl PointReader for E57Reader {
             for (k, rec) in block.recs[self.pos..self.pos + take].iter().enumerate() {
                 let record = block.first + (self.pos + k) as u64;
                 match rec {
-                    Some(p) => self.admit.push(chunk, record, *p, Vec3::ZERO)?,
+                    Some(p) => {
+                        let a = &block.values[self.pos + k];
+                        self.admit.push_with(chunk, record, *p, Vec3::ZERO, a)?
+                    }
                     None => {
                         self.admit.pass(chunk);
                         self.flagged += 1;

@@ -1,5 +1,7 @@
 //! The E57 point writer: one scan of f64 cartesian coordinates in the
-//! world frame (identity pose), streamed through the e57 crate's writer,
+//! world frame (identity pose), with intensity and colour as 16-bit
+//! integers when asked for (limits 0-65535, so a reader normalising by them
+//! gets the values back), streamed through the e57 crate's writer,
 //! which buffers one data packet (at most 64 KiB) at a time.
 //!
 //! As for reading, the crate's scan writer borrows its file writer, so both
@@ -9,8 +11,11 @@
 //! per-point flags have no field in standard E57 and are not written.
 
 use super::read::e57_error;
-use crate::io::{AtomicFile, IoError, PointChunk, PointWriter};
-use ::e57::{Record, RecordValue};
+use crate::io::write::check_chunk;
+use crate::io::{
+    AtomicFile, Attribute, AttributeSet, Attributes, IoError, PointChunk, PointWriter, WriterSpec,
+};
+use ::e57::{Record, RecordDataType, RecordName, RecordValue};
 use crossbeam::channel::{bounded, Receiver, Sender};
 use glam::DVec3;
 use std::fs::File;
@@ -21,7 +26,7 @@ use std::thread::JoinHandle;
 const AHEAD: usize = 2;
 
 enum Msg {
-    Points(Vec<DVec3>),
+    Points(Vec<DVec3>, Attributes),
     /// Write the XML section and header: the file is complete.
     Finish,
 }
@@ -31,11 +36,14 @@ pub(crate) struct E57Writer {
     atomic: Option<AtomicFile>,
     to_worker: Option<Sender<Msg>>,
     worker: Option<JoinHandle<Result<(), IoError>>>,
+    spec: WriterSpec,
     count: u64,
 }
 
 impl E57Writer {
-    pub fn create(path: &Path) -> Result<Self, IoError> {
+    /// Normals and flags in `spec` are not written (E57 has no field).
+    pub fn create(path: &Path, spec: &WriterSpec) -> Result<Self, IoError> {
+        let attributes = spec.attributes;
         let mut atomic = AtomicFile::create(path)?;
         let file = atomic
             .file()
@@ -45,13 +53,18 @@ impl E57Writer {
         let owned = path.to_path_buf();
         let worker = std::thread::Builder::new()
             .name("e57-write".into())
-            .spawn(move || write_scan(&owned, file, rx))
+            .spawn(move || write_scan(&owned, file, attributes, rx))
             .map_err(|e| IoError::os(path, e))?;
         Ok(E57Writer {
             path: path.to_path_buf(),
             atomic: Some(atomic),
             to_worker: Some(tx),
             worker: Some(worker),
+            spec: WriterSpec {
+                with_normals: false,
+                with_flags: false,
+                ..spec.clone()
+            },
             count: 0,
         })
     }
@@ -80,23 +93,53 @@ fn guid(kind: &str) -> String {
 
 /// Worker: one scan from the chunks received, finalised on `Finish`; a
 /// hang-up without it leaves the file unfinished (the caller drops it).
-fn write_scan(path: &Path, file: File, chunks: Receiver<Msg>) -> Result<(), IoError> {
+fn write_scan(
+    path: &Path,
+    file: File,
+    attributes: AttributeSet,
+    chunks: Receiver<Msg>,
+) -> Result<(), IoError> {
     let err = |what: &'static str| move |e| e57_error(path, what, e);
     let mut file57 = ::e57::E57Writer::new(file, &guid("file")).map_err(err("cannot start"))?;
-    let prototype = vec![
+    let mut prototype = vec![
         Record::CARTESIAN_X_F64,
         Record::CARTESIAN_Y_F64,
         Record::CARTESIAN_Z_F64,
     ];
+    let u16_record = |name| Record {
+        name,
+        data_type: RecordDataType::U16,
+    };
+    if attributes.contains(Attribute::Intensity) {
+        prototype.push(Record::INTENSITY_U16);
+    }
+    if attributes.contains(Attribute::Rgb) {
+        prototype.extend(
+            [
+                RecordName::ColorRed,
+                RecordName::ColorGreen,
+                RecordName::ColorBlue,
+            ]
+            .map(u16_record),
+        );
+    }
     let mut scan = file57
         .add_pointcloud(&guid("scan"), prototype)
         .map_err(err("cannot start the scan"))?;
     scan.set_name(Some("scanmesh".into()));
     for msg in chunks.iter() {
         match msg {
-            Msg::Points(pts) => {
-                for p in pts {
-                    let values = p.to_array().map(RecordValue::Double).to_vec();
+            Msg::Points(pts, attrs) => {
+                for (i, p) in pts.iter().enumerate() {
+                    let mut values = p.to_array().map(RecordValue::Double).to_vec();
+                    let a = attrs.get(i);
+                    let int = |v: u16| RecordValue::Integer(i64::from(v));
+                    if attributes.contains(Attribute::Intensity) {
+                        values.push(int(a.intensity));
+                    }
+                    if attributes.contains(Attribute::Rgb) {
+                        values.extend(a.rgb.map(int));
+                    }
                     scan.add_point(values).map_err(err("cannot add a point"))?;
                 }
             }
@@ -113,17 +156,14 @@ fn write_scan(path: &Path, file: File, chunks: Receiver<Msg>) -> Result<(), IoEr
 
 impl PointWriter for E57Writer {
     fn write_chunk(&mut self, chunk: &PointChunk, _flags: Option<&[u8]>) -> Result<(), IoError> {
-        for (i, p) in chunk.xyz.iter().enumerate() {
-            if let Some(value) = [p.x, p.y, p.z].into_iter().find(|c| !c.is_finite()) {
-                return Err(IoError::NonFinite {
-                    path: self.path.clone(),
-                    record: self.count + i as u64,
-                    value,
-                });
-            }
-        }
+        check_chunk(&self.path, &self.spec, chunk, None, self.count)?;
         let sent = match &self.to_worker {
-            Some(tx) => tx.send(Msg::Points(chunk.xyz.clone())).is_ok(),
+            Some(tx) => {
+                let mut attrs = Attributes::default();
+                attrs.reset(self.spec.attributes);
+                (0..chunk.len()).for_each(|i| attrs.push(&chunk.attrs.get(i)));
+                tx.send(Msg::Points(chunk.xyz.clone(), attrs)).is_ok()
+            }
             None => false,
         };
         if !sent {

@@ -5,8 +5,9 @@
 //! class is an error naming the point, never truncated. The number of
 //! returns is not carried: it is written equal to the return number (1 when
 //! there is none), the least value valid beside it. The per-point flags,
-//! when asked for, go to the "user data" byte; formats 0-3 have no place for
-//! normals, so asking for them is an error.
+//! when asked for, go to the "user data" byte; normals go to three float
+//! "extra bytes" after the record, described by an Extra Bytes VLR
+//! ([`crate::io::las_extra`]).
 //!
 //! Quantisation follows the ASPRS LAS 1.2 specification (sec. 2.2, "X, Y and
 //! Z scale factors / offsets"): `X = round((x - offset) / scale)` must fit an
@@ -16,6 +17,7 @@
 use super::{check_chunk, open_output};
 use crate::geom::Aabb;
 use crate::io::las::las_error;
+use crate::io::las_extra::{normals_vlr, NORMAL_BYTES};
 use crate::io::{
     AtomicFile, Attribute, AttributeSet, IoError, LasTransform, PointChunk, PointWriter, WriterSpec,
 };
@@ -174,11 +176,6 @@ impl LasWriter {
             path: path.to_path_buf(),
             reason: reason.into(),
         };
-        if spec.with_normals {
-            return Err(las_fail(
-                "LAS point format 0 has no normals; write PLY or XYZ",
-            ));
-        }
         let transform = match (spec.las_transform, &spec.bounds) {
             (Some(t), _) => t,
             (None, Some(b)) => {
@@ -197,8 +194,12 @@ impl LasWriter {
             return Err(las_fail("scale must be finite and positive, offset finite"));
         }
         let (number, gps_at, rgb_at) = point_format(spec.attributes);
-        let fmt = Format::new(number).map_err(|e| las_error(path, e))?;
+        let mut fmt = Format::new(number).map_err(|e| las_error(path, e))?;
         let mut builder = Builder::from((1, 2));
+        if spec.with_normals {
+            fmt.extra_bytes = NORMAL_BYTES;
+            builder.vlrs.push(normals_vlr());
+        }
         builder.point_format = fmt;
         builder.point_format.is_compressed = compressed;
         builder.transforms = to_vector(&transform);
@@ -286,6 +287,10 @@ impl PointWriter for LasWriter {
             }
             if let Some(at) = self.rgb_at {
                 LittleEndian::write_u16_into(&a.rgb, &mut rec[at..at + 6]);
+            }
+            if let Some(n) = c.normals {
+                let at = self.record_len - usize::from(NORMAL_BYTES);
+                LittleEndian::write_f32_into(&n[i].to_array(), &mut rec[at..]);
             }
         }
         let written = match &mut self.writer {

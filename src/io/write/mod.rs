@@ -44,7 +44,7 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
             let compressed = spec.format == Format::Laz || name.ends_with(".laz");
             Box::new(las::LasWriter::create(path, spec, compressed)?)
         }
-        Format::E57 => Box::new(super::e57::E57Writer::create(path)?),
+        Format::E57 => Box::new(super::e57::E57Writer::create(path, spec)?),
     })
 }
 
@@ -61,7 +61,7 @@ fn open_output(path: &Path) -> Result<(AtomicFile, BufWriter<File>), IoError> {
 
 /// What a chunk carries for the spec: normals and flags, each present
 /// exactly when the spec asks for it.
-struct Checked<'a> {
+pub(crate) struct Checked<'a> {
     normals: Option<&'a [Vec3]>,
     flags: Option<&'a [u8]>,
     /// The chunk's attributes, when the spec asks for some (the spec's
@@ -72,7 +72,7 @@ struct Checked<'a> {
 
 /// Checks `chunk` against `spec`; `written` is the number of points already
 /// written, so errors name the output record.
-fn check_chunk<'a>(
+pub(crate) fn check_chunk<'a>(
     path: &Path,
     spec: &WriterSpec,
     chunk: &'a PointChunk,
