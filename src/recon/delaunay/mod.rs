@@ -16,6 +16,7 @@ pub mod fan;
 pub mod holes;
 pub mod kernel;
 pub mod order;
+pub mod pieces;
 pub mod predicates;
 pub mod reconstruct;
 pub mod select;

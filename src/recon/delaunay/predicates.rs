@@ -30,10 +30,33 @@ fn c3(p: DVec3) -> Coord3D<f64> {
 }
 
 /// Exact sign of the orientation determinant (see the module doc).
+///
+/// A semi-static filter first, as [`insphere`]'s: Shewchuk's
+/// `orient3dfast` in f64 and CGAL's static error bound for
+/// `Orientation_3`, `5.11e-15 * X * Y * Z` over the largest coordinate
+/// difference per axis, taken 8 times; `robust::orient3d` (adaptive,
+/// exact) when it does not settle the sign. `robust`'s own filter sums a
+/// permanent first (measured: 4.3 % of the 1M dragon's triangulation time
+/// in `robust::orient3d`).
 #[inline]
 pub fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    let (ad, bd, cd) = (a - d, b - d, c - d);
+    let m = ad.abs().max(bd.abs()).max(cd.abs());
+    let (lo, hi) = (m.min_element(), m.max_element());
+    if lo > 1e-90 && hi < 1e90 {
+        let det = ad.x * (bd.y * cd.z - bd.z * cd.y)
+            + bd.x * (cd.y * ad.z - cd.z * ad.y)
+            + cd.x * (ad.y * bd.z - ad.z * bd.y);
+        let bound = ORIENT_FILTER * m.x * m.y * m.z;
+        if det > bound || -det > bound {
+            return det;
+        }
+    }
     robust::orient3d(c3(a), c3(b), c3(c), c3(d))
 }
+
+/// Error-bound constant of [`orient`]'s filter (see there).
+const ORIENT_FILTER: f64 = 4.1e-14;
 
 /// Exact in-sphere determinant: positive when `e` is strictly inside the
 /// sphere through `a, b, c, d` (which must have `orient > 0`).

@@ -7,7 +7,8 @@
 
 use super::cleanup::{Cleanup, CleanupReport};
 use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
-use super::holes::small_hole_patches;
+use super::holes::{small_hole_patches, PATCH_RINGS};
+use super::pieces::{drop_extra_fans, drop_small_pieces, PIECE_RINGS};
 use super::triangulation::{Delaunay, DelaunayError};
 use super::umbrella::{nearest_distances, umbrella, Region};
 use glam::DVec3;
@@ -37,8 +38,10 @@ pub struct SelectionReport {
     pub triangulation_bytes: u64,
     pub fan_triangles: u64,
     pub cleanup: CleanupReport,
-    /// Triangles added to close 3- and 4-edge holes.
+    /// Triangles added to close small holes.
     pub patches: u64,
+    /// Triangles dropped as small pieces (and extra fans).
+    pub floating: u64,
 }
 
 /// All fans of one round, by vertex.
@@ -107,14 +110,25 @@ pub fn select(
     let mut doubt = initial_doubt(&sel, &second.proven);
     let mut cleanup = Cleanup::new(d.points(), tris);
     report.cleanup = cleanup.run(&second.interior, &mut doubt);
-    let mut kept: Vec<[u32; 3]> = cleanup.alive_triangles().collect();
-    let patches = small_hole_patches(d.points(), &kept);
+    let alive: Vec<[u32; 3]> = cleanup.alive_triangles().collect();
+    let mut kept = drop_small_pieces(&drop_extra_fans(&alive));
+    report.floating = (alive.len() - kept.len()) as u64;
+    let patches = small_hole_patches(
+        d.points(),
+        &kept,
+        match hole {
+            Hole::Absolute(h) => Some(h),
+            Hole::Local(_) => None,
+        },
+    );
     report.patches = patches.len() as u64;
     kept.extend(patches);
     if !doubt.is_empty() {
-        // A patch reads the triangles two rings around it.
-        cleanup.dilate(&mut doubt);
-        cleanup.dilate(&mut doubt);
+        // A patch reads the triangles PATCH_RINGS rings around it, after
+        // the pieces PIECE_RINGS.
+        for _ in 0..PATCH_RINGS + PIECE_RINGS {
+            cleanup.dilate(&mut doubt);
+        }
     }
     Ok(to_input(
         &d,

@@ -223,3 +223,40 @@ fn noisy_surface_sample_is_delaunay() {
     sanity_check(&d).unwrap();
     assert_eq!(d.vertex_count(), 20_000);
 }
+
+/// The filtered `orient` has robust's exact sign, on random points and on
+/// points rounded onto near-coplanar and exactly coplanar configurations.
+#[test]
+fn filtered_orient_has_the_exact_sign() {
+    let c = |p: DVec3| robust::Coord3D {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    };
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut r = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..200_000 {
+        let mut p = [DVec3::ZERO; 4];
+        for q in &mut p {
+            *q = DVec3::new(r(), r(), r()) * 1e-3 + DVec3::splat(0.1);
+        }
+        if k % 2 == 1 {
+            // d on the plane of a, b, c up to rounding (or exactly: z = 0).
+            let (u, v) = (r(), r());
+            p[3] = p[0] + (p[1] - p[0]) * u + (p[2] - p[0]) * v;
+            if k % 4 == 3 {
+                for q in &mut p {
+                    q.z = 0.25;
+                }
+            }
+        }
+        let exact = robust::orient3d(c(p[0]), c(p[1]), c(p[2]), c(p[3]));
+        let got = orient(p[0], p[1], p[2], p[3]);
+        assert_eq!(got.partial_cmp(&0.0), exact.partial_cmp(&0.0), "{p:?}");
+    }
+}
