@@ -332,3 +332,22 @@ fn a_store_whose_manifest_disagrees_with_its_columns_is_refused() {
         no_output_left(dir.path(), "n.ply");
     }
 }
+
+#[test]
+fn delaunay_on_one_repeated_point_fails_naming_the_input() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let input = write(dir.path(), "same.xyz", "1 2 3\n".repeat(1000).as_bytes());
+    let out = dir.path().join("m.ply");
+    let run = scanmesh(&[
+        "reconstruct",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--method",
+        "delaunay",
+        "-q",
+    ]);
+    assert_fails_naming(&run, "same.xyz");
+    assert!(String::from_utf8_lossy(&run.stderr).contains("all one point"));
+    assert!(!out.exists());
+}

@@ -1,7 +1,7 @@
 //! `scanmesh reconstruct --method delaunay`: paper 4's reconstruction over
 //! a store, tiled and exact (see `recon::delaunay`).
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::delaunay::reconstruct::{
     cost, reconstruct_delaunay, DelaunayParams, DelaunayReport,
@@ -32,7 +32,8 @@ pub fn run(
         format,
         prepared.opts,
         progress.as_ref(),
-    )?;
+    )
+    .with_context(|| format!("reconstructing {}", input.display()))?;
     print_summary(
         &r,
         prepared.ws.store.len(),
