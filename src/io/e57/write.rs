@@ -158,12 +158,11 @@ impl PointWriter for E57Writer {
     fn write_chunk(&mut self, chunk: &PointChunk, _flags: Option<&[u8]>) -> Result<(), IoError> {
         check_chunk(&self.path, &self.spec, chunk, None, self.count)?;
         let sent = match &self.to_worker {
-            Some(tx) => {
-                let mut attrs = Attributes::default();
-                attrs.reset(self.spec.attributes);
-                (0..chunk.len()).for_each(|i| attrs.push(&chunk.attrs.get(i)));
-                tx.send(Msg::Points(chunk.xyz.clone(), attrs)).is_ok()
-            }
+            // The worker writes the spec's attributes (checked above to be
+            // among the chunk's) from the chunk's columns.
+            Some(tx) => tx
+                .send(Msg::Points(chunk.xyz.clone(), chunk.attrs.clone()))
+                .is_ok(),
             None => false,
         };
         if !sent {
