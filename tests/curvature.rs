@@ -10,7 +10,7 @@ use glam::DVec3;
 use scanmesh::features::curvature::{CurvatureReport, VALUES};
 use scanmesh::features::export::write_curvature_ply;
 use scanmesh::features::{
-    compute_curvature, CurvatureParams, HoodChoice, CURVATURE_FILE, CURVATURE_FLAGS_FILE,
+    compute_curvature, CurvatureParams, HoodChoice, CURVATURE, CURVATURE_FLAGS,
 };
 use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::store::PointStore;
@@ -27,8 +27,8 @@ struct Out {
 fn read_back(store: &PointStore) -> (Vec<[f32; VALUES]>, Vec<u8>) {
     let n = store.len() as usize;
     let (mut values, mut flags) = (vec![[0f32; VALUES]; n], vec![0u8; n]);
-    let vcol = store.attribute(CURVATURE_FILE, 4 * VALUES).unwrap();
-    let fcol = store.attribute(CURVATURE_FLAGS_FILE, 1).unwrap();
+    let vcol = store.column(&CURVATURE).unwrap();
+    let fcol = store.column(&CURVATURE_FLAGS).unwrap();
     let (mut ids, mut v, mut f) = (Vec::new(), Vec::new(), Vec::new());
     for t in store.tiles() {
         store.read_indices(t.start, t.count, &mut ids).unwrap();

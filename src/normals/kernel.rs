@@ -14,10 +14,10 @@
 use super::forest::{spanning_forest, Edge};
 use super::hood::{HoodIndex, Hoods};
 use super::pca::fit_plane;
-use super::stats::SamplingHistograms;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::Neighbour;
+use crate::store::sampling::SamplingHistograms;
 use crate::tiling::TilePoints;
 use glam::DVec3;
 

@@ -2,17 +2,17 @@
 //! tiles in flight (and so the memory), reorders results into tile order and
 //! hands them to the kernel's seam policy. It knows nothing of geometry.
 
-pub mod budget;
 pub mod codec;
-pub mod plan;
-pub mod progress;
+pub mod options;
 pub mod run;
 
-pub use budget::{peak_rss_bytes, MemoryBudget};
 pub use codec::Codec;
-pub use plan::{BudgetError, KernelCost, MemoryPlan};
-pub use progress::{NoProgress, Progress};
-pub use run::{run_tiles, KernelError, RunOptions, RunStats, TileKernel};
+pub use options::RunOptions;
+pub use run::{run_tiles, KernelError, RunStats, TileKernel};
+// The run's memory and progress live below every layer that uses them; a
+// kernel finds them here beside the pipeline that takes them.
+pub use crate::memory::{BudgetError, KernelCost, MemoryBudget, MemoryPlan};
+pub use crate::progress::{NoProgress, Progress};
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

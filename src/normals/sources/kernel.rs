@@ -14,6 +14,7 @@ use crate::normals::kernel::store_slots;
 use crate::normals::FLAG_DEGENERATE;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::{build_index, KnnBackend, Neighbour};
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 
@@ -38,8 +39,8 @@ impl TileKernel for SourcesKernel {
         self.margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        &[NORMALS, FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<Vec<Edge>, KernelError> {
@@ -144,9 +145,9 @@ fn reach(found: &[Neighbour], k: usize) -> f64 {
 
 /// A loaded point's PCA normal, unless it was degenerate.
 fn usable_normals(tile: &TilePoints) -> Vec<Option<DVec3>> {
-    tile.normals
+    tile.normals()
         .iter()
-        .zip(&tile.flags)
+        .zip(tile.flags())
         .map(|(n, f)| {
             let ok = f & FLAG_DEGENERATE == 0 && n.is_finite() && *n != DVec3::ZERO;
             ok.then_some(*n)

@@ -18,6 +18,7 @@ use super::sdf::{Corner, Field, Samples};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::grid::GridIndex;
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -103,8 +104,8 @@ impl TileKernel for ImplicitKernel {
         self.initial_margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        &[NORMALS, FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ImplicitTile, KernelError> {
@@ -270,11 +271,11 @@ fn corner_keys(cube: [i64; 3]) -> Result<[u64; 8], KernelError> {
 
 /// Loaded points whose normal is usable (neither degenerate nor unoriented).
 fn usable_samples(tile: &TilePoints) -> (Vec<DVec3>, Vec<DVec3>, Vec<u64>) {
-    let keep = |i: &usize| tile.flags[*i] == 0 && tile.normals[*i] != DVec3::ZERO;
+    let keep = |i: &usize| tile.flags()[*i] == 0 && tile.normals()[*i] != DVec3::ZERO;
     let idx: Vec<usize> = (0..tile.points.len()).filter(keep).collect();
     (
         idx.iter().map(|&i| tile.points[i]).collect(),
-        idx.iter().map(|&i| tile.normals[i]).collect(),
+        idx.iter().map(|&i| tile.normals()[i]).collect(),
         idx.iter().map(|&i| tile.ids[i]).collect(),
     )
 }

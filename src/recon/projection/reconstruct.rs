@@ -146,7 +146,7 @@ pub fn reconstruct_projection(
 /// margin to match), so it is kept within a factor 2 of the estimate;
 /// only then does the tiling enter.
 pub fn lattice_unit(store: &PointStore, spacing: f64) -> f64 {
-    let m = &store.manifest;
+    let m = &store.manifest();
     let extent = (0..3)
         .map(|a| m.bounds_max[a] - m.bounds_min[a])
         .fold(0.0f64, f64::max);
