@@ -46,8 +46,8 @@ pub struct CurvatureKernel {
 
 /// The oriented normal of loaded point `i`, if the normals pass gave one.
 pub(crate) fn oriented_normal(tile: &TilePoints, i: usize) -> Option<DVec3> {
-    let n = *tile.normals().get(i)?;
-    let f = tile.flags().get(i).copied().unwrap_or(N_DEGENERATE);
+    let n = *tile.normals()?.get(i)?;
+    let f = tile.flags()?.get(i).copied().unwrap_or(N_DEGENERATE);
     let ok = f & (N_DEGENERATE | N_UNORIENTED) == 0 && n.is_finite() && n != DVec3::ZERO;
     ok.then_some(n)
 }
@@ -141,7 +141,7 @@ impl TileKernel for CurvatureKernel {
             out.stats.merge(&part.stats);
             short = short.max(sh);
         }
-        check_room(short, tile.margin)?;
+        KernelError::unless_short(short, tile.margin)?;
         Ok(out)
     }
 }
@@ -185,23 +185,6 @@ impl CurvatureKernel {
         }
         Ok((out, short))
     }
-}
-
-/// Fails with the margin that would make every neighbourhood complete,
-/// given the largest shortfall (as the normals kernel does).
-pub(crate) fn check_room(short: f64, margin: f64) -> Result<(), KernelError> {
-    if short > 0.0 {
-        // A little extra so rounding at the region's edge cannot loop.
-        let needed = if short.is_finite() {
-            (margin + short) * 1.0001 + 1e-12
-        } else {
-            0.0
-        };
-        return Err(KernelError::MarginTooSmall {
-            needed: needed.max(margin * 2.0),
-        });
-    }
-    Ok(())
 }
 
 /// What produced a store's curvature column and what it measured, saved

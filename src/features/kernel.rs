@@ -43,7 +43,7 @@ use super::stages::{
 use super::{CURVATURE, CURVATURE_FLAGS};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
-use crate::store::ColumnSpec;
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::synth::LineKind;
 use crate::tiling::{TilePoints, Values};
 use glam::DVec3;
@@ -113,7 +113,8 @@ impl TileKernel for FeaturesKernel {
     }
 
     fn reads(&self) -> &[ColumnSpec] {
-        &[CURVATURE, CURVATURE_FLAGS]
+        // The stages orient their frames by the normals, as curvature did.
+        &[NORMALS, FLAGS, CURVATURE, CURVATURE_FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<FeaturesTile, KernelError> {
@@ -137,7 +138,7 @@ impl TileKernel for FeaturesKernel {
         };
         let hood = HoodIndex::build(tile, p.hood)?;
         let (enh, short) = enhance_points(tile, &hood, &class, &sets, &which, p)?;
-        super::curvature::check_room(short.max(uncovered(tile, &own, chain)), tile.margin)?;
+        KernelError::unless_short(short.max(uncovered(tile, &own, chain)), tile.margin)?;
         let status = corner_status(tile, &which, &enh, &class, &dist, p);
         let mut out = FeaturesTile::default();
         let owned = |i: usize| owns(tile, tile.points[i], p.cell);

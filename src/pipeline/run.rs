@@ -5,45 +5,13 @@
 //! a kernel with a [`Codec`] has each result saved as it finishes and read
 //! back instead of recomputed, and a tile job computes some tiles only.
 
-use super::{Codec, PipelineError, RunOptions};
+use super::{Codec, KernelError, PipelineError, RunOptions, TileKernel};
 use crate::progress::Progress;
-use crate::store::{Checkpoints, ColumnSpec, Job, PointStore, StoreError};
-use crate::tiling::{load_tile, TilePoints};
+use crate::store::{Checkpoints, Job, PointStore};
+use crate::tiling::load_tile;
 use crossbeam::channel;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-
-/// Why a kernel could not finish a tile.
-#[derive(Debug, thiserror::Error)]
-pub enum KernelError {
-    /// Some core point depends on points beyond the loaded region: the
-    /// pipeline reloads the tile with at least `needed` margin and reruns it.
-    #[error("margin too small: {needed} needed")]
-    MarginTooSmall { needed: f64 },
-    #[error(transparent)]
-    Store(#[from] StoreError),
-    #[error("{0}")]
-    Failed(String),
-}
-
-/// A pure function from one tile's points to a tile result.
-pub trait TileKernel: Sync {
-    type Output: Send;
-    /// Stage name shown in progress.
-    fn name(&self) -> &str;
-    /// Margin to load first; the kernel asks for more when it finds it short.
-    fn margin(&self) -> f64;
-    fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
-    /// The store columns the kernel reads: each tile carries their values
-    /// for every loaded point ([`TilePoints::column`]).
-    fn reads(&self) -> &[ColumnSpec] {
-        &[]
-    }
-    /// How results are saved for a resumable run (`None`: recomputed).
-    fn codec(&self) -> Option<Codec<Self::Output>> {
-        None
-    }
-}
 
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStats {
@@ -304,7 +272,13 @@ fn run_one<K: TileKernel>(
             }
             Err(KernelError::Store(e)) => return Err(e.into()),
             Err(KernelError::Failed(reason)) => {
-                return Err(PipelineError::Kernel { tile: t, reason })
+                return Err(PipelineError::Kernel {
+                    tile: t,
+                    source: reason.into(),
+                })
+            }
+            Err(KernelError::Source(source)) => {
+                return Err(PipelineError::Kernel { tile: t, source })
             }
         }
     }

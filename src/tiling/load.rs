@@ -34,6 +34,13 @@ pub struct TilePoints {
     pub columns: Vec<TileColumn>,
 }
 
+/// A kernel read normals from a tile loaded without them (it did not
+/// declare them in `reads`): a programming error, reported rather than
+/// read as "no normal here".
+#[derive(Debug, thiserror::Error)]
+#[error("the tile was loaded without the normals and flags columns")]
+pub struct MissingColumns;
+
 /// One store column's values for a tile's loaded points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TileColumn {
@@ -86,6 +93,17 @@ impl TilePoints {
         lo.min(hi).min_element()
     }
 
+    /// How far a dependence of `p` reaching `reach` extends beyond the
+    /// loaded region (0 when it lies inside; infinite when it is unbounded).
+    pub fn shortfall(&self, p: DVec3, reach: f64) -> f64 {
+        let room = self.room(p);
+        if reach <= room {
+            0.0
+        } else {
+            reach - room
+        }
+    }
+
     /// Store index of loaded point `i`.
     pub fn store_index(&self, i: usize) -> u64 {
         match i.checked_sub(self.n_core) {
@@ -124,21 +142,31 @@ impl TilePoints {
             .map(|c| &c.values)
     }
 
-    /// Oriented unit normals of every loaded point (empty unless the
-    /// kernel reads [`NORMALS`]).
-    pub fn normals(&self) -> &[DVec3] {
+    /// Oriented unit normals of every loaded point; `None` unless the
+    /// kernel reads [`NORMALS`] (never an empty stand-in that a caller
+    /// could mistake for "no normal here").
+    pub fn normals(&self) -> Option<&[DVec3]> {
         match self.column(&NORMALS) {
-            Some(Values::Vec3(v)) => v,
-            _ => &[],
+            Some(Values::Vec3(v)) => Some(v),
+            _ => None,
         }
     }
 
-    /// The normals pass's flags of every loaded point (empty unless the
-    /// kernel reads [`FLAGS`]).
-    pub fn flags(&self) -> &[u8] {
+    /// The normals pass's flags of every loaded point; `None` unless the
+    /// kernel reads [`FLAGS`].
+    pub fn flags(&self) -> Option<&[u8]> {
         match self.column(&FLAGS) {
-            Some(Values::U8(v)) => v,
-            _ => &[],
+            Some(Values::U8(v)) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The normals and flags of every loaded point, or the error a kernel
+    /// that declared them returns when they are missing.
+    pub fn oriented(&self) -> Result<(&[DVec3], &[u8]), MissingColumns> {
+        match (self.normals(), self.flags()) {
+            (Some(n), Some(f)) => Ok((n, f)),
+            _ => Err(MissingColumns),
         }
     }
 

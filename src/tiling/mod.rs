@@ -4,4 +4,4 @@
 
 pub mod load;
 
-pub use load::{load_tile, TileColumn, TilePoints, Values};
+pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};

@@ -188,7 +188,7 @@ pub fn reconstruct_implicit(
         let core = core_box(store, &store.tiles()[t]);
         stitcher
             .add_tile(&lattice, (t, &core), &out.triangles)
-            .map_err(|e| PipelineError::Seam(e.to_string()))
+            .map_err(PipelineError::seam)
     })?;
     let written = stitcher.finish()?;
     report.vertices = written.vertices;

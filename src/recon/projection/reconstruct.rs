@@ -122,7 +122,7 @@ pub fn reconstruct_projection(
         jobs_run += out.jobs_run;
         stitcher
             .add_tile(store, t, &store.tiles()[t], &out)
-            .map_err(|e| PipelineError::Seam(e.to_string()))
+            .map_err(PipelineError::seam)
     })?;
     let stitch = stitcher.finish()?;
     Ok(ProjectionReport {
