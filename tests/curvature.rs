@@ -223,3 +223,37 @@ fn ply_output_is_in_input_order() {
         assert_eq!(r[rec - 1], out.flags[i]);
     }
 }
+
+/// A curvature column is reused only when made from the normals the pass
+/// would use: after the normals are recomputed with other parameters (here
+/// unoriented), `features` recomputes the curvature, and its lines equal a
+/// fresh run's (the stale-normals sequence of issue 13, one stage later).
+#[test]
+fn curvature_made_from_other_normals_is_recomputed() {
+    use scanmesh::features::extract::extract_lines;
+    use scanmesh::features::params::FeatureParams;
+    use scanmesh::normals::{compute_normals, NormalParams, Orientation};
+    use scanmesh::synth::StepProfile;
+    let scan = generate(&Shape::Steps(StepProfile::stepped_block()), 8_000, 0.0, 5).unwrap();
+    let params = FeatureParams::default();
+    let opts = RunOptions::new(1);
+    let lines = |store: &mut PointStore| {
+        let (graph, report) = extract_lines(store, &params, opts, &NoProgress).unwrap();
+        (graph, report.computed_curvature)
+    };
+    with_store(&scan.points, u64::MAX, 1, |store, _| {
+        let (fresh, computed) = lines(store);
+        assert!(computed && !fresh.edges.is_empty(), "a block has creases");
+        assert_eq!(
+            lines(store),
+            (fresh.clone(), false),
+            "same parameters: reused"
+        );
+        let unoriented = NormalParams {
+            orientation: Orientation::None,
+            ..params.curvature.normals
+        };
+        compute_normals(store, &unoriented, opts, &NoProgress).unwrap();
+        assert_eq!(lines(store), (fresh, true), "stale curvature was reused");
+    });
+}
