@@ -11,7 +11,7 @@
 //! (0.26 % here), and `--closed` left 10 holes where they drew the zero
 //! set out of the band (1 here).
 
-use crate::io::{read_mesh_any, IoError};
+use crate::io::{read_mesh_from, IoError};
 use crate::synth::{generate, mean_spacing_hint, Scan, Shape, SynthError, TriMesh};
 
 const DRAGON_PLY_GZ: &[u8] = include_bytes!("../assets/dragon_q20k.ply.gz");
@@ -22,26 +22,12 @@ pub enum DemoError {
     Io(#[from] IoError),
     #[error(transparent)]
     Synth(#[from] SynthError),
-    #[error("writing the embedded sample to {dir}: {source}")]
-    Unpack {
-        dir: std::path::PathBuf,
-        source: std::io::Error,
-    },
 }
 
-/// The embedded dragon mesh.
+/// The embedded dragon mesh, read straight from the binary.
 pub fn dragon_mesh() -> Result<TriMesh, DemoError> {
-    let dir = tempfile_dir()?;
-    let path = dir.join("dragon_q20k.ply.gz");
-    let write = std::fs::write(&path, DRAGON_PLY_GZ);
-    let mesh = write
-        .map_err(|source| DemoError::Unpack {
-            dir: dir.clone(),
-            source,
-        })
-        .and_then(|_| Ok(read_mesh_any(&path)?));
-    let _ = std::fs::remove_dir_all(&dir);
-    let (vertices, faces) = mesh?;
+    let name = std::path::Path::new("dragon_q20k.ply.gz (embedded)");
+    let (vertices, faces) = read_mesh_from(name, DRAGON_PLY_GZ)?;
     Ok(TriMesh { vertices, faces })
 }
 
@@ -57,13 +43,4 @@ pub fn dragon_scan(
     let spacing = mean_spacing_hint(&shape, n)?;
     let scan = generate(&shape, n, noise_spacing * spacing, seed)?;
     Ok((scan, mesh, spacing))
-}
-
-fn tempfile_dir() -> Result<std::path::PathBuf, DemoError> {
-    let dir = std::env::temp_dir().join(format!("scanmesh-demo-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|source| DemoError::Unpack {
-        dir: dir.clone(),
-        source,
-    })?;
-    Ok(dir)
 }

@@ -219,3 +219,44 @@ fn external_orientation_on_a_million_points_gives_the_in_memory_flips() {
     );
     assert!(external.bytes == in_memory.bytes, "external flips differ");
 }
+
+/// The library refuses parameters that cannot give normals, before any
+/// column is written, whoever calls it (not only the CLI).
+#[test]
+fn parameters_that_cannot_give_normals_are_refused() {
+    use scanmesh::normals::{compute_normals, NormalsError};
+    use scanmesh::NoProgress;
+    let scan = generate(&Shape::sphere(DVec3::ZERO, 1.0), 2_000, 0.0, 3).unwrap();
+    let bad = [
+        NormalParams {
+            k: 0,
+            ..NormalParams::default()
+        },
+        NormalParams {
+            orientation: Orientation::Viewpoint(DVec3::new(0.0, f64::NAN, 0.0)),
+            ..NormalParams::default()
+        },
+        NormalParams {
+            orientation: Orientation::SixSources { tau: 1.5 },
+            ..NormalParams::default()
+        },
+        NormalParams {
+            orientation: Orientation::SingleSource {
+                direction: DVec3::ZERO,
+                tau: 0.6,
+            },
+            ..NormalParams::default()
+        },
+    ];
+    common::with_store(&scan.points, u64::MAX, 1, |store, _| {
+        for params in bad {
+            let got = compute_normals(store, &params, RunOptions::new(1), &NoProgress);
+            assert!(
+                matches!(got, Err(NormalsError::BadParameter(_))),
+                "{params:?}: {got:?}"
+            );
+            assert!(!store.has_column(&scanmesh::store::NORMALS));
+        }
+        assert!(NormalParams::default().validate().is_ok());
+    });
+}

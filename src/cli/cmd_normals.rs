@@ -119,9 +119,6 @@ fn parse_point(s: &str) -> Result<DVec3, String> {
 
 impl NormalsArgs {
     fn params(&self) -> Result<NormalParams> {
-        if self.k < 3 {
-            bail!("--k must be at least 3 for a tangent plane");
-        }
         let orientation = match (self.orient, self.viewpoint) {
             (Orient::Viewpoint, None) => bail!("--orient viewpoint needs --viewpoint x,y,z"),
             (Orient::Mst | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
@@ -161,6 +158,7 @@ impl NormalsArgs {
 pub fn run(a: NormalsArgs) -> Result<()> {
     let s = a.common.settings()?;
     let params = a.params()?;
+    params.validate()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let mut spec = output_spec(&a.output, a.ascii)?;

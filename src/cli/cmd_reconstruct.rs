@@ -138,9 +138,6 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         };
         return super::cmd_reconstruct_projection::run(&s, &a.input, &a.output, format, &params);
     }
-    if a.k < 3 {
-        bail!("--k must be at least 3 for a tangent plane");
-    }
     let mut params = ImplicitParams {
         cell: a.cell,
         noise: a.noise,
@@ -156,6 +153,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     params.min_piece_share()?;
     params.normals.k = a.k;
     params.normals.neighbourhood = a.hood.hood();
+    params.normals.validate()?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;

@@ -10,7 +10,7 @@
 //! each side of the potential line (each side is one smooth face): where
 //! the two sides' slopes across the line differ by more than
 //! [`CREASE_SLOPE`], the edge point moves across the line to where the two
-//! surfaces meet (the crease itself; the paper's reference [4] projects
+//! surfaces meet (the crease itself; the paper's reference \[4\] projects
 //! onto such intersections), else (a rounded crest, where both sides are one
 //! smooth surface) it is lifted to the mean of the two heights. A side too
 //! thin for a fit, or no meeting point within reach, falls back to the

@@ -12,7 +12,7 @@
 //!   enhancement's corners are targets too, so lines reach the corner they
 //!   run into instead of stopping short of it; and before the cone rule,
 //!   two ends meeting at an angle are extended to where their rays meet
-//!   ([`corner_meetings`]).
+//!   (`corner_meetings`).
 //! - Relaxation: 1-2 passes over each chain of degree-2 vertices, ends and
 //!   corners fixed, moving each vertex onto the perpendicular bisector of
 //!   its neighbours in their plane, keeping the triangle's area (Fig. 10).
@@ -220,7 +220,7 @@ fn corner_meetings(
     out
 }
 
-/// Smallest angle between two end tangents that [`corner_meetings`] takes
+/// Smallest angle between two end tangents that `corner_meetings` takes
 /// for a corner (below it, the lines continue each other: the cone rule).
 pub const MEET_ANGLE: f64 = 20.0 * std::f64::consts::PI / 180.0;
 

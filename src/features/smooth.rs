@@ -9,7 +9,7 @@
 //! of their two coordinates in some `(u, v)` axes of that plane. In the
 //! principal axes themselves that correlation is zero by construction, and
 //! in arbitrary axes it depends on their rotation; Lee's curve
-//! reconstruction (the paper's reference [15]) measures it in axes at 45
+//! reconstruction (the paper's reference \[15\]) measures it in axes at 45
 //! degrees to the principal one, where it equals `(l0 - l1) / (l0 + l1)`
 //! for the two largest covariance eigenvalues `l0 >= l1`: `|rho| >= 0.6`
 //! means the neighbourhood is at least four times longer than wide. That

@@ -4,7 +4,7 @@
 //!
 //! Decoding runs on a thread of its own, because `las::Reader` is not `Send`
 //! (its backend is a `Box<dyn ReadPoints>` without a `Send` bound) while a
-//! [`PointReader`] must be. A channel of [`AHEAD`] blocks keeps memory flat
+//! [`PointReader`] must be. A channel of `AHEAD` blocks keeps memory flat
 //! and lets LAZ decompression overlap with the consumer.
 //!
 //! For uncompressed LAS the file length is checked against the declared

@@ -31,7 +31,7 @@ pub use atomic::AtomicFile;
 pub use attributes::{Attribute, AttributeSet, AttributeValues, Attributes};
 pub use error::IoError;
 pub use obj::read_obj_mesh;
-pub use open::{open_reader, read_mesh_any};
+pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
 pub use ply::read_mesh;
 pub use write::create_writer;
 

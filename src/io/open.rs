@@ -6,9 +6,9 @@ use super::las::LasReader;
 use super::obj::read_obj;
 use super::pcd::{is_pcd_magic, PcdReader};
 use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
-use super::source::open_input;
+use super::source::{open_input, open_stream, Opened};
 use super::xyz::XyzReader;
-use super::{format_from_name, Format, IoError, PointReader, ReadOptions};
+use super::{format_from_name, Format, InvalidPolicy, IoError, PointReader, ReadOptions};
 use glam::DVec3;
 use std::path::Path;
 
@@ -41,13 +41,73 @@ pub fn open_reader(
             reason: "--scans selects scans of an E57 file; this file is not one".into(),
         });
     }
-    let policy = read.policy;
     if is_e57_magic(&opened.magic) {
         return Err(IoError::Unsupported {
             path: path.to_path_buf(),
             reason: "gzip-compressed E57 cannot be read as a stream; gunzip it".into(),
         });
     }
+    if opened.magic.starts_with(LAS_MAGIC) && !opened.gzip {
+        // The las crate wants a seekable file: reopen it plainly.
+        drop(opened);
+        return Ok(Box::new(LasReader::open(path, read.policy)?));
+    }
+    streamed_format(path, opened, read.policy)
+}
+
+/// Opens points from any byte stream (an embedded sample, a network
+/// body, a pipe) in the formats that read front to back: PLY, PCD and
+/// XYZ/CSV text, gzip allowed. `name` names the stream in errors and, for
+/// text, says its format (`.xyz`, `.csv`, ...). LAS/LAZ and E57 need a
+/// seekable file and are refused with a reason. The reader never offers to
+/// read the stream again ([`PointReader::reopen`]), so a store build keeps
+/// a copy instead.
+pub fn open_stream_reader(
+    name: &Path,
+    stream: impl std::io::Read + Send + 'static,
+    read: impl Into<ReadOptions>,
+) -> Result<Box<dyn PointReader>, IoError> {
+    let read: ReadOptions = read.into();
+    let opened = open_stream(name, stream)?;
+    if is_e57_magic(&opened.magic) || opened.magic.starts_with(LAS_MAGIC) {
+        return Err(IoError::Unsupported {
+            path: name.to_path_buf(),
+            reason: "LAS, LAZ and E57 need a seekable file: save the stream and open the path"
+                .into(),
+        });
+    }
+    if read.scans.is_some() {
+        return Err(IoError::Unsupported {
+            path: name.to_path_buf(),
+            reason: "--scans selects scans of an E57 file; this stream is not one".into(),
+        });
+    }
+    let inner = streamed_format(name, opened, read.policy)?;
+    Ok(Box::new(Streamed(inner)))
+}
+
+/// A reader over a stream that cannot be read again.
+struct Streamed(Box<dyn PointReader>);
+
+impl PointReader for Streamed {
+    fn info(&self) -> &super::SourceInfo {
+        self.0.info()
+    }
+    fn read_chunk(&mut self, chunk: &mut super::PointChunk, max: usize) -> Result<usize, IoError> {
+        self.0.read_chunk(chunk, max)
+    }
+    fn skipped(&self) -> u64 {
+        self.0.skipped()
+    }
+}
+
+/// The reader for a front-to-back format, by content (PLY, PCD) or, for
+/// text, by name.
+fn streamed_format(
+    path: &Path,
+    opened: Opened,
+    policy: InvalidPolicy,
+) -> Result<Box<dyn PointReader>, IoError> {
     if is_ply_magic(&opened.magic) {
         let r = PlyPointReader::open(path, opened.input, opened.gzip, policy)?;
         return Ok(Box::new(r));
@@ -57,16 +117,10 @@ pub fn open_reader(
         return Ok(Box::new(r));
     }
     if opened.magic.starts_with(LAS_MAGIC) {
-        if opened.gzip {
-            return Err(IoError::Unsupported {
-                path: path.to_path_buf(),
-                reason: "gzip-compressed LAS cannot be read as a stream; gunzip it or use LAZ"
-                    .into(),
-            });
-        }
-        // The las crate wants a seekable file: reopen it plainly.
-        drop(opened);
-        return Ok(Box::new(LasReader::open(path, policy)?));
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: "gzip-compressed LAS cannot be read as a stream; gunzip it or use LAZ".into(),
+        });
     }
     let bad = |magic: &str| IoError::BadHeader {
         path: path.to_path_buf(),
@@ -92,7 +146,18 @@ pub fn open_reader(
 /// Reads a whole triangle mesh: PLY (by its magic, gzip allowed) or OBJ (by a
 /// `.obj` / `.obj.gz` name). Polygons are fan-triangulated.
 pub fn read_mesh_any(path: &Path) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), IoError> {
-    let opened = open_input(path)?;
+    let file = std::fs::File::open(path).map_err(|e| IoError::os(path, e))?;
+    read_mesh_from(path, file)
+}
+
+/// Like [`read_mesh_any`] over any byte stream; `name` names it in errors
+/// and, for OBJ, says its format.
+pub fn read_mesh_from(
+    name: &Path,
+    stream: impl std::io::Read + Send + 'static,
+) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), IoError> {
+    let path = name;
+    let opened = open_stream(path, stream)?;
     if is_ply_magic(&opened.magic) {
         return read_ply_mesh(path, opened.input);
     }

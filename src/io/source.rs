@@ -37,9 +37,17 @@ pub(crate) fn reopen_with<R: super::PointReader + 'static>(
 /// Opens `path`, unwrapping gzip (also multi-member gzip) when present.
 /// An empty file, or a gzip stream of nothing, is [`IoError::Empty`].
 pub(crate) fn open_input(path: &Path) -> Result<Opened, IoError> {
+    let file = File::open(path).map_err(|e| IoError::os(path, e))?;
+    open_stream(path, file)
+}
+
+/// Like [`open_input`] over any byte stream; `path` names it in errors.
+pub(crate) fn open_stream(
+    path: &Path,
+    stream: impl Read + Send + 'static,
+) -> Result<Opened, IoError> {
     let os = |e| IoError::os(path, e);
-    let file = File::open(path).map_err(os)?;
-    let (magic, rest) = peek(file).map_err(os)?;
+    let (magic, rest) = peek(stream).map_err(os)?;
     if magic.is_empty() {
         return Err(IoError::Empty {
             path: path.to_path_buf(),

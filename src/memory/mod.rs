@@ -3,7 +3,7 @@
 //! process's measured peak. A bottom layer: it knows no store, tile or
 //! kernel, only numbers.
 
-pub mod budget;
+mod budget;
 pub mod plan;
 
 pub use budget::{peak_rss_bytes, MemoryBudget};

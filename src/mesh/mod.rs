@@ -1,7 +1,7 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
-//! topology metrics ([`quality`]), smallest angles ([`angles`]),
+//! topology metrics (`quality`), smallest angles ([`angles`]),
 //! self-intersecting pairs ([`self_intersect`]), distances to a reference ([`distance`]),
-//! streaming PLY/OBJ output ([`write`]) and procedural shapes for tests and
+//! streaming PLY/OBJ output (`write`) and procedural shapes for tests and
 //! benches ([`shapes`]).
 //!
 //! Mesh evaluation is not part of the five papers; the metrics follow the

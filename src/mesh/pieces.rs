@@ -11,7 +11,7 @@
 //! it costs a replay of the scratch files at the end, and the per-vertex
 //! state (the sets' parents, then the triangle counts that become the new
 //! numbers) lives in scratch files too, behind caches of a fixed size
-//! ([`super::paged`]), so that `--mem` holds at any mesh size. With a share
+//! (`super::paged`), so that `--mem` holds at any mesh size. With a share
 //! of 0 the filter passes everything straight through and keeps nothing.
 
 use super::paged::{ExternalSets, PagedU32, TABLE_BYTES_PER_ELEMENT};

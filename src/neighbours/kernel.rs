@@ -7,7 +7,7 @@
 //! all points when every point it could have depended on is loaded: for kNN
 //! the ball of the k-th distance, for the mean reverse shift the ball of
 //! radius `reach` (largest shift plus that query's k-th distance, see
-//! [`TopoResult::reach`]). The kernel checks that ball against
+//! `TopoResult::reach`). The kernel checks that ball against
 //! [`TilePoints::room`] for every core point, as the normals kernel does, and
 //! otherwise asks for the margin that would make it fit.
 

@@ -25,9 +25,9 @@
 //! Iterations: median 1, max 5, none capped; |T| 15..45, mean 17.2.
 
 pub mod csr;
-pub mod kernel;
+mod kernel;
 pub mod spill;
-pub mod stats;
+mod stats;
 
 pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
 pub use kernel::{NeighboursKernel, NeighboursTile};

@@ -12,13 +12,13 @@
 //! the reverse shift; either is infinite when a query found fewer than k
 //! points (then only a tile holding everything is complete).
 //!
-//! Storage: only the neighbours' local indices are kept ([`Hoods`]), four
-//! bytes each in chunks of [`CHUNK`] points. A `Vec<Neighbour>` per point
+//! Storage: only the neighbours' local indices are kept (`Hoods`), four
+//! bytes each in chunks of `CHUNK` points. A `Vec<Neighbour>` per point
 //! cost ~280 bytes a point at k = 12 (16-byte entries, spare capacity, the
 //! vector itself): a third of the 1M-point run's peak, and its page faults
 //! were ~8 % of the CPU time. Whatever needs the distances (the plane fit,
 //! the sampling statistics) is computed from the full list while it is at
-//! hand, by the `visit` callback of [`HoodIndex::hoods`].
+//! hand, by the `visit` callback of `HoodIndex::hoods`.
 
 use super::NormalParams;
 use crate::pipeline::KernelError;

@@ -7,8 +7,8 @@
 //! Results land in two store columns: `normal.f32` (unit, oriented; zero when
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
-pub mod components;
-pub mod contract;
+mod components;
+mod contract;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
@@ -123,6 +123,37 @@ impl Default for NormalParams {
 }
 
 impl NormalParams {
+    /// Whether the parameters can give normals: a plane needs 3 neighbours,
+    /// a viewpoint or a source direction must be finite (and the direction
+    /// not zero), tau a bound on `|ni.nj|` in `[0, 1]`.
+    pub fn validate(&self) -> Result<(), NormalsError> {
+        let bad = |why: String| Err(NormalsError::BadParameter(why));
+        if self.k < 3 {
+            return bad(format!(
+                "k = {}: a tangent plane needs at least 3 neighbours",
+                self.k
+            ));
+        }
+        match self.orientation {
+            Orientation::Viewpoint(v) if !v.is_finite() => {
+                bad(format!("the viewpoint {v} is not a finite position"))
+            }
+            Orientation::SixSources { tau } | Orientation::SingleSource { tau, .. }
+                if !(0.0..=1.0).contains(&tau) =>
+            {
+                bad(format!("tau = {tau} is not a bound on |ni.nj| in [0, 1]"))
+            }
+            Orientation::SingleSource { direction, .. }
+                if !direction.is_finite() || direction == DVec3::ZERO =>
+            {
+                bad(format!(
+                    "the source direction {direction} is not a direction"
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The parameters as the manifest records them for the normals column.
     pub fn provenance(&self) -> Provenance {
         Provenance::of("normals", self)
@@ -186,6 +217,8 @@ pub enum NormalsError {
     Io(#[from] crate::io::IoError),
     #[error(transparent)]
     Sources(#[from] sources::SourcesError),
+    #[error("normal parameters: {0}")]
+    BadParameter(String),
 }
 
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -215,6 +248,7 @@ pub fn compute_normals(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<NormalsReport, NormalsError> {
+    params.validate()?;
     let spacing = crate::store::spacing::ensure_spacing(store)?;
     let normals = store.create_column(&NORMALS)?;
     let flags = store.create_column(&FLAGS)?;

@@ -36,12 +36,12 @@ mod best_first;
 mod external;
 mod graph;
 mod hood;
-pub mod kernel;
-pub mod pairs;
-pub mod propagate;
-pub mod seeds;
+mod kernel;
+mod pairs;
+mod propagate;
+mod seeds;
 mod stacks;
-pub mod tiled;
+mod tiled;
 
 pub use hood::Neighbourhood;
 pub use propagate::Order;

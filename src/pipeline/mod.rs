@@ -2,10 +2,10 @@
 //! tiles in flight (and so the memory), reorders results into tile order and
 //! hands them to the kernel's seam policy. It knows nothing of geometry.
 
-pub mod codec;
-pub mod kernel;
-pub mod options;
-pub mod run;
+mod codec;
+mod kernel;
+mod options;
+mod run;
 
 pub use codec::Codec;
 pub use kernel::{KernelError, TileKernel};

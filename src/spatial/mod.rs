@@ -12,7 +12,7 @@ use glam::DVec3;
 
 pub mod brute;
 pub mod grid;
-pub mod kdtree;
+mod kdtree;
 pub mod rtree;
 pub mod topological;
 

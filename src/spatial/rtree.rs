@@ -1,6 +1,6 @@
 //! R*-tree over one tile's points (paper 3 step 1) and exact k-nearest
 //! neighbours by the paper's "dynamically expanding hollow sphere" (paper 3
-//! step 2, its reference [6]): spherical shells of growing radius, each query
+//! step 2, its reference \[6\]): spherical shells of growing radius, each query
 //! visiting only the tree nodes that reach into the new shell, until at least
 //! `k` points lie inside; then the exact `k` nearest by (dist2, tie key).
 //!
@@ -187,7 +187,7 @@ impl<'a> RTreeIndex<'a> {
     }
 
     /// The same answer as [`Self::knn_hollow`] through rstar's best-first
-    /// iterator, which yields points in nondecreasing [`dist2`]: read on past
+    /// iterator, which yields points in nondecreasing `dist2`: read on past
     /// the `k`-th point while the distance ties it, then order ties by key.
     pub fn knn_best_first(
         &self,

@@ -13,7 +13,7 @@
 //! 3. Mean at O over T, eq. (3): `m = sum x_i g(|O-x_i|^2/h^2) / sum g(..)`,
 //!    `M = m - O`. The original leaves the kernel open ("给定核函数g(x)");
 //!    we use the normal kernel's profile `g(u) = exp(-u/2)` (Comaniciu & Meer,
-//!    its reference [13]). Deviation, named: with the flat `g` of the
+//!    its reference \[13\]). Deviation, named: with the flat `g` of the
 //!    Epanechnikov kernel every point found after step 1 lies beyond h and
 //!    weighs 0, so the iteration could never move past its first shift.
 //! 4. Reverse shift `X = O - M`, query `kNN(X)` (k points, O excluded).

@@ -2,7 +2,7 @@
 //! does not grow with the number of points:
 //! 1. read: parse the input once, validate, accumulate the bounding box,
 //!    spill f64 points to a scratch file unless the input can be read again
-//!    as cheaply ([`super::replay`]);
+//!    as cheaply (`super::replay`);
 //! 2. histogram: count points per coarse grid cell;
 //! 3. plan: kd-split the histogram into tiles of at most the target size;
 //! 4. scatter: write each point into its tile's slot range, through small

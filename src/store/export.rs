@@ -13,7 +13,7 @@
 //! With more than one window, a pass per window would read the whole store
 //! once per window (15 times for 10M points in 256 MiB, n^2 / memory in
 //! general); the points are then first sorted into their windows' regions
-//! of a scratch file ([`super::reorder`]) and each window read back from it.
+//! of a scratch file (`super::reorder`) and each window read back from it.
 
 use super::reorder::Reorder;
 use super::{Column, PointStore, StoreError, TileEntry, FLAGS, NORMALS};

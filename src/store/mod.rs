@@ -7,13 +7,13 @@
 //! reading whole neighbour tiles), and attribute columns later passes add
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 //! The input's own attributes (intensity, colour, ...) are kept in input
-//! order beside them (`intensity.input`, ...; see [`attributes`]).
+//! order beside them (`intensity.input`, ...; see `attributes`).
 
 mod attributes;
 pub mod build;
 mod cells;
 pub mod checkpoint;
-pub mod column;
+mod column;
 pub mod columns;
 pub mod export;
 mod lock;
@@ -22,9 +22,9 @@ mod reorder;
 mod replay;
 pub mod sampling;
 mod sort;
-pub mod source;
+mod source;
 pub mod spacing;
-pub mod tile_plan;
+mod tile_plan;
 
 pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};

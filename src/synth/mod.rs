@@ -13,15 +13,15 @@
 //! from a second generator so that the noise-free scan with the same seed
 //! holds the exact surface points of the noisy one.
 
-pub mod closed;
-pub mod creased;
-pub mod error;
+mod closed;
+mod creased;
+mod error;
 pub mod fibonacci;
-pub mod mesh;
+mod mesh;
 pub mod rng;
-pub mod sheets;
+mod sheets;
 mod stream;
-pub mod terrain;
+mod terrain;
 
 pub use creased::{LineKind, StepProfile, TrueSegment, WavySheet};
 pub use error::SynthError;

@@ -1,7 +1,7 @@
 //! E57 (ASTM E2807), the exchange format of terrestrial laser scanners,
 //! through the `e57` crate: the scans' descriptions ([`scan`]), the
-//! streaming reader of every selected scan in the world frame ([`read`]),
-//! and a one-scan writer ([`write`]). [`seekbuf`] keeps the crate's page
+//! streaming reader of every selected scan in the world frame (`read`),
+//! and a one-scan writer ([`write`]). `seekbuf` keeps the crate's page
 //! reads buffered.
 //!
 //! Intensity and colour are not carried: points leave the io layer as
@@ -9,7 +9,7 @@
 //! gains attribute columns.
 
 mod read;
-pub mod scan;
+mod scan;
 mod seekbuf;
 mod write;
 

@@ -1,8 +1,8 @@
 //! PCD, the Point Cloud Library's format: the header ([`header`]), the
-//! streaming reader ([`read`]) for ASCII, binary and binary_compressed bodies
-//! (LZF, [`lzf`]). Binary PCD is written by the PLY writer (same records).
+//! streaming reader (`read`) for ASCII, binary and binary_compressed bodies
+//! (LZF, `lzf`). Binary PCD is written by the PLY writer (same records).
 
-pub mod header;
+mod header;
 mod lzf;
 mod read;
 

@@ -1,5 +1,5 @@
 //! Streaming point writers: binary PLY (LE/BE), ASCII PLY, XYZ text,
-//! LAS/LAZ, and E57 ([`crate::io::e57`]). Every writer goes through [`AtomicFile`](super::AtomicFile): the
+//! LAS/LAZ, and E57 ([`crate::io::e57`]). Every writer goes through [`AtomicFile`]: the
 //! output appears under its final name only in `finish`; a writer dropped
 //! before that leaves nothing behind.
 

@@ -18,7 +18,7 @@
 //! Memory: the union-find holds 5 bytes and a bit per point, as the
 //! spanning-tree pass does; the forests (about one edge per point) stay on
 //! disk. Like that pass, the union-find is indexed by store index. When it
-//! does not fit the memory promise, [`super::external`] gives the same
+//! does not fit the memory promise, `super::external` gives the same
 //! flips from the contracted forests.
 
 use super::external::orient_external;

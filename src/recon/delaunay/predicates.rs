@@ -67,7 +67,7 @@ const ORIENT_FILTER: f64 = 4.1e-14;
 /// difference per axis, `C * X * Y * Z * M^2`. A forward error analysis
 /// of the expansion (24 products of four entries, each at most
 /// `X Y Z 3 M^2`, about 17 roundings deep) gives `C` of about 1.4e-13;
-/// CGAL's generated bound is 1.25e-13; [`INSPHERE_FILTER`] takes 8 times
+/// CGAL's generated bound is 1.25e-13; `INSPHERE_FILTER` takes 8 times
 /// that. Cheaper than `robust`'s own filter, which sums a permanent as
 /// large as the determinant; when the bound does not settle the sign,
 /// `robust::insphere` (adaptive, exact) decides.

@@ -38,7 +38,7 @@
 //! normals point to the positive side (f > 0 = outside).
 //!
 //! Deviation: paper 1 follows the small-feature variant of Zhou, Shu and
-//! Kankanhalli (1994, its reference [11]), which is not restated in the
+//! Kankanhalli (1994, its reference \[11\]), which is not restated in the
 //! paper. We use this face-consistent construction instead because crack-free
 //! seams between tiles need exactly one property, a face rule that reads only
 //! the face's signs, and this construction makes that property explicit.

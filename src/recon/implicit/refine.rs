@@ -9,7 +9,7 @@
 //! error at any cell, so a finer cell only adds triangles.
 //!
 //! The root is then moved off the zero set by a share of the chord error
-//! ([`chord_offset`]), so the flat triangles' mean sits on the surface
+//! (`chord_offset`), so the flat triangles' mean sits on the surface
 //! rather than inside every convex part.
 //!
 //! Each distinct edge is refined once per tile, from its key and its two

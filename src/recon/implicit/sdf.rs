@@ -4,7 +4,7 @@
 //! `z = p - f(p) n_i` lies within `rho + delta` of the samples; otherwise
 //! undefined, which is how open boundaries appear. For a closed surface
 //! (`--closed`, paper 1 section 4.1) every corner is defined, and `f`
-//! averages the planes of many nearest samples ([`averaged_planes`]).
+//! averages the planes of many nearest samples (`averaged_planes`).
 //!
 //! Evaluated on one tile's loaded samples, the value is exact (ties by id) as
 //! long as every distance it relied on fits in the loaded region; otherwise
@@ -44,7 +44,7 @@ pub enum Corner {
 pub const PLANES_TRIED: usize = 8;
 
 /// Planes averaged at each corner of a closed surface (see
-/// [`averaged_planes`]).
+/// `averaged_planes`).
 pub const CLOSED_PLANES: usize = 64;
 
 /// Width of the averaging weight, as a share of the distance to the
