@@ -10,7 +10,7 @@ use glam::DVec3;
 use scanmesh::features::curvature::{CurvatureReport, VALUES};
 use scanmesh::features::export::write_curvature_ply;
 use scanmesh::features::{
-    compute_curvature, CurvatureParams, HoodChoice, CURVATURE_FILE, CURVATURE_FLAGS_FILE,
+    compute_curvature, CurvatureParams, HoodChoice, CURVATURE, CURVATURE_FLAGS,
 };
 use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::store::PointStore;
@@ -27,8 +27,8 @@ struct Out {
 fn read_back(store: &PointStore) -> (Vec<[f32; VALUES]>, Vec<u8>) {
     let n = store.len() as usize;
     let (mut values, mut flags) = (vec![[0f32; VALUES]; n], vec![0u8; n]);
-    let vcol = store.attribute(CURVATURE_FILE, 4 * VALUES).unwrap();
-    let fcol = store.attribute(CURVATURE_FLAGS_FILE, 1).unwrap();
+    let vcol = store.column(&CURVATURE).unwrap();
+    let fcol = store.column(&CURVATURE_FLAGS).unwrap();
     let (mut ids, mut v, mut f) = (Vec::new(), Vec::new(), Vec::new());
     for t in store.tiles() {
         store.read_indices(t.start, t.count, &mut ids).unwrap();
@@ -222,4 +222,38 @@ fn ply_output_is_in_input_order() {
         }
         assert_eq!(r[rec - 1], out.flags[i]);
     }
+}
+
+/// A curvature column is reused only when made from the normals the pass
+/// would use: after the normals are recomputed with other parameters (here
+/// unoriented), `features` recomputes the curvature, and its lines equal a
+/// fresh run's (the stale-normals sequence of issue 13, one stage later).
+#[test]
+fn curvature_made_from_other_normals_is_recomputed() {
+    use scanmesh::features::extract::extract_lines;
+    use scanmesh::features::params::FeatureParams;
+    use scanmesh::normals::{compute_normals, NormalParams, Orientation};
+    use scanmesh::synth::StepProfile;
+    let scan = generate(&Shape::Steps(StepProfile::stepped_block()), 8_000, 0.0, 5).unwrap();
+    let params = FeatureParams::default();
+    let opts = RunOptions::new(1);
+    let lines = |store: &mut PointStore| {
+        let (graph, report) = extract_lines(store, &params, opts, &NoProgress).unwrap();
+        (graph, report.computed_curvature)
+    };
+    with_store(&scan.points, u64::MAX, 1, |store, _| {
+        let (fresh, computed) = lines(store);
+        assert!(computed && !fresh.edges.is_empty(), "a block has creases");
+        assert_eq!(
+            lines(store),
+            (fresh.clone(), false),
+            "same parameters: reused"
+        );
+        let unoriented = NormalParams {
+            orientation: Orientation::None,
+            ..params.curvature.normals
+        };
+        compute_normals(store, &unoriented, opts, &NoProgress).unwrap();
+        assert_eq!(lines(store), (fresh, true), "stale curvature was reused");
+    });
 }

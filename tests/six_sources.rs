@@ -17,7 +17,7 @@ use scanmesh::normals::{
     FLAG_UNORIENTED,
 };
 use scanmesh::pipeline::{MemoryBudget, NoProgress, RunOptions};
-use scanmesh::store::{PointStore, FLAGS_FILE, NORMAL_FILE};
+use scanmesh::store::{PointStore, FLAGS, NORMALS};
 use scanmesh::synth::{generate, mean_spacing_hint, Rng, Shape};
 
 /// A store's results in input order: positions as stored (f64 of the f32
@@ -58,8 +58,8 @@ fn read_back(store: &PointStore) -> (Vec<DVec3>, Vec<Vec3>, Vec<u8>) {
     let n = store.len() as usize;
     let (mut points, mut normals, mut flags) =
         (vec![DVec3::ZERO; n], vec![Vec3::ZERO; n], vec![0; n]);
-    let ncol = store.attribute(NORMAL_FILE, 12).expect("normals column");
-    let fcol = store.attribute(FLAGS_FILE, 1).expect("flags column");
+    let ncol = store.column(&NORMALS).expect("normals column");
+    let fcol = store.column(&FLAGS).expect("flags column");
     let (mut pts, mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for t in store.tiles() {
         store

@@ -20,11 +20,11 @@ fn main() -> Result<()> {
         points.extend_from_slice(&chunk.xyz);
     }
     let ranks: Vec<u64> = (0..points.len() as u64).collect();
-    let rss0 = scanmesh::pipeline::peak_rss_bytes().unwrap_or(0);
+    let rss0 = scanmesh::memory::peak_rss_bytes().unwrap_or(0);
     let t0 = Instant::now();
     let d = Delaunay::new(&points, &ranks)?;
     let secs = t0.elapsed().as_secs_f64();
-    let rss1 = scanmesh::pipeline::peak_rss_bytes().unwrap_or(0);
+    let rss1 = scanmesh::memory::peak_rss_bytes().unwrap_or(0);
     let finite = d
         .cell_slots()
         .iter()

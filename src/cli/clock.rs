@@ -45,7 +45,7 @@ impl Mark {
             wall_s: now.wall.duration_since(self.wall).as_secs_f64(),
             cpu_s: now.cpu - self.cpu,
             rss_bytes: rss_bytes().unwrap_or(0),
-            peak_rss_bytes: scanmesh::pipeline::peak_rss_bytes().unwrap_or(0),
+            peak_rss_bytes: scanmesh::memory::peak_rss_bytes().unwrap_or(0),
             disk_read_bytes: now.io[0].saturating_sub(self.io[0]),
             disk_written_bytes: now.io[1].saturating_sub(self.io[1]),
         }

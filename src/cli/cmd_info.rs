@@ -5,9 +5,9 @@ use clap::{Args, ValueEnum};
 use scanmesh::io::e57::is_e57_magic;
 use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
 use scanmesh::io::InvalidPolicy;
+use scanmesh::memory::plan::{MARGIN_FACTOR, MIN_TILE_POINTS};
 use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
-use scanmesh::pipeline::plan::{MARGIN_FACTOR, MIN_TILE_POINTS};
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan};
 use scanmesh::recon::implicit::reconstruct::ImplicitParams;
 use scanmesh::store::{is_store, PointStore};
@@ -98,7 +98,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
 
 fn store_report(dir: &std::path::Path) -> Result<serde_json::Value> {
     let store = PointStore::open_shared(dir)?;
-    let m = &store.manifest;
+    let m = &store.manifest();
     let largest = m.tiles.iter().map(|t| t.count).max().unwrap_or(0);
     Ok(json!({
         "path": dir.display().to_string(),
@@ -243,7 +243,7 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     }
     println!(
         "  fixed costs: {}",
-        human_bytes(scanmesh::pipeline::plan::BASE_BYTES)
+        human_bytes(scanmesh::memory::plan::BASE_BYTES)
     );
     Ok(())
 }

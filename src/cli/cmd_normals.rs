@@ -9,7 +9,7 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
 };
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::{export_points, NORMAL_FILE};
+use scanmesh::store::{export_points, NORMALS};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -174,7 +174,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
         .as_ref()
         .and_then(|r| r.stage::<NormalsReport>("normals"));
     let report = match kept {
-        Some(report) if store.has_column(NORMAL_FILE) => report,
+        Some(report) if store.has_column(&NORMALS) => report,
         _ => {
             let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
             if let Some(r) = &s.run {

@@ -45,7 +45,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     };
     let spacing = ensure_spacing(&mut store)?;
     drop(building);
-    let m = &store.manifest;
+    let m = &store.manifest();
     super::report::summary(format!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
         m.count,

@@ -360,7 +360,7 @@ impl Settings {
     ) -> Result<(MemoryPlan, RunOptions)> {
         let plan = MemoryPlan::new(self.budget(), store.len(), &cost)?;
         let largest = store.tiles().iter().map(|t| t.count).max().unwrap_or(0);
-        let opts = plan.run_options(&cost, largest)?;
+        let opts = RunOptions::planned(&plan, &cost, largest)?;
         Ok((plan, opts))
     }
 
@@ -477,5 +477,5 @@ pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Resu
 }
 
 pub fn peak() -> String {
-    scanmesh::pipeline::peak_rss_bytes().map_or("?".into(), scanmesh::units::human_bytes)
+    scanmesh::memory::peak_rss_bytes().map_or("?".into(), scanmesh::units::human_bytes)
 }

@@ -9,7 +9,7 @@
 use super::export::RECORD;
 use super::params::FeatureParams;
 use super::CurvatureParams;
-use crate::pipeline::plan::MARGIN_FACTOR;
+use crate::memory::plan::MARGIN_FACTOR;
 use crate::pipeline::KernelCost;
 
 /// Peak bytes per loaded point of the curvature kernel: the tile's
@@ -89,7 +89,7 @@ impl FeatureParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::plan::{MemoryPlan, MIN_TILE_POINTS};
+    use crate::memory::plan::{MemoryPlan, MIN_TILE_POINTS};
     use crate::pipeline::MemoryBudget;
 
     #[test]

@@ -1,8 +1,8 @@
 //! The curvature pass (paper 5 section 2): per point, the quadric of its
 //! neighbourhood in the PCA frame oriented by the store's normals
 //! ([`super::quadric`]), and at the point `k1 >= k2`, `H`, `K` and the fit's
-//! RMS residual, into the store columns [`super::CURVATURE_FILE`] and
-//! [`super::CURVATURE_FLAGS_FILE`].
+//! RMS residual, into the store columns [`super::CURVATURE`] and
+//! [`super::CURVATURE_FLAGS`].
 //!
 //! Seam policy: per-point local. A core point's value depends on its
 //! neighbourhood only, found exactly (ties by input id) and checked to lie
@@ -12,15 +12,15 @@ use super::hood::{HoodIndex, HoodScratch};
 use super::quadric::{fit_quadric, pca_frame, Curvature, Quadric};
 use super::stats::CurvatureStats;
 use super::{
-    CurvatureHood, CurvatureParams, FeaturesError, HoodChoice, CURVATURE_FILE,
-    CURVATURE_FLAGS_FILE, CURVATURE_META_FILE, FLAG_UNORIENTED,
+    CurvatureHood, CurvatureParams, FeaturesError, HoodChoice, CURVATURE, CURVATURE_FLAGS,
+    CURVATURE_META_FILE, FLAG_UNORIENTED,
 };
 use crate::normals::{
     ensure_normals, FLAG_DEGENERATE as N_DEGENERATE, FLAG_UNORIENTED as N_UNORIENTED,
 };
 use crate::pipeline::{run_tiles, KernelError, Progress, RunOptions, RunStats, TileKernel};
 use crate::spatial::Neighbour;
-use crate::store::{spacing::ensure_spacing, PointStore};
+use crate::store::{spacing::ensure_spacing, ColumnSpec, PointStore, Provenance, FLAGS, NORMALS};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -46,8 +46,8 @@ pub struct CurvatureKernel {
 
 /// The oriented normal of loaded point `i`, if the normals pass gave one.
 pub(crate) fn oriented_normal(tile: &TilePoints, i: usize) -> Option<DVec3> {
-    let n = *tile.normals.get(i)?;
-    let f = tile.flags.get(i).copied().unwrap_or(N_DEGENERATE);
+    let n = *tile.normals()?.get(i)?;
+    let f = tile.flags()?.get(i).copied().unwrap_or(N_DEGENERATE);
     let ok = f & (N_DEGENERATE | N_UNORIENTED) == 0 && n.is_finite() && n != DVec3::ZERO;
     ok.then_some(n)
 }
@@ -116,8 +116,8 @@ impl TileKernel for CurvatureKernel {
         self.margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        &[NORMALS, FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<CurvatureTile, KernelError> {
@@ -141,7 +141,7 @@ impl TileKernel for CurvatureKernel {
             out.stats.merge(&part.stats);
             short = short.max(sh);
         }
-        check_room(short, tile.margin)?;
+        KernelError::unless_short(short, tile.margin)?;
         Ok(out)
     }
 }
@@ -187,23 +187,6 @@ impl CurvatureKernel {
     }
 }
 
-/// Fails with the margin that would make every neighbourhood complete,
-/// given the largest shortfall (as the normals kernel does).
-pub(crate) fn check_room(short: f64, margin: f64) -> Result<(), KernelError> {
-    if short > 0.0 {
-        // A little extra so rounding at the region's edge cannot loop.
-        let needed = if short.is_finite() {
-            (margin + short) * 1.0001 + 1e-12
-        } else {
-            0.0
-        };
-        return Err(KernelError::MarginTooSmall {
-            needed: needed.max(margin * 2.0),
-        });
-    }
-    Ok(())
-}
-
 /// What produced a store's curvature column and what it measured, saved
 /// beside it ([`CURVATURE_META_FILE`]) so `features` reuses it only when it
 /// was made with the same neighbourhood.
@@ -240,12 +223,12 @@ impl CurvatureMeta {
     }
 
     pub fn load(store: &PointStore) -> Option<CurvatureMeta> {
-        let text = std::fs::read_to_string(store.dir.join(CURVATURE_META_FILE)).ok()?;
+        let text = std::fs::read_to_string(store.dir().join(CURVATURE_META_FILE)).ok()?;
         serde_json::from_str(&text).ok()
     }
 
     fn save(&self, store: &PointStore) -> Result<(), FeaturesError> {
-        let path = store.dir.join(CURVATURE_META_FILE);
+        let path = store.dir().join(CURVATURE_META_FILE);
         let text = serde_json::to_string_pretty(self).map_err(|e| FeaturesError::Meta {
             path: path.clone(),
             reason: e.to_string(),
@@ -255,6 +238,12 @@ impl CurvatureMeta {
             reason: e.to_string(),
         })
     }
+}
+
+/// What the curvature columns record as their making: the curvature
+/// parameters, which include the normals' own.
+pub fn provenance(params: &CurvatureParams) -> Provenance {
+    Provenance::of("curvature", params)
 }
 
 /// The curvature pass's outcome.
@@ -282,13 +271,13 @@ pub fn compute_curvature(
     if !(d > 0.0 && d.is_finite()) {
         return Err(FeaturesError::BadParameter(format!(
             "{}: every point coincides with its neighbours (mean spacing {d}): no curvature",
-            store.dir.display()
+            store.dir().display()
         )));
     }
     // The tangent-plane noise in nearest-neighbour distances, when the
     // normals pass measured it (exact sums: the same for any tiling).
     let noise_ratio = store
-        .manifest
+        .manifest()
         .sampling
         .filter(|s| s.mean_nn > 0.0)
         .map_or(0.0, |s| s.noise / s.mean_nn);
@@ -302,8 +291,8 @@ pub fn compute_curvature(
         },
         spacing: d,
     };
-    let values = store.create_attribute(CURVATURE_FILE, 4 * VALUES)?;
-    let flags = store.create_attribute(CURVATURE_FLAGS_FILE, 1)?;
+    let values = store.create_column(&CURVATURE)?;
+    let flags = store.create_column(&CURVATURE_FLAGS)?;
     let mut stats = CurvatureStats::new(d);
     let run = run_tiles(store, &kernel, opts, progress, |t, out: CurvatureTile| {
         let start = store.tiles()[t].start;
@@ -312,8 +301,8 @@ pub fn compute_curvature(
         stats.merge(&out.stats);
         Ok(())
     })?;
-    store.sync_column(&values)?;
-    store.sync_column(&flags)?;
+    store.finish_column(&CURVATURE_FLAGS, &flags, provenance(params))?;
+    store.finish_column(&CURVATURE, &values, provenance(params))?;
     let meta = CurvatureMeta {
         hood: params.hood,
         spacing: d,

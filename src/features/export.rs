@@ -5,7 +5,7 @@
 
 use super::curvature::VALUES;
 use super::order::write_in_input_order;
-use super::{FeaturesError, CURVATURE_FILE, CURVATURE_FLAGS_FILE};
+use super::{FeaturesError, CURVATURE, CURVATURE_FLAGS};
 use crate::io::{AtomicFile, IoError};
 use crate::store::PointStore;
 use std::io::{BufWriter, Write};
@@ -33,8 +33,8 @@ pub fn write_curvature_ply(
     path: &Path,
     window: u64,
 ) -> Result<(), FeaturesError> {
-    let values = store.attribute(CURVATURE_FILE, 4 * VALUES)?;
-    let flags = store.attribute(CURVATURE_FLAGS_FILE, 1)?;
+    let values = store.column(&CURVATURE)?;
+    let flags = store.column(&CURVATURE_FLAGS)?;
     let origin = store.origin();
     let mut file = AtomicFile::create(path)?;
     {

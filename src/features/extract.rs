@@ -10,7 +10,8 @@ use super::lines::LineGraph;
 use super::params::{FeatureParams, Resolved};
 use super::repair::{repair, Cone};
 use super::seams::{drop_copies, CellPolyline};
-use super::{CurvatureHood, FeaturesError, CURVATURE_FILE, CURVATURE_FLAGS_FILE};
+use super::{CurvatureHood, FeaturesError, CURVATURE, CURVATURE_FLAGS};
+use crate::normals::has_normals_of;
 use crate::pipeline::{run_tiles, Progress, RunOptions, RunStats};
 use crate::store::{spacing::ensure_spacing, PointStore};
 use crate::synth::LineKind;
@@ -46,11 +47,14 @@ pub fn extract_lines(
 ) -> Result<(LineGraph, FeaturesReport), FeaturesError> {
     params.validate()?;
     let t0 = Instant::now();
+    // Reused only when made with these parameters from these normals (the
+    // curvature parameters name the normals' own).
+    let made_by = super::curvature::provenance(&params.curvature);
     let reuse = CurvatureMeta::load(store).filter(|m| {
-        m.hood == params.curvature.hood
-            && m.points == store.len()
-            && store.has_column(CURVATURE_FILE)
-            && store.has_column(CURVATURE_FLAGS_FILE)
+        m.points == store.len()
+            && store.provenance(&CURVATURE) == Some(&made_by)
+            && store.provenance(&CURVATURE_FLAGS) == Some(&made_by)
+            && has_normals_of(store, &params.curvature.normals)
     });
     let computed_curvature = reuse.is_none();
     let meta = match reuse {
@@ -68,8 +72,6 @@ pub fn extract_lines(
     };
     let kernel = FeaturesKernel {
         params: resolved,
-        values: store.attribute(CURVATURE_FILE, 4 * super::curvature::VALUES)?,
-        flags: store.attribute(CURVATURE_FLAGS_FILE, 1)?,
         margin: (resolved.cell + resolved.chain() + reach + resolved.phi) * 1.0001 + 1e-12,
     };
     let mut cells: Vec<CellLines> = Vec::new();

@@ -29,10 +29,6 @@ pub(crate) struct HoodScratch {
     topo: TopoScratch,
 }
 
-fn failed(e: impl std::fmt::Display) -> KernelError {
-    KernelError::Failed(e.to_string())
-}
-
 impl<'a> HoodIndex<'a> {
     /// The index for `hood` (its radius absolute) over `tile`'s points.
     pub(crate) fn build(tile: &'a TilePoints, hood: CurvatureHood) -> Result<Self, KernelError> {
@@ -40,15 +36,15 @@ impl<'a> HoodIndex<'a> {
         Ok(match hood {
             CurvatureHood::Radius(r) => HoodIndex::Radius(
                 BallGrid::new(points, ids, r)
-                    .ok_or_else(|| failed(format!("unusable curvature radius {r}")))?,
+                    .ok_or_else(|| KernelError::Failed(format!("unusable curvature radius {r}")))?,
                 r,
             ),
             CurvatureHood::Knn(k) => HoodIndex::Knn(
-                build_index(KnnBackend::Grid, points, ids).map_err(failed)?,
+                build_index(KnnBackend::Grid, points, ids).map_err(KernelError::failed)?,
                 k,
             ),
             CurvatureHood::Topological { k, max_iterations } => HoodIndex::Topological(
-                RTreeIndex::new(points, ids).map_err(failed)?,
+                RTreeIndex::new(points, ids).map_err(KernelError::failed)?,
                 TopoParams { k, max_iterations },
             ),
         })
@@ -76,10 +72,10 @@ impl<'a> HoodIndex<'a> {
                 }
             }
             HoodIndex::Topological(index, params) => {
-                let q = u32::try_from(i).map_err(failed)?;
+                let q = u32::try_from(i).map_err(KernelError::failed)?;
                 let r =
                     topological_neighbours(index, &tile.points, &tile.ids, q, params, &mut s.topo)
-                        .map_err(failed)?;
+                        .map_err(KernelError::failed)?;
                 s.nbrs = r.neighbours;
                 r.reach
             }

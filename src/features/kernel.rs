@@ -40,20 +40,20 @@ use super::stages::{
     classify, corner_kept, enhance_points, feature_sets, kind_slot, smooth_points, Class,
     CornerCand, Enh, FeatureLists, FeatureSets,
 };
+use super::{CURVATURE, CURVATURE_FLAGS};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
-use crate::store::Column;
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::synth::LineKind;
-use crate::tiling::TilePoints;
+use crate::tiling::{TilePoints, Values};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
-/// The kernel over a store whose curvature columns are `values`, `flags`.
+/// The kernel over a store with curvature columns ([`CURVATURE`],
+/// [`CURVATURE_FLAGS`]).
 pub struct FeaturesKernel {
     pub params: Resolved,
-    pub values: Column,
-    pub flags: Column,
     pub margin: f64,
 }
 
@@ -112,8 +112,9 @@ impl TileKernel for FeaturesKernel {
         self.margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        // The stages orient their frames by the normals, as curvature did.
+        &[NORMALS, FLAGS, CURVATURE, CURVATURE_FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<FeaturesTile, KernelError> {
@@ -137,7 +138,7 @@ impl TileKernel for FeaturesKernel {
         };
         let hood = HoodIndex::build(tile, p.hood)?;
         let (enh, short) = enhance_points(tile, &hood, &class, &sets, &which, p)?;
-        super::curvature::check_room(short.max(uncovered(tile, &own, chain)), tile.margin)?;
+        KernelError::unless_short(short.max(uncovered(tile, &own, chain)), tile.margin)?;
         let status = corner_status(tile, &which, &enh, &class, &dist, p);
         let mut out = FeaturesTile::default();
         let owned = |i: usize| owns(tile, tile.points[i], p.cell);
@@ -181,26 +182,19 @@ impl TileKernel for FeaturesKernel {
 impl FeaturesKernel {
     /// Section 2's class of every loaded point, from the curvature columns.
     fn classes(&self, tile: &TilePoints) -> Result<Vec<Option<Class>>, KernelError> {
-        let n = tile.points.len();
-        let mut out = Vec::with_capacity(n);
-        let (mut vals, mut flg) = (Vec::new(), Vec::new());
-        let mut i = 0;
-        while i < n {
-            // A run of consecutive store indices is one read.
-            let first = tile.store_index(i);
-            let mut len = 1;
-            while i + len < n && tile.store_index(i + len) == first + len as u64 {
-                len += 1;
-            }
-            self.values.read_f32(first, len as u64, &mut vals)?;
-            self.flags.read_u8(first, len as u64, &mut flg)?;
-            for k in 0..len {
-                let v = &vals[VALUES * k..VALUES * (k + 1)];
-                out.push(classify(v[0], v[1], flg[k], self.params.alpha));
-            }
-            i += len;
-        }
-        Ok(out)
+        let (Some(Values::F32(vals)), Some(Values::U8(flg))) =
+            (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS))
+        else {
+            return Err(KernelError::Failed(
+                "the tile carries no curvature columns".into(),
+            ));
+        };
+        let alpha = self.params.alpha;
+        Ok(vals
+            .chunks_exact(VALUES)
+            .zip(flg)
+            .map(|(v, f)| classify(v[0], v[1], *f, alpha))
+            .collect())
     }
 }
 

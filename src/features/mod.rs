@@ -6,7 +6,7 @@
 //!   (`d` the mean distance to the 6 nearest neighbours, [`spacing`]), its
 //!   principal, mean and Gaussian curvatures and MLS residual. A tile
 //!   kernel, per-point local: tiled equals untiled bit for bit. Results land
-//!   in the store columns [`CURVATURE_FILE`] and [`CURVATURE_FLAGS_FILE`].
+//!   in the store columns [`CURVATURE`] and [`CURVATURE_FLAGS`].
 //!
 //! Flags of a point's curvature (a bit set means the values it names are
 //! not available, and they are NaN, never made up).
@@ -39,7 +39,7 @@ pub use curvature::{compute_curvature, CurvatureReport};
 
 use crate::normals::NormalParams;
 use crate::pipeline::PipelineError;
-use crate::store::StoreError;
+use crate::store::{ColumnSpec, Item, StoreError};
 use serde::{Deserialize, Serialize};
 
 /// Fewer than [`quadric::MIN_FIT_POINTS`] points in the neighbourhood: no
@@ -56,9 +56,9 @@ pub const FLAG_ILL_CONDITIONED: u8 = 4;
 pub const FLAG_UNORIENTED: u8 = 8;
 
 /// Per-point curvature column: `k1, k2, H, K, residual` as f32.
-pub const CURVATURE_FILE: &str = "curvature.f32";
+pub const CURVATURE: ColumnSpec = ColumnSpec::new("curvature.f32", Item::F32(curvature::VALUES));
 /// Per-point curvature flags (u8).
-pub const CURVATURE_FLAGS_FILE: &str = "curvature_flags.u8";
+pub const CURVATURE_FLAGS: ColumnSpec = ColumnSpec::new("curvature_flags.u8", Item::U8);
 /// The parameters and statistics that produced the curvature column (JSON).
 pub const CURVATURE_META_FILE: &str = "curvature.json";
 

@@ -29,7 +29,7 @@ pub fn write_in_input_order(
     let window = window.clamp(1, n.max(1));
     let windows = n.div_ceil(window) as usize;
     let slot_rec = record + 4;
-    let path = store.dir.join(SCRATCH_FILE);
+    let path = store.dir().join(SCRATCH_FILE);
     let scratch = ScratchFile::create(path.clone())?;
     let mut cursors: Vec<u64> = (0..windows as u64).map(|w| w * window).collect();
     let cap = ((window / windows.max(1) as u64).max(256) as usize) * slot_rec;

@@ -64,7 +64,7 @@ impl TileKernel for SpacingKernel {
             total.merge(s);
             short = short.max(*sh);
         }
-        super::curvature::check_room(short, tile.margin)?;
+        KernelError::unless_short(short, tile.margin)?;
         Ok(total)
     }
 }

@@ -2,7 +2,7 @@
 //! grouping to the same bits: fixed-point sums (a float sum would depend on
 //! the tiling) and the project's log histograms for quantiles.
 
-use crate::normals::stats::LogHistogram;
+use crate::store::sampling::LogHistogram;
 
 /// Fixed-point units per `scale`.
 const UNIT: f64 = (1u64 << 40) as f64;

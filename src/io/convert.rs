@@ -7,7 +7,7 @@ use super::{
     ReadOptions, WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, Default)]

@@ -4,7 +4,7 @@
 
 use super::{open_reader, IoError, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
 use crate::geom::Aabb;
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use crate::spatial::{build_index, KnnBackend};
 use glam::DVec3;
 use std::path::Path;

@@ -67,36 +67,25 @@ impl TileKernel for NeighboursKernel {
             Neighbourhood::Topological(p) => topological(tile, &p)?,
             Neighbourhood::Knn { k } => nearest(tile, k, self.params.backend)?,
         };
-        check_room(&hoods, tile.margin)?;
+        let short = hoods.iter().map(|h| h.short_by).fold(0.0, f64::max);
+        KernelError::unless_short(short, tile.margin)?;
         Ok(assemble(tile, &hoods))
-    }
-}
-
-fn failed(e: impl std::fmt::Display) -> KernelError {
-    KernelError::Failed(e.to_string())
-}
-
-fn shortfall(reach: f64, room: f64) -> f64 {
-    if reach <= room {
-        0.0
-    } else {
-        reach - room
     }
 }
 
 /// Paper 3 for every core point, over an R*-tree of the loaded points.
 fn topological(tile: &TilePoints, params: &TopoParams) -> Result<Vec<Hood>, KernelError> {
-    let index = RTreeIndex::new(&tile.points, &tile.ids).map_err(failed)?;
-    let n = u32::try_from(tile.n_core).map_err(failed)?;
+    let index = RTreeIndex::new(&tile.points, &tile.ids).map_err(KernelError::failed)?;
+    let n = u32::try_from(tile.n_core).map_err(KernelError::failed)?;
     (0..n)
         .into_par_iter()
         .map_init(TopoScratch::new, |scratch, i| {
             let r = topological_neighbours(&index, &tile.points, &tile.ids, i, params, scratch)
-                .map_err(failed)?;
+                .map_err(KernelError::failed)?;
             Ok(Hood {
                 local: r.neighbours.iter().map(|nb| nb.index).collect(),
                 iterations: Some((r.iterations, r.hit_cap)),
-                short_by: shortfall(r.reach, tile.room(tile.points[i as usize])),
+                short_by: tile.shortfall(tile.points[i as usize], r.reach),
             })
         })
         .collect()
@@ -104,9 +93,9 @@ fn topological(tile: &TilePoints, params: &TopoParams) -> Result<Vec<Hood>, Kern
 
 /// Exact kNN of every core point (the point itself excluded).
 fn nearest(tile: &TilePoints, k: usize, backend: KnnBackend) -> Result<Vec<Hood>, KernelError> {
-    let index = build_index(backend, &tile.points, &tile.ids).map_err(failed)?;
+    let index = build_index(backend, &tile.points, &tile.ids).map_err(KernelError::failed)?;
     let index = index.as_ref();
-    let n = u32::try_from(tile.n_core).map_err(failed)?;
+    let n = u32::try_from(tile.n_core).map_err(KernelError::failed)?;
     Ok((0..n)
         .into_par_iter()
         .map_init(Vec::<Neighbour>::new, |found, i| {
@@ -121,26 +110,10 @@ fn nearest(tile: &TilePoints, k: usize, backend: KnnBackend) -> Result<Vec<Hood>
             Hood {
                 local: found.iter().map(|nb| nb.index).collect(),
                 iterations: None,
-                short_by: shortfall(reach, tile.room(p)),
+                short_by: tile.shortfall(p, reach),
             }
         })
         .collect())
-}
-
-/// Fails with the margin that would make every neighbourhood complete.
-fn check_room(hoods: &[Hood], margin: f64) -> Result<(), KernelError> {
-    let short = hoods.iter().map(|h| h.short_by).fold(0.0, f64::max);
-    if short <= 0.0 {
-        return Ok(());
-    }
-    // A little extra so rounding at the region's edge cannot loop; an
-    // unbounded need (too few points loaded) doubles the margin.
-    let needed = if short.is_finite() {
-        (margin + short) * 1.0001 + 1e-12
-    } else {
-        margin * 2.0
-    };
-    Err(KernelError::MarginTooSmall { needed })
 }
 
 /// Core lists in input-order ids, points sorted by id.

@@ -235,7 +235,7 @@ pub fn compute_neighbours(
         initial_margin: params.initial_margin(spacing).max(f64::MIN_POSITIVE),
     };
     let windows = Windows::new(store.len(), out.window_points);
-    let mut spill = Spill::create(&store.dir, windows, IdWidth::for_points(store.len()))?;
+    let mut spill = Spill::create(store.dir(), windows, IdWidth::for_points(store.len()))?;
     let mut report = NeighboursReport {
         points: store.len(),
         tiles: store.tiles().len(),

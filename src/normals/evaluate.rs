@@ -1,7 +1,7 @@
 //! Normals against a truth: angle errors and orientation agreement, as the
 //! tests, benches and the demo report them.
 
-use crate::store::{PointStore, StoreError, NORMAL_FILE};
+use crate::store::{PointStore, StoreError, NORMALS};
 use glam::DVec3;
 
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
@@ -75,7 +75,7 @@ pub fn accuracy_where(normals: &[DVec3], truth: &[DVec3], keep: &[bool]) -> Norm
 /// A store's normals in input order, in memory (evaluation of small
 /// clouds only: 24 bytes per point).
 pub fn normals_in_input_order(store: &PointStore) -> Result<Vec<DVec3>, StoreError> {
-    let col = store.attribute(NORMAL_FILE, 12)?;
+    let col = store.column(&NORMALS)?;
     let mut out = vec![DVec3::ZERO; store.len() as usize];
     let (mut ids, mut nrm) = (Vec::new(), Vec::new());
     for t in store.tiles() {

@@ -80,10 +80,6 @@ pub(crate) enum HoodIndex<'a> {
     },
 }
 
-fn failed(e: impl std::fmt::Display) -> KernelError {
-    KernelError::Failed(e.to_string())
-}
-
 /// Per-worker query buffers.
 struct Scratch {
     topo: TopoScratch,
@@ -96,11 +92,11 @@ impl<'a> HoodIndex<'a> {
         let (points, ids) = (&tile.points[..], &tile.ids[..]);
         Ok(match params.neighbourhood.topo_params(params.k) {
             None => HoodIndex::Knn {
-                index: build_index(params.backend, points, ids).map_err(failed)?,
+                index: build_index(params.backend, points, ids).map_err(KernelError::failed)?,
                 k: params.k,
             },
             Some(params) => HoodIndex::Topological {
-                index: RTreeIndex::new(points, ids).map_err(failed)?,
+                index: RTreeIndex::new(points, ids).map_err(KernelError::failed)?,
                 params,
             },
         })
@@ -135,7 +131,7 @@ impl<'a> HoodIndex<'a> {
         let reach = match self {
             HoodIndex::Knn { index, k } => knn(index.as_ref(), tile, i, *k, &mut scratch.nbrs),
             HoodIndex::Topological { index, params } => {
-                let i = u32::try_from(i).map_err(failed)?;
+                let i = u32::try_from(i).map_err(KernelError::failed)?;
                 let r = topological_neighbours(
                     index,
                     &tile.points,
@@ -144,7 +140,7 @@ impl<'a> HoodIndex<'a> {
                     params,
                     &mut scratch.topo,
                 )
-                .map_err(failed)?;
+                .map_err(KernelError::failed)?;
                 scratch.nbrs = r.neighbours;
                 r.reach
             }
@@ -217,7 +213,7 @@ impl<'a> HoodIndex<'a> {
             chunk.nbrs.extend(scratch.nbrs.iter().map(|n| n.index));
             chunk
                 .ends
-                .push(u32::try_from(chunk.nbrs.len()).map_err(failed)?);
+                .push(u32::try_from(chunk.nbrs.len()).map_err(KernelError::failed)?);
         }
         chunk.nbrs.shrink_to_fit();
         Ok((chunk, values, short_by))

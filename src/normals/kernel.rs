@@ -14,10 +14,10 @@
 use super::forest::{spanning_forest, Edge};
 use super::hood::{HoodIndex, Hoods};
 use super::pca::fit_plane;
-use super::stats::SamplingHistograms;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::Neighbour;
+use crate::store::sampling::SamplingHistograms;
 use crate::tiling::TilePoints;
 use glam::DVec3;
 
@@ -102,7 +102,7 @@ impl TileKernel for NormalsKernel {
             |i| i,
             |i, nbrs| self.core_fit(tile, i, nbrs),
         )?;
-        check_room(core.short_by, tile.margin)?;
+        KernelError::unless_short(core.short_by, tile.margin)?;
         let mut out = NormalsTile {
             normals: fits
                 .iter()
@@ -157,7 +157,7 @@ impl NormalsKernel {
             |r| ring[r] as usize,
             |j, nbrs| self.normal_of(tile, j, nbrs).map(|f| f.n),
         )?;
-        check_room(hoods.short_by, tile.margin)?;
+        KernelError::unless_short(hoods.short_by, tile.margin)?;
         for (&j, n) in ring.iter().zip(fitted) {
             normals[j as usize] = n;
         }
@@ -176,23 +176,6 @@ fn sampling(fits: &[CoreFit], scale: f64) -> SamplingHistograms {
         }
     }
     h
-}
-
-/// Fails with the margin that would make every neighbourhood complete,
-/// given the largest shortfall.
-fn check_room(short: f64, margin: f64) -> Result<(), KernelError> {
-    if short > 0.0 {
-        // A little extra so rounding at the region's edge cannot loop.
-        let needed = if short.is_finite() {
-            (margin + short) * 1.0001 + 1e-12
-        } else {
-            0.0
-        };
-        return Err(KernelError::MarginTooSmall {
-            needed: needed.max(margin * 2.0),
-        });
-    }
-    Ok(())
 }
 
 /// See [`EdgeCost`]. Symmetric in (i, j), so both tiles that see an edge

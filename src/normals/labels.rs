@@ -76,7 +76,7 @@ impl ForestLabels {
         let tiles = store.tiles();
         let sources: Vec<u32> = extra.iter().map(|e| e.0).collect();
         let boundary = runs.outside_slots(&sources)?;
-        let dir = store.dir.as_path();
+        let dir = store.dir();
         let mut supers = EdgeRuns::create(&dir.join(SUPERS_FILE))?;
         progress.begin("orient: contract", tiles.len() as u64);
         let branches = write_supers(tiles, runs, &boundary, &mut supers, progress)?;

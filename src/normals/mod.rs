@@ -19,17 +19,16 @@ pub mod orient;
 pub mod pca;
 pub mod runs;
 pub mod sources;
-pub mod stats;
 pub mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
-use crate::store::{Column, PointStore, StoreError, FLAGS_FILE, NORMAL_FILE};
+use crate::store::sampling::{SamplingHistograms, SamplingStats};
+use crate::store::{Column, PointStore, Provenance, StoreError, FLAGS, NORMALS};
 use glam::DVec3;
 use kernel::{NormalsKernel, NormalsTile};
 use runs::EdgeRuns;
-use stats::{SamplingHistograms, SamplingStats};
 
 /// Bytes per point of an input-order output window of positions, normals
 /// and flags (the record and its share of the reorder buffers).
@@ -125,8 +124,8 @@ impl Default for NormalParams {
 
 impl NormalParams {
     /// The parameters as the manifest records them for the normals column.
-    pub fn provenance(&self) -> String {
-        format!("normals {self:?}")
+    pub fn provenance(&self) -> Provenance {
+        Provenance::of("normals", self)
     }
 
     /// Peak bytes per loaded point of the kernel (index, neighbour lists,
@@ -217,26 +216,21 @@ pub fn compute_normals(
     progress: &dyn Progress,
 ) -> Result<NormalsReport, NormalsError> {
     let spacing = crate::store::spacing::ensure_spacing(store)?;
-    let normals = store.create_attribute(NORMAL_FILE, 12)?;
-    let flags = store.create_attribute(FLAGS_FILE, 1)?;
+    let normals = store.create_column(&NORMALS)?;
+    let flags = store.create_column(&FLAGS)?;
     let report = normals_into(store, params, spacing, opts, progress, &normals, &flags)?;
-    store.sync_column(&normals)?;
-    store.sync_column(&flags)?;
-    store.manifest.sampling = Some(report.sampling);
-    store
-        .manifest
-        .provenance
-        .insert(NORMAL_FILE.to_string(), params.provenance());
-    store.save_manifest()?;
+    store.set_sampling(report.sampling)?;
+    store.finish_column(&FLAGS, &flags, params.provenance())?;
+    store.finish_column(&NORMALS, &normals, params.provenance())?;
     Ok(report)
 }
 
 /// Whether `store` holds normals computed with `params` (with their
 /// sampling statistics): the ones a later pass may reuse.
 pub fn has_normals_of(store: &PointStore, params: &NormalParams) -> bool {
-    store.has_column(NORMAL_FILE)
-        && store.manifest.sampling.is_some()
-        && store.manifest.provenance.get(NORMAL_FILE) == Some(&params.provenance())
+    store.manifest().sampling.is_some()
+        && store.provenance(&NORMALS) == Some(&params.provenance())
+        && store.provenance(&FLAGS) == Some(&params.provenance())
 }
 
 /// Computes normals with `params` unless the store holds them already;
@@ -274,7 +268,7 @@ fn normals_into(
         histogram_scale: scale,
     };
     let mut sampling = SamplingHistograms::new(scale);
-    let mut runs = EdgeRuns::create(&store.dir.join(".forest.edges"))?;
+    let mut runs = EdgeRuns::create(&store.dir().join(".forest.edges"))?;
     let mut report = NormalsReport {
         points: store.len(),
         tiles: store.tiles().len(),

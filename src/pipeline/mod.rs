@@ -2,17 +2,19 @@
 //! tiles in flight (and so the memory), reorders results into tile order and
 //! hands them to the kernel's seam policy. It knows nothing of geometry.
 
-pub mod budget;
 pub mod codec;
-pub mod plan;
-pub mod progress;
+pub mod kernel;
+pub mod options;
 pub mod run;
 
-pub use budget::{peak_rss_bytes, MemoryBudget};
 pub use codec::Codec;
-pub use plan::{BudgetError, KernelCost, MemoryPlan};
-pub use progress::{NoProgress, Progress};
-pub use run::{run_tiles, KernelError, RunOptions, RunStats, TileKernel};
+pub use kernel::{KernelError, TileKernel};
+pub use options::RunOptions;
+pub use run::{run_tiles, RunStats};
+// The run's memory and progress live below every layer that uses them; a
+// kernel finds them here beside the pipeline that takes them.
+pub use crate::memory::{BudgetError, KernelCost, MemoryBudget, MemoryPlan};
+pub use crate::progress::{NoProgress, Progress};
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -21,8 +23,12 @@ pub enum PipelineError {
     Store(#[from] crate::store::StoreError),
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
-    #[error("tile {tile}: {reason}")]
-    Kernel { tile: usize, reason: String },
+    #[error("tile {tile}: {source}")]
+    Kernel {
+        tile: usize,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     #[error("tile {tile}: margin {margin} is short but the kernel asked for {needed}")]
     MarginStuck {
         tile: usize,
@@ -31,8 +37,9 @@ pub enum PipelineError {
     },
     #[error("a worker thread stopped without a result")]
     WorkerLost,
-    #[error("{0}")]
-    Seam(String),
+    /// The seam policy failed (its stitcher's typed error, kept).
+    #[error(transparent)]
+    Seam(Box<dyn std::error::Error + Send + Sync>),
     /// The job this process was started for is done (`--until`, a tile
     /// job): not a failure.
     #[error("stopped at stage `{stage}` as the job asked")]
@@ -51,4 +58,11 @@ pub enum PipelineError {
         tile: usize,
         reason: String,
     },
+}
+
+impl PipelineError {
+    /// A seam policy's own error, kept typed.
+    pub fn seam(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+        PipelineError::Seam(Box::new(e))
+    }
 }

@@ -5,81 +5,13 @@
 //! a kernel with a [`Codec`] has each result saved as it finishes and read
 //! back instead of recomputed, and a tile job computes some tiles only.
 
-use super::{Codec, PipelineError, Progress};
-use crate::store::{Checkpoints, Job, PointStore, StoreError};
-use crate::tiling::{load_tile, TilePoints};
+use super::{Codec, KernelError, PipelineError, RunOptions, TileKernel};
+use crate::progress::Progress;
+use crate::store::{Checkpoints, Job, PointStore};
+use crate::tiling::load_tile;
 use crossbeam::channel;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-
-/// Why a kernel could not finish a tile.
-#[derive(Debug, thiserror::Error)]
-pub enum KernelError {
-    /// Some core point depends on points beyond the loaded region: the
-    /// pipeline reloads the tile with at least `needed` margin and reruns it.
-    #[error("margin too small: {needed} needed")]
-    MarginTooSmall { needed: f64 },
-    #[error(transparent)]
-    Store(#[from] StoreError),
-    #[error("{0}")]
-    Failed(String),
-}
-
-/// A pure function from one tile's points to a tile result.
-pub trait TileKernel: Sync {
-    type Output: Send;
-    /// Stage name shown in progress.
-    fn name(&self) -> &str;
-    /// Margin to load first; the kernel asks for more when it finds it short.
-    fn margin(&self) -> f64;
-    fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
-    /// Whether tiles must carry the store's normals and flags.
-    fn needs_normals(&self) -> bool {
-        false
-    }
-    /// How results are saved for a resumable run (`None`: recomputed).
-    fn codec(&self) -> Option<Codec<Self::Output>> {
-        None
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-pub struct RunOptions {
-    pub threads: usize,
-    /// Tiles loaded, running or waiting in the reorder buffer at once.
-    pub in_flight: usize,
-    /// The memory promise global passes plan by (`None`: unbounded, every
-    /// pass keeps its state in memory).
-    pub budget: Option<super::MemoryBudget>,
-}
-
-impl RunOptions {
-    /// `threads` workers, no memory promise.
-    pub fn new(threads: usize) -> Self {
-        let threads = threads.max(1);
-        RunOptions {
-            threads,
-            in_flight: threads + 1,
-            budget: None,
-        }
-    }
-}
-
-impl RunOptions {
-    /// The same options under the memory promise `budget`.
-    pub fn within(self, budget: super::MemoryBudget) -> Self {
-        RunOptions {
-            budget: Some(budget),
-            ..self
-        }
-    }
-
-    /// Whether a global pass may keep `bytes_per_point` per point in memory
-    /// (see [`super::MemoryBudget::holds`]).
-    pub fn holds(&self, points: u64, bytes_per_point: u64) -> bool {
-        self.budget.is_none_or(|b| b.holds(points, bytes_per_point))
-    }
-}
 
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStats {
@@ -321,7 +253,7 @@ fn run_one<K: TileKernel>(
     let mut margin = kernel.margin();
     let mut retries = 0;
     loop {
-        let tile = load_tile(store, t, margin, kernel.needs_normals())?;
+        let tile = load_tile(store, t, margin, kernel.reads())?;
         match kernel.run(&tile) {
             Ok(out) => return Ok((out, margin, retries)),
             Err(KernelError::MarginTooSmall { needed })
@@ -340,7 +272,13 @@ fn run_one<K: TileKernel>(
             }
             Err(KernelError::Store(e)) => return Err(e.into()),
             Err(KernelError::Failed(reason)) => {
-                return Err(PipelineError::Kernel { tile: t, reason })
+                return Err(PipelineError::Kernel {
+                    tile: t,
+                    source: reason.into(),
+                })
+            }
+            Err(KernelError::Source(source)) => {
+                return Err(PipelineError::Kernel { tile: t, source })
             }
         }
     }

@@ -14,12 +14,13 @@ use super::attributes::AttributeSink;
 use super::cells::CellCounts;
 use super::manifest::{GridSpec, Manifest, STORE_VERSION};
 use super::replay::{first_pass, Replay};
+use super::tile_plan::{plan_tiles, CellCount, TilePlan};
 use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
 use crate::geom::Aabb;
 use crate::io::PointReader;
-use crate::pipeline::{BudgetError, KernelCost, MemoryBudget, MemoryPlan, Progress};
-use crate::tiling::{plan_tiles, CellCount, TilePlan};
+use crate::memory::{plan, BudgetError, KernelCost, MemoryBudget, MemoryPlan};
+use crate::progress::Progress;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -68,8 +69,8 @@ impl BuildOptions {
     pub fn within(budget: MemoryBudget, cost: KernelCost) -> Self {
         BuildOptions {
             tiles: TileTarget::Budget { budget, cost },
-            scatter_buffer: crate::pipeline::plan::scatter_buffer(budget),
-            histogram_cells: crate::pipeline::plan::histogram_cells(budget),
+            scatter_buffer: plan::scatter_buffer(budget),
+            histogram_cells: plan::histogram_cells(budget),
         }
     }
 }
@@ -361,7 +362,7 @@ pub fn scratch_store_dir_in(dir: &Path, output: &Path) -> PathBuf {
 mod tests {
     use super::*;
     use crate::io::memory::MemoryReader;
-    use crate::pipeline::NoProgress;
+    use crate::progress::NoProgress;
 
     fn build(pts: &[DVec3], dir: &Path, scatter_buffer: usize) -> PointStore {
         let mut reader = MemoryReader::new("cloud", pts.to_vec(), None);

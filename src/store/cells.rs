@@ -15,7 +15,7 @@
 //! the final grid is the finest one whose whole histogram fits: it does not
 //! depend on the order of the points.
 
-use crate::tiling::CellCount;
+use super::tile_plan::CellCount;
 
 /// Keys sorted and merged at a time (8 MiB of keys, 8 MiB of scratch).
 const BATCH: usize = 1 << 20;

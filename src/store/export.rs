@@ -16,9 +16,9 @@
 //! of a scratch file ([`super::reorder`]) and each window read back from it.
 
 use super::reorder::Reorder;
-use super::{Column, PointStore, StoreError, TileEntry, FLAGS_FILE, NORMAL_FILE};
+use super::{Column, PointStore, StoreError, TileEntry, FLAGS, NORMALS};
 use crate::io::{create_writer, PointChunk, PointWriter, WriterSpec};
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use crossbeam::channel::{bounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -34,12 +34,12 @@ pub fn export_points(
 ) -> Result<u64, StoreError> {
     let cols = Columns {
         normals: if spec.with_normals {
-            Some(store.attribute(NORMAL_FILE, 12)?)
+            Some(store.column(&NORMALS)?)
         } else {
             None
         },
         flags: if spec.with_flags {
-            Some(store.attribute(FLAGS_FILE, 1)?)
+            Some(store.column(&FLAGS)?)
         } else {
             None
         },
@@ -325,11 +325,11 @@ mod tests {
             tiles: TileTarget::Points(600),
             ..BuildOptions::default()
         };
-        let nop = &crate::pipeline::NoProgress;
+        let nop = &crate::progress::NoProgress;
         let mut store = build_store(&mut reader, &dir.path().join("s"), &opts, nop).unwrap();
         assert!(store.tiles().len() > 4);
-        let normals = store.create_attribute(NORMAL_FILE, 12).unwrap();
-        let flags = store.create_attribute(FLAGS_FILE, 1).unwrap();
+        let normals = store.create_column(&NORMALS).unwrap();
+        let flags = store.create_column(&FLAGS).unwrap();
         let mut ids = Vec::new();
         for t in store.tiles() {
             store.read_indices(t.start, t.count, &mut ids).unwrap();

@@ -35,12 +35,14 @@ pub struct Manifest {
     pub source_has_normals: bool,
     /// Sampling density and noise, once a normals pass measured them.
     #[serde(default)]
-    pub sampling: Option<crate::normals::stats::SamplingStats>,
-    /// For each derived column, the parameters that produced it, so a
-    /// later pass asking for other parameters recomputes it rather than
-    /// reusing it silently (absent: unknown, recomputed when asked).
-    #[serde(default)]
-    pub provenance: std::collections::BTreeMap<String, String>,
+    pub sampling: Option<super::sampling::SamplingStats>,
+    /// For each derived column, what produced it, so a later pass asking
+    /// for other parameters recomputes it rather than reusing it silently
+    /// (absent: unknown, recomputed when asked). Stores of earlier versions
+    /// kept a bare string under `provenance`; it is ignored, so their
+    /// columns are recomputed once.
+    #[serde(default, rename = "made_by")]
+    pub provenance: std::collections::BTreeMap<String, super::columns::Provenance>,
 }
 
 /// The coarse histogram grid the planner split; tile cores are integer boxes

@@ -14,22 +14,27 @@ pub mod build;
 mod cells;
 pub mod checkpoint;
 pub mod column;
+pub mod columns;
 pub mod export;
 mod lock;
 pub mod manifest;
 mod reorder;
 mod replay;
+pub mod sampling;
 mod sort;
 pub mod source;
 pub mod spacing;
+pub mod tile_plan;
 
 pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};
 pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
+pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use export::export_points;
 pub use manifest::{GridSpec, Manifest, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
+pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
 
 use crate::geom::Aabb;
 use glam::DVec3;
@@ -41,8 +46,6 @@ pub const BLOCK: u64 = 512;
 pub const XYZ_FILE: &str = "xyz.f32";
 pub const INDEX_FILE: &str = "index.u64";
 pub const BLOCKS_FILE: &str = "blocks.f32";
-pub const NORMAL_FILE: &str = "normal.f32";
-pub const FLAGS_FILE: &str = "flags.u8";
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -66,7 +69,7 @@ pub enum StoreError {
     #[error("store has no `{column}` column (run the pass that computes it first)")]
     MissingColumn { column: String },
     #[error(transparent)]
-    Budget(#[from] crate::pipeline::BudgetError),
+    Budget(#[from] crate::memory::BudgetError),
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
     Busy { path: PathBuf },
 }
@@ -83,8 +86,8 @@ impl StoreError {
 /// An open point store.
 #[derive(Debug)]
 pub struct PointStore {
-    pub dir: PathBuf,
-    pub manifest: Manifest,
+    dir: PathBuf,
+    manifest: Manifest,
     xyz: Column,
     index: Column,
     blocks: Column,
@@ -200,17 +203,6 @@ impl PointStore {
         self.checkpoints.as_ref()
     }
 
-    /// Forces a column of this store to disk, unless the store is scratch.
-    /// For a scratch store it would cost an fdatasync and, worse, the blocks
-    /// it allocates make removing the file slow (ext4: 17-34 ms for the
-    /// normals of 1M points, where an unsynced column unlinks in 0.03 ms).
-    pub fn sync_column(&self, column: &Column) -> Result<(), StoreError> {
-        if self.scratch {
-            return Ok(());
-        }
-        column.sync()
-    }
-
     pub fn len(&self) -> u64 {
         self.manifest.count
     }
@@ -294,35 +286,23 @@ impl PointStore {
         Ok(())
     }
 
-    pub fn has_column(&self, name: &str) -> bool {
-        self.manifest.columns.iter().any(|c| c == name)
+    /// The store's directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
     }
 
-    /// Opens an attribute column for reading and writing.
-    pub fn attribute(&self, name: &str, item_bytes: usize) -> Result<Column, StoreError> {
-        if !self.has_column(name) {
-            return Err(StoreError::MissingColumn {
-                column: name.to_string(),
-            });
-        }
-        Column::open(&self.dir.join(name), item_bytes, true)
+    /// The store's description (counts, bounds, tiles, columns).
+    pub fn manifest(&self) -> &Manifest {
+        &self.manifest
     }
 
-    /// Creates (or resets) an attribute column and records it in the manifest.
-    pub fn create_attribute(
-        &mut self,
-        name: &str,
-        item_bytes: usize,
-    ) -> Result<Column, StoreError> {
-        let col = Column::create(&self.dir.join(name), item_bytes, self.manifest.count)?;
-        if !self.has_column(name) {
-            self.manifest.columns.push(name.to_string());
-            self.save_manifest()?;
-        }
-        Ok(col)
+    /// Keeps the sampling statistics a normals pass measured.
+    pub fn set_sampling(&mut self, stats: sampling::SamplingStats) -> Result<(), StoreError> {
+        self.manifest.sampling = Some(stats);
+        self.save_manifest()
     }
 
-    pub fn save_manifest(&self) -> Result<(), StoreError> {
+    fn save_manifest(&self) -> Result<(), StoreError> {
         save_manifest(&self.dir, &self.manifest)
     }
 }

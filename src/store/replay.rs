@@ -11,7 +11,7 @@ use super::attributes::AttributeSink;
 use super::StoreError;
 use crate::geom::Aabb;
 use crate::io::{IoError, PointChunk, PointReader, DEFAULT_CHUNK};
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use crossbeam::channel::{Receiver, Sender};
 use glam::DVec3;
 use std::fs::File;
@@ -222,7 +222,7 @@ fn for_each_reread(
 mod tests {
     use super::*;
     use crate::io::{memory::MemoryReader, open_reader, InvalidPolicy};
-    use crate::pipeline::NoProgress;
+    use crate::progress::NoProgress;
     use crate::store::{build_store, BuildOptions, TileTarget, INDEX_FILE, XYZ_FILE};
 
     /// A binary PLY of `pts` (f32 x y z), every 7th record NaN.

@@ -3,7 +3,7 @@
 //! duplicates (adjacent after the sort), and records tile and block bounds.
 
 use super::{Column, StoreError, TileEntry, BLOCK, BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use rayon::prelude::*;
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 
 use super::{build_store, BuildOptions, PointStore, StoreError};
 use crate::io::{open_reader, ReadOptions};
-use crate::pipeline::Progress;
+use crate::progress::Progress;
 use std::path::{Path, PathBuf};
 
 /// An open store, owning its directory when it is scratch.

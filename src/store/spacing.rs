@@ -229,7 +229,7 @@ mod tests {
                 &mut reader,
                 &dir.path().join("s"),
                 &opts,
-                &crate::pipeline::NoProgress,
+                &crate::progress::NoProgress,
             )
             .unwrap();
             // Oracle: the same sample, nearest distances by brute force.

@@ -3,7 +3,8 @@
 //! margin. Only the blocks whose bounds meet that region are read.
 
 use crate::geom::Aabb;
-use crate::store::{Column, PointStore, StoreError, TileEntry, BLOCK, FLAGS_FILE, NORMAL_FILE};
+use crate::store::{Column, ColumnSpec, Item, PointStore, StoreError, TileEntry, BLOCK};
+use crate::store::{FLAGS, NORMALS};
 use glam::DVec3;
 
 /// A tile's points in memory, core first, coordinates relative to the store
@@ -28,10 +29,59 @@ pub struct TilePoints {
     /// The region whose points are all loaded: `core` grown by `margin`.
     pub loaded: Aabb,
     pub margin: f64,
-    /// Oriented unit normals and flags of every loaded point, when the
-    /// kernel asked for them (empty otherwise).
-    pub normals: Vec<DVec3>,
-    pub flags: Vec<u8>,
+    /// The store columns the kernel declared it reads, for every loaded
+    /// point (a kernel declares them: `TileKernel::reads`).
+    pub columns: Vec<TileColumn>,
+}
+
+/// A kernel read normals from a tile loaded without them (it did not
+/// declare them in `reads`): a programming error, reported rather than
+/// read as "no normal here".
+#[derive(Debug, thiserror::Error)]
+#[error("the tile was loaded without the normals and flags columns")]
+pub struct MissingColumns;
+
+/// One store column's values for a tile's loaded points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TileColumn {
+    pub spec: ColumnSpec,
+    pub values: Values,
+}
+
+/// Loaded values, typed by the column's item.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values {
+    Vec3(Vec<DVec3>),
+    /// `n` values per point, flat.
+    F32(Vec<f32>),
+    U8(Vec<u8>),
+}
+
+impl Values {
+    fn empty(item: Item) -> Self {
+        match item {
+            Item::Vec3 => Values::Vec3(Vec::new()),
+            Item::F32(_) => Values::F32(Vec::new()),
+            Item::U8 => Values::U8(Vec::new()),
+        }
+    }
+
+    /// Appends point `k` of a range read into `raw` (f32 or byte items).
+    fn push(&mut self, item: Item, raw: &Raw, k: usize) {
+        match (self, raw) {
+            (Values::Vec3(v), Raw::F32(f)) => {
+                let n = &f[3 * k..3 * k + 3];
+                v.push(DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64));
+            }
+            (Values::F32(v), Raw::F32(f)) => {
+                let w = item.bytes() / 4;
+                v.extend_from_slice(&f[w * k..w * (k + 1)]);
+            }
+            (Values::U8(v), Raw::U8(b)) => v.push(b[k]),
+            // `Raw::for_item` reads every item type as its own kind.
+            _ => {}
+        }
+    }
 }
 
 impl TilePoints {
@@ -41,6 +91,17 @@ impl TilePoints {
         let lo = p - self.loaded.min;
         let hi = self.loaded.max - p;
         lo.min(hi).min_element()
+    }
+
+    /// How far a dependence of `p` reaching `reach` extends beyond the
+    /// loaded region (0 when it lies inside; infinite when it is unbounded).
+    pub fn shortfall(&self, p: DVec3, reach: f64) -> f64 {
+        let room = self.room(p);
+        if reach <= room {
+            0.0
+        } else {
+            reach - room
+        }
     }
 
     /// Store index of loaded point `i`.
@@ -54,11 +115,73 @@ impl TilePoints {
     pub fn core_points(&self) -> &[DVec3] {
         &self.points[..self.n_core]
     }
+
+    /// A tile holding all of `points` as its core (ids 0..n), with space
+    /// unbounded: what an untiled run of a kernel sees.
+    pub fn whole(points: Vec<DVec3>) -> Self {
+        let everywhere = Aabb::new(DVec3::NEG_INFINITY, DVec3::INFINITY);
+        TilePoints {
+            tile: 0,
+            ids: (0..points.len() as u64).collect(),
+            n_core: points.len(),
+            points,
+            store_first: 0,
+            margin_store: Vec::new(),
+            core: everywhere,
+            loaded: everywhere,
+            margin: f64::INFINITY,
+            columns: Vec::new(),
+        }
+    }
+
+    /// The loaded values of column `spec`, if the kernel declared it.
+    pub fn column(&self, spec: &ColumnSpec) -> Option<&Values> {
+        self.columns
+            .iter()
+            .find(|c| c.spec == *spec)
+            .map(|c| &c.values)
+    }
+
+    /// Oriented unit normals of every loaded point; `None` unless the
+    /// kernel reads [`NORMALS`] (never an empty stand-in that a caller
+    /// could mistake for "no normal here").
+    pub fn normals(&self) -> Option<&[DVec3]> {
+        match self.column(&NORMALS) {
+            Some(Values::Vec3(v)) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The normals pass's flags of every loaded point; `None` unless the
+    /// kernel reads [`FLAGS`].
+    pub fn flags(&self) -> Option<&[u8]> {
+        match self.column(&FLAGS) {
+            Some(Values::U8(v)) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The normals and flags of every loaded point, or the error a kernel
+    /// that declared them returns when they are missing.
+    pub fn oriented(&self) -> Result<(&[DVec3], &[u8]), MissingColumns> {
+        match (self.normals(), self.flags()) {
+            (Some(n), Some(f)) => Ok((n, f)),
+            _ => Err(MissingColumns),
+        }
+    }
+
+    /// Attaches `values` as column `spec` (tests and untiled callers that
+    /// build a tile by hand).
+    pub fn with_column(mut self, spec: ColumnSpec, values: Values) -> Self {
+        self.columns.retain(|c| c.spec != spec);
+        self.columns.push(TileColumn { spec, values });
+        self
+    }
 }
 
 /// Core box of `tile` relative to the store origin, outer faces at infinity.
 pub fn core_box(store: &PointStore, tile: &TileEntry) -> Aabb {
-    let g = &store.manifest.grid;
+    let g = &store.manifest().grid;
     let origin = store.origin();
     let mut min = DVec3::ZERO;
     let mut max = DVec3::ZERO;
@@ -99,12 +222,12 @@ fn entry_bounds(t: &TileEntry) -> Aabb {
 }
 
 /// Loads tile `tile` with all points within `margin` (per axis) of its core,
-/// and their normals and flags when `with_normals`.
+/// and their values of the columns `reads`.
 pub fn load_tile(
     store: &PointStore,
     tile: usize,
     margin: f64,
-    with_normals: bool,
+    reads: &[ColumnSpec],
 ) -> Result<TilePoints, StoreError> {
     let entry = &store.tiles()[tile];
     let core = core_box(store, entry);
@@ -119,38 +242,59 @@ pub fn load_tile(
         core,
         loaded,
         margin,
-        normals: Vec::new(),
-        flags: Vec::new(),
+        columns: reads
+            .iter()
+            .map(|spec| TileColumn {
+                spec: *spec,
+                values: Values::empty(spec.item),
+            })
+            .collect(),
     };
-    let attrs = if with_normals {
-        Some(Attributes {
-            normals: store.attribute(NORMAL_FILE, 12)?,
-            flags: store.attribute(FLAGS_FILE, 1)?,
-        })
-    } else {
-        None
+    let files = reads
+        .iter()
+        .map(|spec| store.column(spec))
+        .collect::<Result<Vec<Column>, _>>()?;
+    let mut scratch = Scratch {
+        raw: reads.iter().map(|s| Raw::for_item(s.item)).collect(),
+        ..Scratch::default()
     };
-    let mut scratch = Scratch::default();
     append_range(
         store,
         entry.start,
         entry.count,
         None,
-        attrs.as_ref(),
+        &files,
         &mut tp,
         &mut scratch,
     )?;
     for (i, other) in store.tiles().iter().enumerate() {
         if i != tile && other.count > 0 && entry_bounds(other).intersects(&loaded) {
-            gather_margin(store, other, &loaded, attrs.as_ref(), &mut tp, &mut scratch)?;
+            gather_margin(store, other, &loaded, &files, &mut tp, &mut scratch)?;
         }
     }
     Ok(tp)
 }
 
-struct Attributes {
-    normals: Column,
-    flags: Column,
+/// A column range as read from disk.
+enum Raw {
+    F32(Vec<f32>),
+    U8(Vec<u8>),
+}
+
+impl Raw {
+    fn for_item(item: Item) -> Self {
+        match item {
+            Item::Vec3 | Item::F32(_) => Raw::F32(Vec::new()),
+            Item::U8 => Raw::U8(Vec::new()),
+        }
+    }
+
+    fn read(&mut self, column: &Column, first: u64, count: u64) -> Result<(), StoreError> {
+        match self {
+            Raw::F32(v) => column.read_f32(first, count, v),
+            Raw::U8(v) => column.read_u8(first, count, v),
+        }
+    }
 }
 
 #[derive(Default)]
@@ -158,27 +302,26 @@ struct Scratch {
     blocks: Vec<Aabb>,
     pts: Vec<DVec3>,
     ids: Vec<u64>,
-    nrm: Vec<f32>,
-    flg: Vec<u8>,
+    raw: Vec<Raw>,
 }
 
-/// Appends points `[first, first+count)` with their ids and, if asked,
-/// attributes: all of them (the core, `region` is `None`), or the margin
-/// points inside `region`, whose store indices are kept too.
+/// Appends points `[first, first+count)` with their ids and the values of
+/// the loaded columns (`files`, in `tp.columns` order): all of them (the
+/// core, `region` is `None`), or the margin points inside `region`, whose
+/// store indices are kept too.
 fn append_range(
     store: &PointStore,
     first: u64,
     count: u64,
     region: Option<&Aabb>,
-    attrs: Option<&Attributes>,
+    files: &[Column],
     tp: &mut TilePoints,
     s: &mut Scratch,
 ) -> Result<(), StoreError> {
     store.read_points(first, count, &mut s.pts)?;
     store.read_indices(first, count, &mut s.ids)?;
-    if let Some(a) = attrs {
-        a.normals.read_f32(first, count, &mut s.nrm)?;
-        a.flags.read_u8(first, count, &mut s.flg)?;
+    for (raw, file) in s.raw.iter_mut().zip(files) {
+        raw.read(file, first, count)?;
     }
     for (k, p) in s.pts.iter().enumerate() {
         if region.is_some_and(|r| !r.contains(*p)) {
@@ -189,11 +332,8 @@ fn append_range(
         }
         tp.points.push(*p);
         tp.ids.push(s.ids[k]);
-        if attrs.is_some() {
-            let n = &s.nrm[3 * k..3 * k + 3];
-            tp.normals
-                .push(DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64));
-            tp.flags.push(s.flg[k]);
+        for (col, raw) in tp.columns.iter_mut().zip(&s.raw) {
+            col.values.push(col.spec.item, raw, k);
         }
     }
     Ok(())
@@ -203,7 +343,7 @@ fn gather_margin(
     store: &PointStore,
     other: &TileEntry,
     loaded: &Aabb,
-    attrs: Option<&Attributes>,
+    files: &[Column],
     tp: &mut TilePoints,
     s: &mut Scratch,
 ) -> Result<(), StoreError> {
@@ -222,7 +362,7 @@ fn gather_margin(
         }
         let first = other.start + run_start as u64 * BLOCK;
         let end = (other.start + b as u64 * BLOCK).min(other.start + other.count);
-        append_range(store, first, end - first, Some(loaded), attrs, tp, s)?;
+        append_range(store, first, end - first, Some(loaded), files, tp, s)?;
     }
     Ok(())
 }

@@ -1,8 +1,7 @@
-//! Tiles: the planner that splits space into core boxes, and the loader that
-//! gathers a tile's core points plus the margin points of its neighbours.
+//! Tiles: the loader that gathers a tile's core points plus the margin
+//! points of its neighbours. (The tiles themselves are planned when the
+//! store is laid out: `store::tile_plan`.)
 
 pub mod load;
-pub mod planner;
 
-pub use load::{load_tile, TilePoints};
-pub use planner::{plan_tiles, CellCount, PlannedTile, TilePlan};
+pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};

@@ -14,7 +14,8 @@ use crate::normals::kernel::store_slots;
 use crate::normals::FLAG_DEGENERATE;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::{build_index, KnnBackend, Neighbour};
-use crate::tiling::TilePoints;
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
+use crate::tiling::{MissingColumns, TilePoints};
 use glam::DVec3;
 
 pub struct SourcesKernel {
@@ -38,13 +39,13 @@ impl TileKernel for SourcesKernel {
         self.margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        &[NORMALS, FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<Vec<Edge>, KernelError> {
         let failed = |e: &dyn std::fmt::Display| KernelError::Failed(e.to_string());
-        let normals = usable_normals(tile);
+        let normals = usable_normals(tile).map_err(KernelError::failed)?;
         let index =
             build_index(KnnBackend::KdTree, &tile.points, &tile.ids).map_err(|e| failed(&e))?;
         let grid = match self.params.hood {
@@ -82,17 +83,7 @@ impl TileKernel for SourcesKernel {
                 self.add(tile, &normals, &rule, i, &found, &mut edges);
             }
         }
-        if short > 0.0 {
-            // A little extra so rounding at the region's edge cannot loop.
-            let needed = if short.is_finite() {
-                (tile.margin + short) * 1.0001 + 1e-12
-            } else {
-                0.0
-            };
-            return Err(KernelError::MarginTooSmall {
-                needed: needed.max(tile.margin * 2.0),
-            });
-        }
+        KernelError::unless_short(short, tile.margin)?;
         Ok(store_slots(tile, spanning_forest(edges, tile.points.len())))
     }
 }
@@ -143,13 +134,14 @@ fn reach(found: &[Neighbour], k: usize) -> f64 {
 }
 
 /// A loaded point's PCA normal, unless it was degenerate.
-fn usable_normals(tile: &TilePoints) -> Vec<Option<DVec3>> {
-    tile.normals
+fn usable_normals(tile: &TilePoints) -> Result<Vec<Option<DVec3>>, MissingColumns> {
+    let (normals, flags) = tile.oriented()?;
+    Ok(normals
         .iter()
-        .zip(&tile.flags)
+        .zip(flags)
         .map(|(n, f)| {
             let ok = f & FLAG_DEGENERATE == 0 && n.is_finite() && *n != DVec3::ZERO;
             ok.then_some(*n)
         })
-        .collect()
+        .collect())
 }

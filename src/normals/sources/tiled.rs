@@ -89,7 +89,7 @@ pub fn orient_store(
         params: *params,
         margin: tile_margin(params, spacing),
     };
-    let mut runs = EdgeRuns::create(&store.dir.join(FOREST_FILE))?;
+    let mut runs = EdgeRuns::create(&store.dir().join(FOREST_FILE))?;
     run_tiles(store, &kernel, opts, progress, |t, forest| {
         let tile = &store.tiles()[t];
         let core = tile.start..tile.start + tile.count;

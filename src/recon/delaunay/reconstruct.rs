@@ -115,8 +115,7 @@ pub fn reconstruct_delaunay(
     };
     let mut seam = Seams::new(MeshWriter::create(output, format)?, store)?;
     let run = run_tiles(store, &kernel, opts, progress, |_, out| {
-        seam.add_tile(out)
-            .map_err(|e| PipelineError::Seam(e.to_string()))
+        seam.add_tile(out).map_err(PipelineError::seam)
     })?;
     let mut report = seam.finish()?;
     report.run = run;

@@ -18,7 +18,8 @@ use super::sdf::{Corner, Field, Samples};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::grid::GridIndex;
-use crate::tiling::TilePoints;
+use crate::store::{ColumnSpec, FLAGS, NORMALS};
+use crate::tiling::{MissingColumns, TilePoints};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -73,10 +74,6 @@ fn corner_of(key: u64) -> [i64; 3] {
     edge_from_key(key).map_or([0; 3], |(c, _)| c)
 }
 
-fn failed(e: impl std::fmt::Display) -> KernelError {
-    KernelError::Failed(e.to_string())
-}
-
 const CORNERS: [[i64; 3]; 8] = [
     [0, 0, 0],
     [1, 0, 0],
@@ -103,8 +100,8 @@ impl TileKernel for ImplicitKernel {
         self.initial_margin
     }
 
-    fn needs_normals(&self) -> bool {
-        true
+    fn reads(&self) -> &[ColumnSpec] {
+        &[NORMALS, FLAGS]
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ImplicitTile, KernelError> {
@@ -114,8 +111,9 @@ impl TileKernel for ImplicitKernel {
         if tile.margin < band_reach {
             return Err(KernelError::MarginTooSmall { needed: band_reach });
         }
-        let (points, normals, ids) = usable_samples(tile);
-        let index = GridIndex::with_cell(&points, &ids, self.index_cell()).map_err(failed)?;
+        let (points, normals, ids) = usable_samples(tile).map_err(KernelError::failed)?;
+        let index =
+            GridIndex::with_cell(&points, &ids, self.index_cell()).map_err(KernelError::failed)?;
         let samples = Samples {
             points: &points,
             normals: &normals,
@@ -170,7 +168,8 @@ impl ImplicitKernel {
         let mut cursor = CornerCursor::new(corners, first)?;
         for cube in cubes {
             if let Some(values) = cursor.values(*cube)? {
-                polygonize_cube(&self.lattice, *cube, &values, &mut triangles).map_err(failed)?;
+                polygonize_cube(&self.lattice, *cube, &values, &mut triangles)
+                    .map_err(KernelError::failed)?;
             }
         }
         Ok(triangles)
@@ -187,8 +186,8 @@ impl ImplicitKernel {
             .iter()
             .map(|&c| corner_key(c))
             .collect::<Result<Vec<u64>, _>>()
-            .map_err(failed)?;
-        let corners = dilate(&cube_keys, 0..=1).map_err(failed)?;
+            .map_err(KernelError::failed)?;
+        let corners = dilate(&cube_keys, 0..=1).map_err(KernelError::failed)?;
         drop(cube_keys);
         let evaluated: Vec<Corner> = corners
             .par_iter()
@@ -263,20 +262,24 @@ impl<'a> CornerCursor<'a> {
 fn corner_keys(cube: [i64; 3]) -> Result<[u64; 8], KernelError> {
     let mut keys = [0; 8];
     for (key, o) in keys.iter_mut().zip(CORNERS) {
-        *key = corner_key([cube[0] + o[0], cube[1] + o[1], cube[2] + o[2]]).map_err(failed)?;
+        *key = corner_key([cube[0] + o[0], cube[1] + o[1], cube[2] + o[2]])
+            .map_err(KernelError::failed)?;
     }
     Ok(keys)
 }
 
 /// Loaded points whose normal is usable (neither degenerate nor unoriented).
-fn usable_samples(tile: &TilePoints) -> (Vec<DVec3>, Vec<DVec3>, Vec<u64>) {
-    let keep = |i: &usize| tile.flags[*i] == 0 && tile.normals[*i] != DVec3::ZERO;
+type Usable = (Vec<DVec3>, Vec<DVec3>, Vec<u64>);
+
+fn usable_samples(tile: &TilePoints) -> Result<Usable, MissingColumns> {
+    let (normals, flags) = tile.oriented()?;
+    let keep = |i: &usize| flags[*i] == 0 && normals[*i] != DVec3::ZERO;
     let idx: Vec<usize> = (0..tile.points.len()).filter(keep).collect();
-    (
+    Ok((
         idx.iter().map(|&i| tile.points[i]).collect(),
-        idx.iter().map(|&i| tile.normals[i]).collect(),
+        idx.iter().map(|&i| normals[i]).collect(),
         idx.iter().map(|&i| tile.ids[i]).collect(),
-    )
+    ))
 }
 
 /// Whether the tile with core box `core` owns `cube`: its min corner lies
@@ -297,12 +300,12 @@ fn band(
         .iter()
         .map(|p| corner_key(lattice.cell_of(*p)))
         .collect::<Result<Vec<u64>, _>>()
-        .map_err(failed)?;
+        .map_err(KernelError::failed)?;
     // Points come in space-filling order: most neighbours share a cube.
     occupied.dedup();
     occupied.par_sort_unstable();
     occupied.dedup();
-    let near = dilate(&occupied, -reach..=reach).map_err(failed)?;
+    let near = dilate(&occupied, -reach..=reach).map_err(KernelError::failed)?;
     Ok(near
         .into_iter()
         .map(corner_of)

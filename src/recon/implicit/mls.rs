@@ -213,24 +213,10 @@ pub const ROOT_STEPS: usize = 2;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::Aabb;
     use crate::spatial::grid::GridIndex;
 
     fn open_tile() -> TilePoints {
-        let big = DVec3::splat(1e6);
-        TilePoints {
-            tile: 0,
-            points: Vec::new(),
-            ids: Vec::new(),
-            store_first: 0,
-            margin_store: Vec::new(),
-            n_core: 0,
-            core: Aabb::new(-big, big),
-            loaded: Aabb::new(-big, big),
-            margin: 1e6,
-            normals: Vec::new(),
-            flags: Vec::new(),
-        }
+        TilePoints::whole(Vec::new())
     }
 
     /// Samples of the unit sphere (a Fibonacci spiral) pushed in and out by

@@ -143,11 +143,11 @@ pub fn reconstruct_implicit(
         normals: ensure_normals(store, &params.normals, opts, progress)?,
         ..ImplicitReport::default()
     };
-    let stats = store.manifest.sampling.unwrap_or_default();
+    let stats = store.manifest().sampling.unwrap_or_default();
     report.rho = if stats.rho > 0.0 {
         stats.rho
     } else {
-        store.manifest.spacing.unwrap_or(1.0)
+        store.manifest().spacing.unwrap_or(1.0)
     };
     report.rho_outliers = stats.rho_outliers;
     report.delta = positive("noise", params.noise.unwrap_or(stats.noise), true)?;
@@ -188,7 +188,7 @@ pub fn reconstruct_implicit(
         let core = core_box(store, &store.tiles()[t]);
         stitcher
             .add_tile(&lattice, (t, &core), &out.triangles)
-            .map_err(|e| PipelineError::Seam(e.to_string()))
+            .map_err(PipelineError::seam)
     })?;
     let written = stitcher.finish()?;
     report.vertices = written.vertices;

@@ -45,7 +45,7 @@ pub fn refine_vertices(
     let moved: Vec<Result<DVec3, f64>> = keys
         .par_iter()
         .map_init(Vec::new, |nbr, &key| -> Result<_, KernelError> {
-            let (c0, axis) = edge_from_key(key).map_err(failed)?;
+            let (c0, axis) = edge_from_key(key).map_err(KernelError::failed)?;
             let a = usize::from(axis);
             let mut c1 = c0;
             c1[a] += 1;
@@ -144,15 +144,13 @@ const EDGE_EPSILON: f64 = 1e-4;
 
 /// The defined value at corner `c`.
 fn value(corners: &[CornerValue], c: [i64; 3]) -> Result<f64, KernelError> {
-    let key = super::lattice::edge_key(c, 0).map_err(failed)?;
+    let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
     match corners.binary_search_by_key(&key, |e| e.0) {
         Ok(i) => corners[i]
             .1
-            .ok_or_else(|| failed("a cut edge has an undefined corner")),
-        Err(_) => Err(failed("a cut edge's corner was not evaluated")),
+            .ok_or_else(|| KernelError::Failed("a cut edge has an undefined corner".into())),
+        Err(_) => Err(KernelError::Failed(
+            "a cut edge's corner was not evaluated".into(),
+        )),
     }
-}
-
-fn failed(e: impl std::fmt::Display) -> KernelError {
-    KernelError::Failed(e.to_string())
 }

@@ -267,7 +267,6 @@ fn nearest(s: &Samples, q: DVec3, hint: Option<u32>, nbr: &mut Vec<Neighbour>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::Aabb;
 
     /// Samples on the plane z = 0 at integer x, y in [-10, 10], normals +z
     /// except those listed in `flipped`, all loaded.
@@ -286,20 +285,7 @@ mod tests {
             })
             .collect();
         let ids = (0..points.len() as u64).collect();
-        let big = DVec3::splat(1e6);
-        let tile = TilePoints {
-            tile: 0,
-            points: Vec::new(),
-            ids: Vec::new(),
-            store_first: 0,
-            margin_store: Vec::new(),
-            n_core: 0,
-            core: Aabb::new(-big, big),
-            loaded: Aabb::new(-big, big),
-            margin: 1e6,
-            normals: Vec::new(),
-            flags: Vec::new(),
-        };
+        let tile = TilePoints::whole(Vec::new());
         (points, normals, ids, tile)
     }
 

@@ -3,8 +3,8 @@
 //! involved, so one setting serves a uniform scan, a 20:1 density step and
 //! terrain.
 
+use crate::memory::plan::KernelCost;
 use crate::normals::{NormalHood, NormalParams};
-use crate::pipeline::plan::KernelCost;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionParams {

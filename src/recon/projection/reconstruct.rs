@@ -130,7 +130,7 @@ pub fn reconstruct_projection(
         jobs_run += out.jobs_run;
         stitcher
             .add_tile(store, t, &store.tiles()[t], &out)
-            .map_err(|e| PipelineError::Seam(e.to_string()))
+            .map_err(PipelineError::seam)
     })?;
     let stitch = stitcher.finish()?;
     Ok(ProjectionReport {
@@ -154,7 +154,7 @@ pub fn reconstruct_projection(
 /// margin to match), so it is kept within a factor 2 of the estimate;
 /// only then does the tiling enter.
 pub fn lattice_unit(store: &PointStore, spacing: f64) -> f64 {
-    let m = &store.manifest;
+    let m = &store.manifest();
     let extent = (0..3)
         .map(|a| m.bounds_max[a] - m.bounds_min[a])
         .fold(0.0f64, f64::max);

@@ -8,7 +8,6 @@ use super::local::{local_data, PointInfo, TileHoods};
 use super::orient::settle;
 use super::params::ProjectionParams;
 use super::surface::{State, Surface};
-use crate::geom::Aabb;
 use crate::pipeline::KernelError;
 use crate::tiling::TilePoints;
 use glam::DVec3;
@@ -67,20 +66,7 @@ pub fn triangulate_points(
     points: &[DVec3],
     params: &ProjectionParams,
 ) -> Result<(Vec<[u32; 3]>, TileSurface), KernelError> {
-    let everywhere = Aabb::new(DVec3::NEG_INFINITY, DVec3::INFINITY);
-    let tile = TilePoints {
-        tile: 0,
-        points: points.to_vec(),
-        ids: (0..points.len() as u64).collect(),
-        store_first: 0,
-        margin_store: Vec::new(),
-        n_core: points.len(),
-        core: everywhere,
-        loaded: everywhere,
-        margin: f64::INFINITY,
-        normals: Vec::new(),
-        flags: Vec::new(),
-    };
+    let tile = TilePoints::whole(points.to_vec());
     let mut grown = triangulate_tile(&tile, params)?;
     let low = points.iter().fold(DVec3::INFINITY, |m, p| m.min(*p));
     let triangles = settle(&mut grown.surface, points, low);

@@ -1,4 +1,5 @@
-//! The memory budget: turns `--mem` (a promise about peak RSS) into tile sizes.
+//! The memory budget: `--mem` (a promise about peak RSS) and the thread
+//! count, turned into tile sizes.
 
 /// Peak-RSS budget split between fixed costs and tiles in flight.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,6 +2,7 @@
 //! nearest-neighbour distance (paper 1's rho, sampling density) and the
 //! tangent-plane fit residual (its delta, noise), as mergeable log-scale
 //! histograms so tiles can be summed in any grouping to the same result.
+//! The store owns them because its manifest keeps them for later runs.
 
 use serde::{Deserialize, Serialize};
 

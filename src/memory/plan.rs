@@ -18,7 +18,7 @@
 //!   [`BYTES_PER_NODE`] each;
 //! - export: a window of `window_points` input-order records.
 
-use super::{MemoryBudget, RunOptions};
+use super::MemoryBudget;
 
 /// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O
 /// buffers (the read chunk, the merge buffers of the edge runs).
@@ -165,12 +165,11 @@ impl MemoryPlan {
         lo << 20
     }
 
-    /// Run options for a store whose largest tile holds `largest` core
-    /// points: all workers when `threads + 1` such tiles fit the plan,
-    /// else fewer tiles in flight (a store built under a larger budget),
-    /// down to one; none fitting is an error naming the budget needed.
-    pub fn run_options(&self, cost: &KernelCost, largest: u64) -> Result<RunOptions, BudgetError> {
-        let opts = RunOptions::new(self.budget.threads).within(self.budget);
+    /// Tiles in flight for a store whose largest tile holds `largest` core
+    /// points: `threads + 1` when that many such tiles fit the plan, else
+    /// fewer (a store built under a larger budget), down to one; none
+    /// fitting is an error naming the budget needed.
+    pub fn tiles_in_flight(&self, cost: &KernelCost, largest: u64) -> Result<usize, BudgetError> {
         let reserved = self.reserved;
         let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
         let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
@@ -183,10 +182,7 @@ impl MemoryPlan {
                 reason: "the store's largest tile (rebuild it with `scanmesh tile --mem`)",
             });
         }
-        Ok(RunOptions {
-            in_flight: opts.in_flight.min(fit),
-            ..opts
-        })
+        Ok((self.budget.threads + 1).min(fit))
     }
 
     /// Estimated peak of each stage beside the fixed costs, for `info --plan`.
@@ -267,13 +263,13 @@ mod tests {
     fn oversized_tiles_run_fewer_at_a_time() {
         let budget = MemoryBudget::new(256 << 20, 2);
         let plan = MemoryPlan::new(budget, 100_000_000, &normals()).unwrap();
-        let ok = plan.run_options(&normals(), plan.tile_points).unwrap();
-        assert_eq!(ok.in_flight, 3);
-        let one = plan
-            .run_options(&normals(), plan.tile_points * 5 / 2)
-            .unwrap();
-        assert_eq!(one.in_flight, 1);
-        assert!(plan.run_options(&normals(), plan.tile_points * 4).is_err());
+        let all = plan.tiles_in_flight(&normals(), plan.tile_points).unwrap();
+        assert_eq!(all, 3);
+        let one = plan.tiles_in_flight(&normals(), plan.tile_points * 5 / 2);
+        assert_eq!(one, Ok(1));
+        assert!(plan
+            .tiles_in_flight(&normals(), plan.tile_points * 4)
+            .is_err());
     }
 
     #[test]

@@ -1,0 +1,10 @@
+//! The memory promise (`--mem`): the budget, the plan that derives every
+//! size a run uses from it and from what a kernel declares it costs, and the
+//! process's measured peak. A bottom layer: it knows no store, tile or
+//! kernel, only numbers.
+
+pub mod budget;
+pub mod plan;
+
+pub use budget::{peak_rss_bytes, MemoryBudget};
+pub use plan::{BudgetError, KernelCost, MemoryPlan};

@@ -1,0 +1,68 @@
+//! What a tile kernel is: a pure function from one tile's points (and the
+//! store columns it declares it reads) to a result, which fails only when it
+//! finds its margin short (the pipeline reloads the tile wider) or when the
+//! tile cannot be processed at all.
+
+use super::Codec;
+use crate::store::{ColumnSpec, StoreError};
+use crate::tiling::TilePoints;
+
+/// Why a kernel could not finish a tile.
+#[derive(Debug, thiserror::Error)]
+pub enum KernelError {
+    /// Some core point depends on points beyond the loaded region: the
+    /// pipeline reloads the tile with at least `needed` margin and reruns it.
+    #[error("margin too small: {needed} needed")]
+    MarginTooSmall { needed: f64 },
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// The tile cannot be processed; the message says why.
+    #[error("{0}")]
+    Failed(String),
+    /// The tile cannot be processed; the typed error says why.
+    #[error(transparent)]
+    Source(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl KernelError {
+    /// A typed error of the layer below, kept as it is.
+    pub fn failed(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+        KernelError::Source(Box::new(e))
+    }
+
+    /// Ok when no dependence of a core point is short of the loaded region;
+    /// else asks for the margin that makes the largest one complete:
+    /// `margin + short`, a little more so rounding at the region's edge
+    /// cannot loop, and twice the margin when the shortfall is unbounded
+    /// (too few points loaded to tell how far it reaches). The one margin
+    /// rule of every kernel.
+    pub fn unless_short(short: f64, margin: f64) -> Result<(), KernelError> {
+        if short <= 0.0 {
+            return Ok(());
+        }
+        let needed = match short.is_finite() {
+            true => (margin + short) * 1.0001 + 1e-12,
+            false => margin * 2.0,
+        };
+        Err(KernelError::MarginTooSmall { needed })
+    }
+}
+
+/// A pure function from one tile's points to a tile result.
+pub trait TileKernel: Sync {
+    type Output: Send;
+    /// Stage name shown in progress.
+    fn name(&self) -> &str;
+    /// Margin to load first; the kernel asks for more when it finds it short.
+    fn margin(&self) -> f64;
+    fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
+    /// The store columns the kernel reads: each tile carries their values
+    /// for every loaded point ([`TilePoints::column`]).
+    fn reads(&self) -> &[ColumnSpec] {
+        &[]
+    }
+    /// How results are saved for a resumable run (`None`: recomputed).
+    fn codec(&self) -> Option<Codec<Self::Output>> {
+        None
+    }
+}
