@@ -67,7 +67,7 @@ fn by_position(m: &Mesh) -> Vec<[[u64; 3]; 3]> {
 
 #[test]
 fn many_tiles_equal_one() {
-    let points = torus_points(6_000);
+    let points = torus_points(8_000);
     let (one, m1, _) = run(&points, 1 << 20, 2);
     let (many, mm, _) = run(&points, 80, 2);
     assert_eq!(one.run.tiles, 1);

@@ -23,9 +23,10 @@ use super::orient::flipped;
 use super::params::ProjectionParams;
 use super::surface::{State, Surface, NONE};
 use crate::geom::Aabb;
-use crate::spatial::{GridIndex, IndexError};
+use crate::spatial::{GridIndex, IndexError, KnnIndex, Neighbour};
 use glam::DVec3;
 use std::collections::HashMap;
+use std::sync::OnceLock;
 
 /// What a job made.
 #[derive(Debug, Default)]
@@ -40,7 +41,13 @@ pub struct JobOutput {
     /// `parity` is set.
     pub relations: Vec<(u64, u64, bool)>,
     pub processed: u64,
+    /// The box of each run of [`CHUNK`] triangles (in order): a higher job
+    /// skips the runs that miss its view without reading their corners.
+    pub chunks: Vec<Aabb>,
 }
+
+/// Triangles per box in [`JobOutput::chunks`].
+pub const CHUNK: usize = 32;
 
 /// A tile's points as the jobs read them (tile-local indices).
 pub struct TileView<'a, H: Neighbourhoods> {
@@ -49,6 +56,21 @@ pub struct TileView<'a, H: Neighbourhoods> {
     pub info: &'a [PointInfo],
     pub hoods: &'a H,
     pub buckets: &'a Buckets,
+    /// The tile's points in input-id order, and each point's place there.
+    pub by_id: &'a [u32],
+    pub rank: &'a [u32],
+}
+
+/// `(by_id, rank)`: the points in input-id order and each one's place in
+/// it, so that a job sorts its points by comparing plain integers.
+pub fn id_order(ids: &[u64]) -> (Vec<u32>, Vec<u32>) {
+    let mut by_id: Vec<u32> = (0..ids.len() as u32).collect();
+    by_id.sort_unstable_by_key(|&i| ids[i as usize]);
+    let mut rank = vec![0u32; ids.len()];
+    for (r, &i) in by_id.iter().enumerate() {
+        rank[i as usize] = r as u32;
+    }
+    (by_id, rank)
 }
 
 /// Tile points by coarse cell, to find a view's points without a scan.
@@ -122,6 +144,20 @@ struct JobPoints {
 }
 
 impl JobPoints {
+    fn with_capacity(n: usize) -> Self {
+        JobPoints {
+            tile: Vec::with_capacity(n),
+            points: Vec::with_capacity(n),
+            ids: Vec::with_capacity(n),
+            normals: Vec::with_capacity(n),
+            spacing: Vec::with_capacity(n),
+            centre: Vec::with_capacity(n),
+            joinable: Vec::with_capacity(n),
+            keep: Vec::with_capacity(n),
+            unused: Vec::with_capacity(n),
+        }
+    }
+
     /// A point; `grows`: in the job's growth box, `keep`: in its window.
     fn push(
         &mut self,
@@ -190,8 +226,14 @@ pub fn run_job<'a, H: Neighbourhoods>(
     let grow = lat.grow_box(key);
     let mut members = Vec::new();
     tile.buckets.inside(tile.points, &view, &mut members);
-    members.sort_unstable_by_key(|&i| tile.ids[i as usize]);
-    let mut jp = JobPoints::default();
+    for m in members.iter_mut() {
+        *m = tile.rank[*m as usize];
+    }
+    members.sort_unstable();
+    for m in members.iter_mut() {
+        *m = tile.by_id[*m as usize];
+    }
+    let mut jp = JobPoints::with_capacity(members.len() + members.len() / 8);
     for &i in &members {
         let p = tile.points[i as usize];
         let info = &tile.info[i as usize];
@@ -241,26 +283,32 @@ fn grow_job<'a, H: Neighbourhoods>(
             for &(a, b, parity) in &out.relations {
                 relations.push((names.get(a), names.get(b), parity));
             }
-            for (t, &piece) in out.tris.iter().zip(&out.piece) {
-                let l = t.map(|v| local.get(v));
-                if l.iter().all(Option::is_none) {
+            let runs = out.tris.chunks(CHUNK).zip(out.piece.chunks(CHUNK));
+            for ((tris, pieces), b) in runs.zip(&out.chunks) {
+                if !b.intersects(&view) {
                     continue;
                 }
-                let mut lt = [0u32; 3];
-                for c in 0..3 {
-                    lt[c] = match l[c] {
-                        Some(x) => x,
-                        None => *ghosts.entry(t[c]).or_insert_with(|| {
-                            let v = t[c] as usize;
-                            // Ghosts are never processed; their tie key
-                            // only has to differ from every input id.
-                            let id = u64::MAX - tile.ids[v];
-                            jp.push(t[c], tile.points[v], id, None, false, false);
-                            jp.points.len() as u32 - 1
-                        }),
-                    };
+                for (t, &piece) in tris.iter().zip(pieces) {
+                    let l = t.map(|v| local.get(v));
+                    if l.iter().all(Option::is_none) {
+                        continue;
+                    }
+                    let mut lt = [0u32; 3];
+                    for c in 0..3 {
+                        lt[c] = match l[c] {
+                            Some(x) => x,
+                            None => *ghosts.entry(t[c]).or_insert_with(|| {
+                                let v = t[c] as usize;
+                                // Ghosts are never processed; their tie key
+                                // only has to differ from every input id.
+                                let id = u64::MAX - tile.ids[v];
+                                jp.push(t[c], tile.points[v], id, None, false, false);
+                                jp.points.len() as u32 - 1
+                            }),
+                        };
+                    }
+                    given.push((lt, names.get(out.names[piece as usize])));
                 }
-                given.push((lt, names.get(out.names[piece as usize])));
             }
         }
     }
@@ -278,7 +326,7 @@ fn grow_job<'a, H: Neighbourhoods>(
         s.push(t, piece);
     }
     let fixed = s.tris.len();
-    let index = GridIndex::new(&jp.points, &jp.ids)?;
+    let index = LazyGrid::new(&jp.points, &jp.ids);
     let cloud = Cloud {
         points: &jp.points,
         normals: &jp.normals,
@@ -312,6 +360,7 @@ fn grow_job<'a, H: Neighbourhoods>(
         .filter(|&i| jp.centre[i as usize] && jp.keep[i as usize])
         .collect();
     grower.grow(&cloud, &mut s, &seeds);
+    index.finish()?;
     // Hand back the new triangles, each in its root's frame.
     let name_of = |root: u32| -> u64 {
         if root < pieces {
@@ -337,6 +386,17 @@ fn grow_job<'a, H: Neighbourhoods>(
         out.piece.push(out_names.get(name_of(root)));
     }
     out.names = out_names.names;
+    out.chunks = out
+        .tris
+        .chunks(CHUNK)
+        .map(|run| {
+            let mut b = Aabb::EMPTY;
+            for &v in run.iter().flatten() {
+                b.add(tile.points[v as usize]);
+            }
+            b
+        })
+        .collect();
     for p in 0..pieces {
         let (root, flip) = s.pieces.find(p);
         if root != p {
@@ -345,6 +405,50 @@ fn grow_job<'a, H: Neighbourhoods>(
         }
     }
     Ok(out)
+}
+
+/// A job's kNN index, built on its first query: only triangles larger
+/// than a vertex's list query it (`fan.rs`), and many jobs have none, so
+/// building it up front cost a twentieth of the run.
+struct LazyGrid<'a> {
+    points: &'a [DVec3],
+    ids: &'a [u64],
+    grid: OnceLock<Result<GridIndex<'a>, IndexError>>,
+}
+
+impl<'a> LazyGrid<'a> {
+    fn new(points: &'a [DVec3], ids: &'a [u64]) -> Self {
+        LazyGrid {
+            points,
+            ids,
+            grid: OnceLock::new(),
+        }
+    }
+
+    /// The build's error, if a query needed the index and it failed (the
+    /// queries then found nothing).
+    fn finish(self) -> Result<(), IndexError> {
+        match self.grid.into_inner() {
+            Some(Err(e)) => Err(e),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl KnnIndex for LazyGrid<'_> {
+    fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
+        match self
+            .grid
+            .get_or_init(|| GridIndex::new(self.points, self.ids))
+        {
+            Ok(g) => g.knn(q, k, exclude, out),
+            Err(_) => out.clear(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.points.len()
+    }
 }
 
 /// The view points' lists in job indices; neighbours outside the view are

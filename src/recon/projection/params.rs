@@ -103,11 +103,12 @@ impl ProjectionParams {
 
     /// What a run costs, for the memory plan (measured, see
     /// [`BYTES_PER_POINT_BASE`]): the kernel's bytes per loaded point.
-    /// The lattice's margin (~74 units) loads more than the plan's 1.5
+    /// The lattice's margin (~108 units) loads more than the plan's 1.5
     /// points per core point on small tiles, but the kernel no longer
     /// holds a whole tile's growth, only its jobs' outputs and a few jobs
     /// at a time: measured peaks 181 MiB for 1M points at `--mem 256MiB`
-    /// (8 tiles) and 368 MiB for 10M at `--mem 512MiB` (64 tiles), so the
+    /// (8 tiles; 188 MiB with the 96-unit cell) and 368 MiB for 10M at
+    /// `--mem 512MiB` (64 tiles; 357 MiB with the 96-unit cell), so the
     /// declared bytes keep the promise with room.
     pub fn cost(&self) -> KernelCost {
         let k = self.k as u64;
