@@ -22,7 +22,7 @@ const LAS_MAGIC: &[u8] = b"LASF";
 /// XYZ/CSV text if its name says so (`.xyz`, `.txt`, `.csv`, `.pts`, each
 /// optionally `.gz`), else it is [`IoError::UnknownFormat`].
 ///
-/// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`];
+/// `read` is an [`InvalidPolicy`] or [`ReadOptions`];
 /// a scan selection is refused for a format without scans.
 pub fn open_reader(
     path: &Path,

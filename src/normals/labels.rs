@@ -1,6 +1,6 @@
 //! The spanning forest of all tiles solved without per-point state in
 //! memory: each tile's forest is contracted to its boundary
-//! ([`super::contract`]), Kruskal runs over the super-edges alone (a few
+//! (`super::contract`), Kruskal runs over the super-edges alone (a few
 //! per cent of the points), and each tile then gives its core points a
 //! component label and a parity, written to a scratch column of the store.
 //! The same tree as Kruskal over every point (paper 1 section 2.4, exact),
@@ -16,7 +16,7 @@
 //!    nodes, marking the super-edges it takes;
 //! 4. resolve every tile's points: its forest without the heaviest edges
 //!    of its rejected super-edges, each tree taking the label and parity
-//!    of a boundary vertex it holds ([`resolve`]).
+//!    of a boundary vertex it holds (`resolve`).
 //!
 //! A label at or above the point count is `count + ` a node component's
 //! dense number (it may span tiles); below, a store index of the one tile

@@ -7,7 +7,7 @@
 //! direction (e.g. +Z) serves single-sheet models such as terrain.
 //!
 //! - [`orient_by_sources`]: the algorithm over one cloud in memory, a pure
-//!   function ([`propagate`] has the steps, the two spreading orders and
+//!   function (`propagate` has the steps, the two spreading orders and
 //!   every deviation from the paper).
 //! - [`orient_store`]: the same over a store of any size, tile by tile,
 //!   *exactly*: the default best-first spreading is Prim's algorithm from a
@@ -15,7 +15,7 @@
 //!   forest of its pairs, one Kruskal pass over the union of the tiles'
 //!   forests finds the same tree (ARCHITECTURE.md, normal orientation), and
 //!   the tiled result equals the in-memory one bit for bit, for any tiling
-//!   and thread count, given the same radius ([`tiled`]). The default
+//!   and thread count, given the same radius (`tiled`). The default
 //!   radius comes from the kernel pass's exact mean nearest-neighbour
 //!   distance, not from the store's spacing estimate, which samples tiles and so
 //!   changed with the tiling (and with it the result, measured on a 1M
@@ -69,7 +69,7 @@ pub struct SourceParams {
     /// With a radius neighbourhood, the nearest-distance rule also reaches
     /// this many nearest points beyond `r` (0: none).
     pub bridge_k: usize,
-    /// How `w` is measured ([`pairs::PairRule`]).
+    /// How `w` is measured (`pairs::PairRule`).
     pub weight: EdgeCost,
     pub order: Order,
 }

@@ -2,7 +2,7 @@
 //! for tests and benches: sphere, torus, plane with a hole, two close sheets,
 //! terrain with buildings, Moebius strip, a 20:1 density step, any
 //! triangle mesh, and shapes with known feature lines (stepped prisms, a
-//! wavy sheet: [`creased`]).
+//! wavy sheet: `creased`).
 //!
 //! Everything streams: [`stream`] yields one [`Sample`] at a time (or fills
 //! bounded chunks), so 10^7 points never need to be in memory at once;

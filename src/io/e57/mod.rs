@@ -1,5 +1,5 @@
 //! E57 (ASTM E2807), the exchange format of terrestrial laser scanners,
-//! through the `e57` crate: the scans' descriptions ([`scan`]), the
+//! through the `e57` crate: the scans' descriptions (`scan`), the
 //! streaming reader of every selected scan in the world frame (`read`),
 //! and a one-scan writer ([`write`]). `seekbuf` keeps the crate's page
 //! reads buffered.

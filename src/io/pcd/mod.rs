@@ -1,4 +1,4 @@
-//! PCD, the Point Cloud Library's format: the header ([`header`]), the
+//! PCD, the Point Cloud Library's format: the header (`header`), the
 //! streaming reader (`read`) for ASCII, binary and binary_compressed bodies
 //! (LZF, `lzf`). Binary PCD is written by the PLY writer (same records).
 

@@ -16,7 +16,7 @@
 //! The union-find is indexed by store index, not input id (edges carry both,
 //! see [`super::forest::Edge`]): the store is in spatial order, so its
 //! accesses stay local. After step 1 it is flattened into dense component
-//! labels ([`Components`]), so steps 2 and 3 are sequential array reads over
+//! labels (`Components`), so steps 2 and 3 are sequential array reads over
 //! the tiles, in parallel; per-component facts live in a `Vec` by label.
 //! Every per-component fact is order-free (a count, and a maximum under a
 //! total order over input ids), so neither the thread count nor the tiling
