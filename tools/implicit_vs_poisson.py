@@ -7,8 +7,9 @@ Not part of CI (needs Open3D: `pip install open3d`, and a reference mesh):
         --spacing 1.365e-4 [--scanmesh target/release/scanmesh] \
         [--depth 9] [--repeat 3] [--extra '--cell 2e-4'] [--skip-peer]
 
-Runs are back to back, alternating, `--repeat` times; times are wall
-medians (normals included on both sides: reconstruct computes them from
+Runs are back to back, alternating, `--repeat` times; times are wall and
+CPU (user + sys of the child) medians, the ratio is CPU's (a shared
+machine's wall time depends on the others' load) (normals included on both sides: reconstruct computes them from
 the bare points, Open3D estimates and orients its own). Distances come
 from `scanmesh eval --reference`, both ways, averaged, and are printed in
 units of `--spacing` (the *input's* mean nearest-neighbour distance), not
@@ -18,6 +19,7 @@ the reference's spacing `eval` uses.
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -28,9 +30,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def timed(cmd):
+    """Wall and CPU (user + sys of the child) seconds of one run."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 def evaluate(scanmesh, mesh, reference, spacing):
@@ -89,19 +95,21 @@ def main():
     for _ in range(a.repeat):
         for name, cmd in runs.items():
             times[name].append(timed(cmd))
-    peer_time = statistics.median(times[peer]) if not a.skip_peer else None
+    cpu = {name: statistics.median(c for _, c in ts) for name, ts in times.items()}
+    peer_time = cpu[peer] if not a.skip_peer else None
     print(f"input {a.input}, distances in input spacings ({a.spacing:g}), both ways averaged")
-    print(f"{'run':<22} {'mean':>7} {'there':>7} {'back':>7} {'hausd.':>7} {'time':>7} {'ratio':>6}  mesh")
+    print(f"{'run':<22} {'mean':>7} {'there':>7} {'back':>7} {'hausd.':>7} {'wall':>7} {'cpu':>7} {'ratio':>6}  mesh")
     for name in runs:
         e = evaluate(a.scanmesh, meshes[name], a.reference, a.spacing)
-        t = statistics.median(times[name])
+        wall = statistics.median(w for w, _ in times[name])
+        t = cpu[name]
         ratio = f"{t / peer_time:.2f}" if peer_time else "-"
         print(
             f"{name:<22} {e['mean_sp']:7.4f} {e['there_sp']:7.4f} {e['back_sp']:7.4f} "
-            f"{e['hausdorff_sp']:7.2f} {t:6.2f}s {ratio:>6}  {summary(e['quality'])}"
+            f"{e['hausdorff_sp']:7.2f} {wall:6.2f}s {t:6.2f}s {ratio:>6}  {summary(e['quality'])}"
         )
-    print(f"times: medians of {a.repeat} alternating runs: " + "; ".join(
-        f"{n} {', '.join(f'{x:.2f}' for x in ts)}" for n, ts in times.items()))
+    print(f"times: medians of {a.repeat} alternating runs, ratio of CPU (user + sys): " + "; ".join(
+        f"{n} {', '.join(f'{w:.2f}/{c:.2f}' for w, c in ts)}" for n, ts in times.items()))
 
 
 if __name__ == "__main__":

@@ -78,6 +78,15 @@ impl NearHoles {
         self.kept.retain(|(b, _)| still(*b));
     }
 
+    /// The kept triangles with vertex `v` (repeats possible).
+    pub fn triangles_at(&self, v: u32) -> Vec<[u32; 3]> {
+        self.kept
+            .iter()
+            .map(|(_, p)| p.0)
+            .filter(|t| t.contains(&v))
+            .collect()
+    }
+
     /// Adds an accepted patch, so later patches do not cross it.
     pub fn add_patch(&mut self, patch: &[Placed]) {
         self.kept.extend(patch.iter().map(|&p| (p.0[0], p)));

@@ -162,7 +162,8 @@ impl BoundaryEdges {
         let mut triangles = Vec::new();
         let is_edge = |a: u32, b: u32| self.edges_near_holes.contains_key(&(a.min(b), a.max(b)));
         let mut near = self.near;
-        for lp in chain_loops(edges) {
+        let turns = pinch_turns(&edges, &near);
+        for lp in chain_loops(edges, &turns) {
             let patch = lp
                 .filter(|l| l.len() <= MAX_FILLED_LOOP)
                 .and_then(|l| patch_clear_of_mesh(&l, is_edge, &near));
@@ -181,9 +182,14 @@ impl BoundaryEdges {
 
 /// The loops the directed edges form, each in edge direction, in order of
 /// their smallest index (so the result does not depend on hash order);
-/// `None` for a loop that passes a vertex twice (the walk cannot tell which
-/// way to turn there, so it is left open).
-fn chain_loops(edges: Vec<[LoopVertex; 2]>) -> Vec<Option<Vec<LoopVertex>>> {
+/// at a vertex with two edges out the walk takes the turn `turns` gives
+/// ([`super::pinch`]); `None` for a loop that passes a vertex twice, or a
+/// pinch vertex without a turn (the walk cannot tell which way to go
+/// there, so it is left open).
+fn chain_loops(
+    edges: Vec<[LoopVertex; 2]>,
+    turns: &HashMap<(u32, u32), u32>,
+) -> Vec<Option<Vec<LoopVertex>>> {
     let mut next: HashMap<u32, Vec<LoopVertex>> = HashMap::new();
     let mut starts: Vec<LoopVertex> = Vec::new();
     for [a, b] in edges {
@@ -191,34 +197,64 @@ fn chain_loops(edges: Vec<[LoopVertex; 2]>) -> Vec<Option<Vec<LoopVertex>>> {
         starts.push(a);
     }
     starts.sort_by_key(|v| v.0);
-    let pinches: Vec<u32> = next
+    let pinches: HashSet<u32> = next
         .iter()
         .filter(|(_, out)| out.len() > 1)
         .map(|(&a, _)| a)
         .collect();
     let mut loops = Vec::new();
     for start in starts {
-        if !next.contains_key(&start.0) {
+        let Some(first) = next.get_mut(&start.0).and_then(Vec::pop) else {
             continue;
-        }
+        };
         let mut lp = vec![start];
+        let mut seen = HashSet::from([start.0]);
+        // A pinch vertex starting the walk: whichever edge it left by, the
+        // turn into it must lead back to that edge.
+        let mut ok = !pinches.contains(&start.0) || turns.values().any(|&to| to == first.0);
+        let (mut prev, mut step) = (start.0, first);
         let mut closed = false;
-        let mut at = start.0;
-        while let Some(step) = next.get_mut(&at).and_then(Vec::pop) {
-            if next.get(&at).is_some_and(Vec::is_empty) {
-                next.remove(&at);
-            }
+        loop {
             if step.0 == start.0 {
-                closed = true;
+                closed =
+                    !pinches.contains(&start.0) || turns.get(&(prev, start.0)) == Some(&first.0);
                 break;
             }
+            ok &= seen.insert(step.0);
             lp.push(step);
-            at = step.0;
+            let Some(outs) = next.get_mut(&step.0) else {
+                break;
+            };
+            let pick = match turns.get(&(prev, step.0)) {
+                Some(&to) => outs.iter().position(|o| o.0 == to),
+                None => {
+                    ok &= !pinches.contains(&step.0);
+                    outs.len().checked_sub(1)
+                }
+            };
+            let Some(i) = pick else {
+                break;
+            };
+            (prev, step) = (step.0, outs.remove(i));
         }
-        let pinched = lp.iter().any(|v| pinches.contains(&v.0));
-        loops.push((closed && !pinched).then(|| start_at_least_position(lp)));
+        loops.push((closed && ok).then(|| start_at_least_position(lp)));
     }
     loops
+}
+
+/// The turns at the vertices with two boundary edges out.
+fn pinch_turns(edges: &[[LoopVertex; 2]], near: &NearHoles) -> HashMap<(u32, u32), u32> {
+    let ids: Vec<[u32; 2]> = edges.iter().map(|[a, b]| [a.0, b.0]).collect();
+    let mut tails: Vec<u32> = ids.iter().map(|e| e[0]).collect();
+    tails.sort_unstable();
+    let pinches: Vec<u32> = tails
+        .windows(2)
+        .filter(|w| w[0] == w[1])
+        .map(|w| w[0])
+        .collect();
+    let mut pinches = pinches;
+    pinches.dedup();
+    super::pinch::turns(&pinches, &ids, |v| near.triangles_at(v))
 }
 
 /// `lp` rotated to start at its least vertex position, so that ties in the
@@ -450,7 +486,7 @@ mod tests {
     }
 
     #[test]
-    fn a_loop_through_one_vertex_twice_is_left_open() {
+    fn a_pinched_loop_is_split_by_the_turns_or_left_open() {
         // Two triangles' worth of boundary meeting at vertex 0 (a bow tie).
         let e = |a: LoopVertex, b: LoopVertex| [a, b];
         let (o, a, b, c, d) = (
@@ -460,7 +496,25 @@ mod tests {
             v(3, -1., 0., 0.),
             v(4, -1., -1., 0.),
         );
-        let loops = chain_loops(vec![e(o, a), e(a, b), e(b, o), e(o, c), e(c, d), e(d, o)]);
+        let edges = vec![e(o, a), e(a, b), e(b, o), e(o, c), e(c, d), e(d, o)];
+        let loops = chain_loops(edges.clone(), &HashMap::new());
+        assert!(loops.iter().all(Option::is_none), "{loops:?}");
+        // Turning into the other wedge (the mesh's wedges at 0 run from
+        // ray 2 to ray 3 and from 4 to 1): two loops, each through 0 once.
+        let turns = HashMap::from([((2, 0), 1), ((4, 0), 3)]);
+        let ids = |lp: &Option<Vec<LoopVertex>>| {
+            let lp = lp.as_ref().expect("a loop");
+            let mut ids: Vec<u32> = lp.iter().map(|v| v.0).collect();
+            ids.sort_unstable();
+            ids
+        };
+        let loops = chain_loops(edges.clone(), &turns);
+        let mut loops: Vec<Vec<u32>> = loops.iter().map(ids).collect();
+        loops.sort();
+        assert_eq!(loops, vec![vec![0, 1, 2], vec![0, 3, 4]]);
+        // Turning into the same wedge walks one loop through 0 twice.
+        let turns = HashMap::from([((2, 0), 3), ((4, 0), 1)]);
+        let loops = chain_loops(edges, &turns);
         assert!(loops.iter().all(Option::is_none), "{loops:?}");
     }
 }

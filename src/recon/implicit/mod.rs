@@ -14,6 +14,7 @@ pub mod lattice;
 pub mod mc_table;
 pub mod mls;
 pub mod owners;
+pub mod pinch;
 pub mod polygonize;
 pub mod reconstruct;
 pub mod refine;
