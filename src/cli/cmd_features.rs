@@ -73,6 +73,9 @@ struct Thresholds {
     /// Across-line refinement: width of the strip around the line (d).
     #[arg(long)]
     refine_width: Option<f64>,
+    /// Line vertices moved onto the maximum of the curvature profile across the line: half-width of the profile, in curvature fit radii (0 = off).
+    #[arg(long)]
+    crest: Option<f64>,
     /// Side of the cells polylines grow in (d).
     #[arg(long)]
     cell: Option<f64>,
@@ -97,6 +100,7 @@ impl FeaturesArgs {
             relax_passes: t.relax.unwrap_or(d.relax_passes),
             refine: t.refine.unwrap_or(d.refine),
             refine_width: t.refine_width.unwrap_or(d.refine_width),
+            crest: t.crest.unwrap_or(d.crest),
             cell: t.cell.unwrap_or(d.cell),
             ..d
         };

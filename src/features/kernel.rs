@@ -31,6 +31,7 @@
 //! remaining chain of the owned region; the kernel checks that the loaded
 //! region covers it and asks for more margin otherwise.
 
+use super::crest::{place_on_crests, Slab};
 use super::curvature::VALUES;
 use super::grid::BallGrid;
 use super::hood::HoodIndex;
@@ -141,6 +142,7 @@ impl TileKernel for FeaturesKernel {
         KernelError::unless_short(short.max(uncovered(tile, &own, chain)), tile.margin)?;
         let status = corner_status(tile, &which, &enh, &class, &dist, p);
         let mut out = FeaturesTile::default();
+        let mut crest_grid = None;
         let owned = |i: usize| owns(tile, tile.points[i], p.cell);
         for kind in [LineKind::Ridge, LineKind::Valley] {
             let entries = Entries::collect(tile, &which, &enh, &class, &status, kind);
@@ -159,7 +161,17 @@ impl TileKernel for FeaturesKernel {
                         .push((*s, entries.ids[e], prio));
                 }
             }
-            out.cells.extend(grow_cells(groups, kind, p));
+            let mut cells = grow_cells(groups, kind, p);
+            if let Some(slab) = p.crest {
+                let grid = crest_grid.get_or_insert_with(|| {
+                    BallGrid::new(&tile.points, &tile.ids, slab.reach())
+                });
+                if let Some(grid) = grid {
+                    let short = crests(&mut cells, kind, grid, tile, slab)?;
+                    KernelError::unless_short(short, tile.margin)?;
+                }
+            }
+            out.cells.extend(cells);
             entries.count(kind, &smoothed, &owned, &mut out.counts);
             for (c, &src) in corners.source.iter().enumerate() {
                 if owned(src as usize) {
@@ -196,6 +208,35 @@ impl FeaturesKernel {
             .map(|(v, f)| classify(v[0], v[1], *f, alpha))
             .collect())
     }
+}
+
+/// Section 5's vertices moved onto the crest of the curvature profile
+/// (`crest.rs`); returns how far the slabs reach beyond the loaded region.
+fn crests(
+    cells: &mut [CellLines],
+    kind: LineKind,
+    grid: &BallGrid,
+    tile: &TilePoints,
+    slab: Slab,
+) -> Result<f64, KernelError> {
+    let (Some(Values::F32(vals)), Some(Values::U8(flg))) =
+        (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS))
+    else {
+        return Err(KernelError::Failed(
+            "the tile carries no curvature columns".into(),
+        ));
+    };
+    let k_of = |j: usize| {
+        let v = &vals[j * VALUES..j * VALUES + 2];
+        let k = if v[0].abs() >= v[1].abs() { v[0] } else { v[1] };
+        (flg[j] == 0 && k.is_finite()).then_some(f64::from(k))
+    };
+    let room = |p: DVec3| tile.room(p);
+    let ridge = kind == LineKind::Ridge;
+    Ok(cells
+        .par_iter_mut()
+        .map(|c| place_on_crests(&mut c.lines, ridge, grid, &k_of, slab, &room))
+        .reduce(|| 0.0, f64::max))
 }
 
 /// Distance from `p` to the box `b` (0 inside; faces may be infinite).

@@ -12,6 +12,7 @@
 //! not available, and they are NaN, never made up).
 
 pub mod cost;
+pub mod crest;
 pub mod curvature;
 pub mod curve;
 pub mod enhance;

@@ -3,6 +3,7 @@
 //! curvature threshold from the curvature distribution and the fit
 //! residuals, so `features` works untuned; every one can be overridden.
 
+use super::crest::Slab;
 use super::curvature::CurvatureMeta;
 use super::{CurvatureHood, CurvatureParams, FeaturesError, DEFAULT_RADIUS_SPACINGS};
 use std::f64::consts::PI;
@@ -45,6 +46,10 @@ pub struct FeatureParams {
     /// 94.2 / 94.5 / 95.4 %, wavy sheet 93.6 / 93.3 / 93.3 %).
     pub refine: f64,
     pub refine_width: f64,
+    /// Line vertices moved onto the crest of the curvature profile across
+    /// the line (`crest.rs`): the half-width of the profile's slab, in
+    /// curvature fit radii (0: off); its half-length is one fit radius.
+    pub crest: f64,
     /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
     pub cell: f64,
 }
@@ -69,6 +74,7 @@ impl Default for FeatureParams {
             relax_passes: 2,
             refine: 10.0,
             refine_width: 2.5,
+            crest: 1.5,
             // 16 d: the tiles' margin holds a cell beyond the core, and
             // 32 d made the margin (75 d) four times a 256 MiB plan's
             // tile at 10M points; the synthetic figures are the same at
@@ -97,6 +103,8 @@ pub struct Resolved {
     pub relax_passes: usize,
     pub refine: f64,
     pub refine_width: f64,
+    /// The crest's slab (`crest.rs`), absolute; `None` when off.
+    pub crest: Option<Slab>,
     pub cell: f64,
     /// The curvature neighbourhood, to recompute a feature point's quadric.
     pub hood: CurvatureHood,
@@ -146,6 +154,12 @@ impl FeatureParams {
                 return Err(bad(format!("{name} must be positive and finite, not {v}")));
             }
         }
+        if !(self.crest.is_finite() && self.crest >= 0.0) {
+            return Err(bad(format!(
+                "crest width must be finite and >= 0, not {}",
+                self.crest
+            )));
+        }
         if !(self.refine.is_finite() && self.refine >= 0.0) {
             return Err(bad(format!(
                 "refine radius must be finite and >= 0, not {}",
@@ -181,6 +195,16 @@ impl FeatureParams {
     /// Absolute thresholds for a cloud with the curvature `meta`.
     pub fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
         let d = meta.spacing;
+        // The fit radius: the neighbourhood's, or for k nearest about as
+        // far as the default radius.
+        let fit = match meta.resolved {
+            CurvatureHood::Radius(r) => r,
+            _ => DEFAULT_RADIUS_SPACINGS * d,
+        };
+        let crest = (self.crest > 0.0).then(|| Slab {
+            along: fit,
+            across: self.crest * fit,
+        });
         Resolved {
             alpha: self.alpha.unwrap_or_else(|| default_alpha(meta)),
             phi: self.phi * d,
@@ -198,6 +222,7 @@ impl FeatureParams {
             relax_passes: self.relax_passes,
             refine: self.refine * d,
             refine_width: self.refine_width * d,
+            crest,
             cell: self.cell * d,
             hood: meta.resolved,
             spacing: d,
