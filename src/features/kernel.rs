@@ -149,16 +149,28 @@ impl TileKernel for FeaturesKernel {
             let smoothed = entries.smooth(&dist, p);
             let corners = &entries.corners;
             let cgrid = BallGrid::new(&corners.pos, &corners.ids, p.corner_cap());
+            // Priorities in parallel (a query each), grouped in entry order.
+            let prios: Vec<Option<(DVec3, f64)>> = smoothed
+                .par_iter()
+                .enumerate()
+                .map_init(Vec::new, |found, (e, s)| {
+                    let src = entries.source[e] as usize;
+                    match (s, owned(src)) {
+                        (Some(s), true) => {
+                            Some((*s, priority(*s, cgrid.as_ref(), p.corner_cap(), found)))
+                        }
+                        _ => None,
+                    }
+                })
+                .collect();
             let mut groups: BTreeMap<[i64; 3], CellPoints> = BTreeMap::new();
-            for (e, s) in smoothed.iter().enumerate() {
-                let src = entries.source[e] as usize;
-                if let (Some(s), true) = (s, owned(src)) {
-                    let prio = priority(*s, cgrid.as_ref(), p.corner_cap());
-                    let key = cell_key(tile.points[src], p.cell);
+            for (e, sp) in prios.into_iter().enumerate() {
+                if let Some((s, prio)) = sp {
+                    let key = cell_key(tile.points[entries.source[e] as usize], p.cell);
                     groups
                         .entry(key)
                         .or_default()
-                        .push((*s, entries.ids[e], prio));
+                        .push((s, entries.ids[e], prio));
                 }
             }
             let mut cells = grow_cells(groups, kind, p);
@@ -276,10 +288,15 @@ fn owns(tile: &TilePoints, p: DVec3, cell: f64) -> bool {
 }
 
 /// A seed's priority: its distance to the nearest kept corner, capped.
-fn priority(s: DVec3, corners: Option<&BallGrid>, cap: f64) -> f64 {
-    let mut found = Vec::new();
+fn priority(
+    s: DVec3,
+    corners: Option<&BallGrid>,
+    cap: f64,
+    found: &mut Vec<crate::spatial::Neighbour>,
+) -> f64 {
+    found.clear();
     if let Some(g) = corners {
-        g.within(s, cap, None, &mut found);
+        g.within(s, cap, None, found);
     }
     let nearest = found.iter().map(|n| n.dist2).fold(f64::INFINITY, f64::min);
     nearest.sqrt().min(cap)
