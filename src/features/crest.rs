@@ -168,7 +168,9 @@ pub fn place_on_crests(
                 continue;
             }
             short = short.max(slab.reach() - room(old[i]));
-            if let Some(c) = crest_point(old[i], t, along, grid, &signed, slab, &mut found, &mut buf) {
+            if let Some(c) =
+                crest_point(old[i], t, along, grid, &signed, slab, &mut found, &mut buf)
+            {
                 *v = c;
             }
         }
@@ -284,11 +286,31 @@ mod tests {
         };
         let (mut found, mut buf) = (Vec::new(), Vec::new());
         let v = DVec3::new(0.012, 0.0, a * (w * 0.012).cos());
-        let c = crest_point(v, DVec3::Y, (-0.03, 0.03), &grid, &k, slab, &mut found, &mut buf).unwrap();
+        let c = crest_point(
+            v,
+            DVec3::Y,
+            (-0.03, 0.03),
+            &grid,
+            &k,
+            slab,
+            &mut found,
+            &mut buf,
+        )
+        .unwrap();
         assert!(c.x.abs() < 1e-3, "{c}");
         assert!((c.z - a).abs() < 1e-3, "{c}");
         // A flat profile has no crest.
         let flat = |_: usize| Some(1.0);
-        assert!(crest_point(v, DVec3::Y, (-0.03, 0.03), &grid, &flat, slab, &mut found, &mut buf).is_none());
+        assert!(crest_point(
+            v,
+            DVec3::Y,
+            (-0.03, 0.03),
+            &grid,
+            &flat,
+            slab,
+            &mut found,
+            &mut buf
+        )
+        .is_none());
     }
 }

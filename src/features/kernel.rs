@@ -175,9 +175,8 @@ impl TileKernel for FeaturesKernel {
             }
             let mut cells = grow_cells(groups, kind, p);
             if let Some(slab) = p.crest {
-                let grid = crest_grid.get_or_insert_with(|| {
-                    BallGrid::new(&tile.points, &tile.ids, slab.reach())
-                });
+                let grid = crest_grid
+                    .get_or_insert_with(|| BallGrid::new(&tile.points, &tile.ids, slab.reach()));
                 if let Some(grid) = grid {
                     let short = crests(&mut cells, kind, grid, tile, slab)?;
                     KernelError::unless_short(short, tile.margin)?;
