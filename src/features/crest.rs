@@ -2,9 +2,11 @@
 //! line (deviation from paper 5, section 5, named; the paper places a
 //! line's vertices at its growth points and relaxes them, section 5 end).
 //!
-//! Why: a valley-ridge line is where the principal curvature `k_i` is
-//! extreme across the line (paper 5 section 1: the lines are "the loci of
-//! the extrema of principal curvature along their curvature lines"). The
+//! Why: paper 5 (section 1) calls valley-ridge lines the curves that follow
+//! the surface's convex and concave variation, and the mesh method it
+//! cites (its reference \[10\]) traces them where the principal curvature
+//! is extreme across the line (from its gradient): the line is where
+//! `k_i` peaks across it. The
 //! enhancement (section 3) finds the line as the curvature-weighted centre
 //! of the band of feature points (`|k_i| > alpha`), and the band's edges are
 //! where the noisy `k_i` crosses `alpha`: on a rounded crest the band is
@@ -15,9 +17,18 @@
 //! or not) in a short slab across the vertex gives `(s, k_i)`, `s` its
 //! offset across the line, a least-squares parabola `k(s)` is fitted and
 //! the vertex moves to its maximum (for valleys, of `-k_i`), along the
-//! surface (the height across the line is fitted the same way, and the
-//! vertex keeps its own height above that fit, so a vertex the lift put on
-//! a crease stays on it).
+//! surface (the height across the line is fitted with a parabola too, and
+//! the vertex keeps its own height above that fit). A crease is the other
+//! case: its `k_i` comes from quadrics that round the edge off (`lift.rs`),
+//! so where two lines meeting at a kink fit the height profile better than
+//! a parabola, the vertex goes to the best kink instead (without that
+//! test, the stepped block's ridge recall fell from 95.4 to 91.5 %). The
+//! slab stops at the line's ends: at a box corner it would otherwise hold
+//! the perpendicular face (the notched box's valley ends moved 3 sp).
+//! Measured (100k points, seed 1, noise 0.1 sp, recall/precision): wavy
+//! sheet ridge 93.3/92.5 -> 97.7/96.0 %, valley 94.6/92.6 -> 97.7/96.1 %;
+//! notched box ridge 94.1/92.2 -> 95.5/95.1 %; stepped block ridge
+//! 95.4/94.2 -> 96.6/95.5 %.
 //!
 //! The across direction is the largest principal axis of the slab's points
 //! projected onto the plane normal to the line: the profile of a crest or
