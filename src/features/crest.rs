@@ -56,6 +56,13 @@ impl Slab {
     }
 }
 
+/// Buffers of [`crest_point`], reused between vertices.
+#[derive(Default)]
+pub struct Scratch {
+    found: Vec<Neighbour>,
+    buf: Vec<(DVec3, f64)>,
+}
+
 /// Fewest points a profile is fitted to.
 const MIN_POINTS: usize = 12;
 
@@ -71,9 +78,9 @@ pub fn crest_point(
     grid: &BallGrid,
     signed_k: &impl Fn(usize) -> Option<f64>,
     slab: Slab,
-    found: &mut Vec<Neighbour>,
-    buf: &mut Vec<(DVec3, f64)>,
+    scratch: &mut Scratch,
 ) -> Option<DVec3> {
+    let Scratch { found, buf } = scratch;
     grid.within(v, slab.reach(), None, found);
     let points = grid.points();
     buf.clear();
@@ -102,7 +109,7 @@ pub fn crest_point(
         return None;
     }
     let s = -ks[1] / (2.0 * ks[2]);
-    if !(s.abs() <= 0.5) {
+    if s.is_nan() || s.abs() > 0.5 {
         return None;
     }
     let profile = || buf.iter().map(|(q, _)| (q.dot(b) / w, q.dot(n)));
@@ -158,7 +165,7 @@ pub fn place_on_crests(
     room: &impl Fn(DVec3) -> f64,
 ) -> f64 {
     let signed = |j: usize| k_of(j).map(|k| if ridge { k } else { -k });
-    let (mut found, mut buf) = (Vec::new(), Vec::new());
+    let mut scratch = Scratch::default();
     let mut short = 0.0f64;
     for line in lines.iter_mut() {
         let old = line.clone();
@@ -179,9 +186,7 @@ pub fn place_on_crests(
                 continue;
             }
             short = short.max(slab.reach() - room(old[i]));
-            if let Some(c) =
-                crest_point(old[i], t, along, grid, &signed, slab, &mut found, &mut buf)
-            {
+            if let Some(c) = crest_point(old[i], t, along, grid, &signed, slab, &mut scratch) {
                 *v = c;
             }
         }
@@ -258,8 +263,9 @@ fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
         r.swap(c, p);
         for row in c + 1..3 {
             let f = a[row][c] / a[c][c];
-            for k in c..3 {
-                a[row][k] -= f * a[c][k];
+            let pivot = a[c];
+            for (k, x) in a[row].iter_mut().enumerate().skip(c) {
+                *x -= f * pivot[k];
             }
             r[row] -= f * r[c];
         }
@@ -295,33 +301,13 @@ mod tests {
             along: 0.03,
             across: 0.04,
         };
-        let (mut found, mut buf) = (Vec::new(), Vec::new());
+        let mut sc = Scratch::default();
         let v = DVec3::new(0.012, 0.0, a * (w * 0.012).cos());
-        let c = crest_point(
-            v,
-            DVec3::Y,
-            (-0.03, 0.03),
-            &grid,
-            &k,
-            slab,
-            &mut found,
-            &mut buf,
-        )
-        .unwrap();
+        let c = crest_point(v, DVec3::Y, (-0.03, 0.03), &grid, &k, slab, &mut sc).unwrap();
         assert!(c.x.abs() < 1e-3, "{c}");
         assert!((c.z - a).abs() < 1e-3, "{c}");
         // A flat profile has no crest.
         let flat = |_: usize| Some(1.0);
-        assert!(crest_point(
-            v,
-            DVec3::Y,
-            (-0.03, 0.03),
-            &grid,
-            &flat,
-            slab,
-            &mut found,
-            &mut buf
-        )
-        .is_none());
+        assert!(crest_point(v, DVec3::Y, (-0.03, 0.03), &grid, &flat, slab, &mut sc).is_none());
     }
 }

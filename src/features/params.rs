@@ -201,7 +201,7 @@ impl FeatureParams {
             CurvatureHood::Radius(r) => r,
             _ => DEFAULT_RADIUS_SPACINGS * d,
         };
-        let crest = (self.crest > 0.0).then(|| Slab {
+        let crest = (self.crest > 0.0).then_some(Slab {
             along: fit,
             across: self.crest * fit,
         });
