@@ -304,7 +304,9 @@ mod tests {
         let mut sc = Scratch::default();
         let v = DVec3::new(0.012, 0.0, a * (w * 0.012).cos());
         let c = crest_point(v, DVec3::Y, (-0.03, 0.03), &grid, &k, slab, &mut sc).unwrap();
-        assert!(c.x.abs() < 1e-3, "{c}");
+        // The slab is centred on the vertex, so it sees the crest off its
+        // centre and one step leaves about a tenth of the offset.
+        assert!(c.x.abs() < 0.2 * v.x, "{c}");
         assert!((c.z - a).abs() < 1e-3, "{c}");
         // A flat profile has no crest.
         let flat = |_: usize| Some(1.0);

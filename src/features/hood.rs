@@ -50,6 +50,15 @@ impl<'a> HoodIndex<'a> {
         })
     }
 
+    /// The grid over the tile's points, for a radius neighbourhood (other
+    /// stages query it at their own radii).
+    pub(crate) fn radius_grid(&self) -> Option<&BallGrid<'a>> {
+        match self {
+            HoodIndex::Radius(grid, _) => Some(grid),
+            _ => None,
+        }
+    }
+
     /// The neighbours of loaded point `i` into `s.nbrs`; returns their
     /// reach (infinite when a k-query found fewer than k points).
     pub(crate) fn query(

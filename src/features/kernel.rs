@@ -142,7 +142,13 @@ impl TileKernel for FeaturesKernel {
         KernelError::unless_short(short.max(uncovered(tile, &own, chain)), tile.margin)?;
         let status = corner_status(tile, &which, &enh, &class, &dist, p);
         let mut out = FeaturesTile::default();
-        let mut crest_grid = None;
+        // The crest's slabs query the tile's points: the curvature
+        // neighbourhood's grid when it has one (no second index).
+        let own_grid = match (hood.radius_grid(), p.crest) {
+            (None, Some(slab)) => BallGrid::new(&tile.points, &tile.ids, slab.reach()),
+            _ => None,
+        };
+        let crest_grid = hood.radius_grid().or(own_grid.as_ref());
         let owned = |i: usize| owns(tile, tile.points[i], p.cell);
         for kind in [LineKind::Ridge, LineKind::Valley] {
             let entries = Entries::collect(tile, &which, &enh, &class, &status, kind);
@@ -175,9 +181,7 @@ impl TileKernel for FeaturesKernel {
             }
             let mut cells = grow_cells(groups, kind, p);
             if let Some(slab) = p.crest {
-                let grid = crest_grid
-                    .get_or_insert_with(|| BallGrid::new(&tile.points, &tile.ids, slab.reach()));
-                if let Some(grid) = grid {
+                if let Some(grid) = crest_grid {
                     let short = crests(&mut cells, kind, grid, tile, slab)?;
                     KernelError::unless_short(short, tile.margin)?;
                 }
