@@ -104,8 +104,9 @@ pub fn crest_point(
     let (b, n) = across_axes(buf, t)?;
     let w = slab.across;
     let ks = fit_parabola(buf.iter().map(|(q, k)| (q.dot(b) / w, *k)))?;
-    // A maximum: k concave, its top within half the slab.
-    if ks[2] >= 0.0 {
+    // A maximum: k concave beyond rounding (a flat profile fits c2 of
+    // either sign at the last bits), its top within half the slab.
+    if ks[2] >= -1e-9 * ks[0].abs().max(ks[1].abs()) {
         return None;
     }
     let s = -ks[1] / (2.0 * ks[2]);
