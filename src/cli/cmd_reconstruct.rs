@@ -24,7 +24,7 @@ pub struct ReconstructArgs {
     /// Reconstruction method.
     #[arg(long, value_enum, default_value_t = Method::Implicit)]
     method: Method,
-    /// Marching-cubes cell edge (default: rho + delta, as paper 1 advises).
+    /// Marching-cubes cell edge (default: 2.2 x the mean spacing, 3 x with --closed; rho + delta, as paper 1 advises, with --plane sample).
     #[arg(long)]
     cell: Option<f64>,
     /// Noise bound delta (default: estimated from the tangent-plane fits).

@@ -160,6 +160,7 @@ pub fn reconstruct_implicit(
         "cell",
         params.cell.unwrap_or(default_cell(
             params.field,
+            params.closed,
             spacing,
             report.rho + report.delta,
         )),
@@ -199,25 +200,34 @@ pub fn reconstruct_implicit(
     Ok(report)
 }
 
-/// Lattice cell of the MLS field, in spacings (mean nearest-neighbour
-/// distances). Its vertices lie on the field's zero set whatever the cell,
-/// so the cell only sets how finely the mesh follows curvature (the chord
-/// error, about L^2 / 8R for edges L on radius R). 1M noisy dragon, open,
-/// mean distance to the true surface in spacings at cells of 3.7 / 2.9 /
-/// 2.2 spacings: 0.069 / 0.060 / 0.055 (Open3D Poisson depth 9: 0.072),
-/// the time about inversely proportional to the cell squared.
-pub const MLS_CELL_SPACINGS: f64 = 3.0;
+/// Lattice cell of the MLS field in open mode, in spacings (mean
+/// nearest-neighbour distances). Its vertices lie on the field's zero set
+/// whatever the cell, so the cell only sets how finely the mesh follows
+/// curvature (the chord error, about L^2 / 8R for edges L on radius R).
+/// 1M noisy dragon, mean distance to the true surface both ways at cells of
+/// 3 / 2.2 / 1.8 spacings: 0.0572 / 0.0541 / 0.0535 (Open3D Poisson depth
+/// 9: 0.0723), the time about inversely proportional to the cell squared.
+pub const MLS_CELL_SPACINGS: f64 = 2.2;
+
+/// The MLS cell with `closed`, in spacings: coarser than the open one
+/// because a finer lattice meets more places where the surface leaves the
+/// band (next to parts thinner than a cell), and some of those holes are
+/// too twisted for a least-area patch clear of the mesh: the 1M dragon at
+/// 3 / 2.2 spacings leaves 0 / 4 holes open.
+pub const CLOSED_MLS_CELL_SPACINGS: f64 = 3.0;
 
 /// The default cell: paper 1's `rho + delta` (section 2.6) for its own
-/// field; [`MLS_CELL_SPACINGS`] for the MLS field.
+/// field; [`MLS_CELL_SPACINGS`] (open) or [`CLOSED_MLS_CELL_SPACINGS`] for
+/// the MLS field.
 ///
 /// Deviation for the MLS field: `rho` is the *largest* nearest-neighbour
 /// distance (7 spacings on the dragon), coarse enough that the chord error
 /// (0.14 spacings on the dragon) swamps the field's accuracy.
-fn default_cell(field: Field, spacing: f64, paper: f64) -> f64 {
-    match field {
-        Field::Mls => MLS_CELL_SPACINGS * spacing,
-        Field::Paper1 => paper,
+fn default_cell(field: Field, closed: bool, spacing: f64, paper: f64) -> f64 {
+    match (field, closed) {
+        (Field::Mls, false) => MLS_CELL_SPACINGS * spacing,
+        (Field::Mls, true) => CLOSED_MLS_CELL_SPACINGS * spacing,
+        (Field::Paper1, _) => paper,
     }
 }
 
@@ -229,8 +239,10 @@ fn default_cell(field: Field, spacing: f64, paper: f64) -> f64 {
 /// samples leave a patch 30 spacings across), where the least-area patch
 /// of [`super::holes`] cannot follow the shape. 1M dragon, `--closed`, cell
 /// 2.9 spacings: a band of 1 / 2 / 3 cubes leaves 5 / 0 / 0 boundary loops
-/// (mean distance 0.062 / 0.063 / 0.065 spacings).
-const BAND_SPACINGS: f64 = 4.0;
+/// (mean distance 0.062 / 0.063 / 0.065 spacings). Six spacings keeps the
+/// reach the 3-spacing cell had (two cubes) at the open cell of 2.2: with
+/// four, the test terrain opened a second boundary loop.
+const BAND_SPACINGS: f64 = 6.0;
 
 /// The band's reach in cubes: one for paper 1's field (its cell is
 /// `rho + delta`), else at least one, the half-width above when the cell
