@@ -5,6 +5,9 @@
 //! until the seams are joined. Checked on the 10M-point noisy dragon:
 //! `features --mem 256MiB` peaks at 231 MiB (peak-rss; 258 MiB before the
 //! margin and the join were declared, 276 MiB with 32 d growth cells).
+//! Measured again on 2026-11-24 (scratch in /dev/shm, 256 tiles, maximum
+//! RSS from `/usr/bin/time -v`): 263 MiB with `--crest 0` and 277 MiB with
+//! the crest placement, both over the promise: not yet explained.
 
 use super::export::RECORD;
 use super::params::FeatureParams;
