@@ -25,7 +25,7 @@ pub enum DemoError {
 }
 
 /// The embedded dragon mesh, read straight from the binary.
-pub fn dragon_mesh() -> Result<TriMesh, DemoError> {
+pub(crate) fn dragon_mesh() -> Result<TriMesh, DemoError> {
     let name = std::path::Path::new("dragon_q20k.ply.gz (embedded)");
     let (vertices, faces) = read_mesh_from(name, DRAGON_PLY_GZ)?;
     Ok(TriMesh { vertices, faces })

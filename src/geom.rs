@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 /// The scalar of all geometry that must be exact or reproducible.
-pub type Real = f64;
+pub(crate) type Real = f64;
 
 /// Axis-aligned box, `min <= max` on every axis once a point was added.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +23,7 @@ impl Aabb {
         Aabb { min, max }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
@@ -32,11 +32,11 @@ impl Aabb {
         self.max = self.max.max(p);
     }
 
-    pub fn union(&self, o: &Aabb) -> Aabb {
+    pub(crate) fn union(&self, o: &Aabb) -> Aabb {
         Aabb::new(self.min.min(o.min), self.max.max(o.max))
     }
 
-    pub fn extent(&self) -> DVec3 {
+    pub(crate) fn extent(&self) -> DVec3 {
         if self.is_empty() {
             DVec3::ZERO
         } else {
@@ -44,7 +44,7 @@ impl Aabb {
         }
     }
 
-    pub fn center(&self) -> DVec3 {
+    pub(crate) fn center(&self) -> DVec3 {
         (self.min + self.max) * 0.5
     }
 
@@ -58,7 +58,7 @@ impl Aabb {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
-    pub fn intersects(&self, o: &Aabb) -> bool {
+    pub(crate) fn intersects(&self, o: &Aabb) -> bool {
         self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
     }
 }

@@ -30,14 +30,14 @@ use serde::{Deserialize, Serialize};
 pub const VALUES: usize = 5;
 
 /// One tile's curvature of its core points.
-pub struct CurvatureTile {
+pub(crate) struct CurvatureTile {
     /// `k1, k2, H, K, residual` per core point.
     pub values: Vec<f32>,
     pub flags: Vec<u8>,
     pub stats: CurvatureStats,
 }
 
-pub struct CurvatureKernel {
+pub(crate) struct CurvatureKernel {
     pub hood: CurvatureHood,
     pub margin: f64,
     /// Mean spacing `d` (the statistics' scale).
@@ -55,7 +55,7 @@ pub(crate) fn oriented_normal(tile: &TilePoints, i: usize) -> Option<DVec3> {
 /// The quadric of point `i` and its neighbours `nbrs` (the point first,
 /// then neighbours in their order), its frame's normal turned toward
 /// `toward` (canonical PCA sign when `None`).
-pub fn point_quadric(
+pub(crate) fn point_quadric(
     points: &[DVec3],
     i: usize,
     nbrs: &[Neighbour],
@@ -70,7 +70,7 @@ pub fn point_quadric(
 }
 
 /// The curvatures of a fitted quadric at the point it was fitted for.
-pub fn curvature_of(q: &Quadric, p: DVec3) -> Curvature {
+pub(crate) fn curvature_of(q: &Quadric, p: DVec3) -> Curvature {
     let l = q.frame.local(p);
     q.curvature_at(l.x, l.y)
 }
@@ -242,7 +242,7 @@ impl CurvatureMeta {
 
 /// What the curvature columns record as their making: the curvature
 /// parameters, which include the normals' own.
-pub fn provenance(params: &CurvatureParams) -> Provenance {
+pub(crate) fn provenance(params: &CurvatureParams) -> Provenance {
     Provenance::of("curvature", params)
 }
 

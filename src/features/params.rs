@@ -106,16 +106,16 @@ pub struct Resolved {
 
 /// Multiple of the noise-induced curvature scale `sigma / r^2` the default
 /// threshold stays above.
-pub const NOISE_FACTOR: f64 = 8.0;
+pub(crate) const NOISE_FACTOR: f64 = 8.0;
 /// Share of the points the default threshold leaves below it at least.
-pub const QUANTILE: f64 = 0.7;
+pub(crate) const QUANTILE: f64 = 0.7;
 
 /// The default `alpha`: the larger of the 70th percentile of `|k_i|` (the
 /// paper's dragon kept 30 % of its points) and eight times the curvature
 /// that fit noise alone produces, `sigma / r^2` with `sigma` the median fit
 /// residual (on crease models most points are flat and the percentile falls
 /// into the noise).
-pub fn default_alpha(meta: &CurvatureMeta) -> f64 {
+pub(crate) fn default_alpha(meta: &CurvatureMeta) -> f64 {
     let r = match meta.resolved {
         CurvatureHood::Radius(r) => r,
         // The k nearest hold about as many points as the default radius.
@@ -179,7 +179,7 @@ impl FeatureParams {
     }
 
     /// Absolute thresholds for a cloud with the curvature `meta`.
-    pub fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
+    pub(crate) fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
         let d = meta.spacing;
         Resolved {
             alpha: self.alpha.unwrap_or_else(|| default_alpha(meta)),
@@ -213,18 +213,18 @@ impl Resolved {
     /// Cells of the smoothing's grid: the first radius, where most points
     /// settle, but wide enough that `delta_max` spans at most the 8 cells
     /// a grid query reaches (`grid.rs`).
-    pub fn smooth_cell(&self) -> f64 {
+    pub(crate) fn smooth_cell(&self) -> f64 {
         self.delta.max(self.delta_max / 8.0)
     }
 
     /// How far the priority of a polyline seed looks for corners.
-    pub fn corner_cap(&self) -> f64 {
+    pub(crate) fn corner_cap(&self) -> f64 {
         3.0 * self.gamma_max
     }
 
     /// Radius around a point that its quadric's neighbourhood needs, for a
     /// radius neighbourhood (0 for k nearest: checked per point).
-    pub fn fit_radius(&self) -> f64 {
+    pub(crate) fn fit_radius(&self) -> f64 {
         match self.hood {
             CurvatureHood::Radius(r) => r,
             _ => 0.0,
@@ -236,7 +236,7 @@ impl Resolved {
     /// status (corners within `epsilon`, each within `phi` of its source),
     /// then smoothing (enhanced points within `delta_max`) and the corner
     /// distance (corners within the cap). See `kernel.rs`.
-    pub fn chain(&self) -> f64 {
+    pub(crate) fn chain(&self) -> f64 {
         let corner_status = 2.0 * self.phi + self.epsilon;
         corner_status + 2.0 * self.phi + self.delta_max + self.corner_cap()
     }

@@ -67,7 +67,7 @@ pub fn convert(
 }
 
 /// Bounding box of all points of `path`, by one streaming pass.
-pub fn scan_bounds(
+pub(crate) fn scan_bounds(
     path: &Path,
     read: impl Into<ReadOptions>,
     progress: &dyn Progress,

@@ -6,26 +6,26 @@
 //! consistent with headers), so nothing downstream checks again.
 
 pub mod atomic;
-pub mod attributes;
+pub(crate) mod attributes;
 pub mod cleanup;
 pub mod convert;
 pub mod e57;
-pub mod error;
+pub(crate) mod error;
 pub mod inspect;
-pub mod las;
+pub(crate) mod las;
 mod las_extra;
 pub mod memory;
-pub mod obj;
-pub mod open;
-pub mod pcd;
+pub(crate) mod obj;
+pub(crate) mod open;
+pub(crate) mod pcd;
 pub mod place;
-pub mod ply;
+pub(crate) mod ply;
 mod policy;
 pub(crate) mod scratch;
 mod source;
 mod text;
 pub mod write;
-pub mod xyz;
+pub(crate) mod xyz;
 
 pub use atomic::AtomicFile;
 pub use attributes::{Attribute, AttributeSet, AttributeValues, Attributes};
@@ -98,10 +98,10 @@ impl PointChunk {
     pub fn len(&self) -> usize {
         self.xyz.len()
     }
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.xyz.is_empty()
     }
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.xyz.clear();
         if let Some(n) = &mut self.normals {
             n.clear();

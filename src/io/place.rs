@@ -48,7 +48,7 @@ pub fn check_output(output: &Path) -> Result<(), IoError> {
 }
 
 /// Bytes available to this user on the file system holding `dir`.
-pub fn available_bytes(dir: &Path) -> Option<u64> {
+pub(crate) fn available_bytes(dir: &Path) -> Option<u64> {
     let s = rustix::fs::statvfs(dir).ok()?;
     Some(s.f_bavail.saturating_mul(s.f_frsize))
 }

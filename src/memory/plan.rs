@@ -31,12 +31,12 @@ pub const MARGIN_FACTOR: f64 = 1.5;
 /// Boundary nodes of the external orientation per point, times the square
 /// root of the tile size: 10.4 measured on the 10M-point noisy dragon with
 /// tiles of 17k, 77k and 312k points (k = 12); 13 allows for rougher scans.
-pub const NODES_PER_SQRT_TILE: f64 = 13.0;
+pub(crate) const NODES_PER_SQRT_TILE: f64 = 13.0;
 /// Bytes per node of the external orientation's global solve (the rank
 /// table, the union-find, the accepted-edge bits).
-pub const BYTES_PER_NODE: u64 = 10;
+pub(crate) const BYTES_PER_NODE: u64 = 10;
 /// Peak bytes per occupied histogram cell.
-pub const BYTES_PER_CELL: u64 = 36;
+pub(crate) const BYTES_PER_CELL: u64 = 36;
 
 /// What a tile kernel and the passes around it cost, as it declares.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -169,7 +169,11 @@ impl MemoryPlan {
     /// points: `threads + 1` when that many such tiles fit the plan, else
     /// fewer (a store built under a larger budget), down to one; none
     /// fitting is an error naming the budget needed.
-    pub fn tiles_in_flight(&self, cost: &KernelCost, largest: u64) -> Result<usize, BudgetError> {
+    pub(crate) fn tiles_in_flight(
+        &self,
+        cost: &KernelCost,
+        largest: u64,
+    ) -> Result<usize, BudgetError> {
         let reserved = self.reserved;
         let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
         let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
@@ -216,13 +220,13 @@ fn external_nodes(points: u64, tile_points: u64) -> u64 {
 }
 
 /// Histogram cells the budget holds: half of what is free.
-pub fn histogram_cells(budget: MemoryBudget) -> usize {
+pub(crate) fn histogram_cells(budget: MemoryBudget) -> usize {
     (budget.bytes.saturating_sub(BASE_BYTES) / 2 / BYTES_PER_CELL).max(1024) as usize
 }
 
 /// Scatter buffers: an eighth of the budget, at most 64 MiB (larger ones
 /// buy nothing: the writes are already long).
-pub fn scatter_buffer(budget: MemoryBudget) -> usize {
+pub(crate) fn scatter_buffer(budget: MemoryBudget) -> usize {
     (budget.bytes / 8).min(64 << 20) as usize
 }
 

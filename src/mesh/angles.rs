@@ -16,11 +16,11 @@ use rayon::prelude::*;
 use std::fmt;
 
 /// Width of a histogram bin, degrees.
-pub const BIN_DEGREES: f64 = 5.0;
+pub(crate) const BIN_DEGREES: f64 = 5.0;
 /// Bins: 0-5, 5-10, ..., 55-60 (60 itself, an equilateral, in the last).
-pub const BINS: usize = 12;
+pub(crate) const BINS: usize = 12;
 /// A triangle whose smallest angle is below this is a sliver.
-pub const SLIVER_DEGREES: f64 = 10.0;
+pub(crate) const SLIVER_DEGREES: f64 = 10.0;
 
 /// Triangles per parallel chunk; fixed so float sums are reproducible.
 const CHUNK: usize = 1 << 16;

@@ -36,8 +36,8 @@ pub struct CompareOptions {
     pub seed: u64,
 }
 
-pub const MIN_AUTO_SAMPLES: usize = 10_000;
-pub const MAX_AUTO_SAMPLES: usize = 1_000_000;
+pub(crate) const MIN_AUTO_SAMPLES: usize = 10_000;
+pub(crate) const MAX_AUTO_SAMPLES: usize = 1_000_000;
 
 impl Default for CompareOptions {
     fn default() -> Self {

@@ -12,17 +12,17 @@
 
 pub mod angles;
 pub mod distance;
-pub mod error;
+pub(crate) mod error;
 mod paged;
-pub mod pieces;
-pub mod quality;
-pub mod self_intersect;
+pub(crate) mod pieces;
+pub(crate) mod quality;
+pub(crate) mod self_intersect;
 pub mod shapes;
-pub mod write;
+pub(crate) mod write;
 
 mod bvh;
 mod closest;
-pub mod intersect;
+pub(crate) mod intersect;
 mod nearest;
 mod sampling;
 mod topology;
@@ -96,7 +96,7 @@ impl Mesh {
 
     /// Sum of triangle areas, skipping invalid triangles. Summed in fixed
     /// order, so the result is reproducible.
-    pub fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         self.triangles
             .iter()
             .filter_map(|&t| self.corners(t))
@@ -106,6 +106,6 @@ impl Mesh {
 }
 
 /// Area of the triangle `abc`.
-pub fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(crate) fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     0.5 * (b - a).cross(c - a).length()
 }

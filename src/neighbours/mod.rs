@@ -24,9 +24,9 @@
 //! 46 MiB at `--mem 128MiB` (64 tiles, byte-identical output); kNN 3.9 s.
 //! Iterations: median 1, max 5, none capped; |T| 15..45, mean 17.2.
 
-pub mod csr;
+pub(crate) mod csr;
 mod kernel;
-pub mod spill;
+pub(crate) mod spill;
 mod stats;
 
 pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
@@ -103,7 +103,7 @@ impl NeighbourParams {
 
     /// Typical neighbours per point: k, or 2k for topological (paper 3:
     /// |T| in [k, 3k]).
-    pub fn expected_size(&self) -> u64 {
+    pub(crate) fn expected_size(&self) -> u64 {
         match self.neighbourhood {
             Neighbourhood::Topological(p) => 2 * p.k as u64,
             Neighbourhood::Knn { k } => k as u64,
@@ -112,7 +112,7 @@ impl NeighbourParams {
 
     /// Peak bytes per loaded point of the kernel (points, ids, index, the
     /// core lists in local and global ids), for the memory planner.
-    pub fn bytes_per_point(&self) -> u64 {
+    pub(crate) fn bytes_per_point(&self) -> u64 {
         120 + 12 * 3 * self.k() as u64
     }
 
@@ -131,7 +131,7 @@ impl NeighbourParams {
     }
 
     /// Bytes per point of an output window (decoded lists, scratch records).
-    pub fn window_bytes_per_point(&self) -> u64 {
+    pub(crate) fn window_bytes_per_point(&self) -> u64 {
         40 + 16 * self.expected_size()
     }
 
@@ -139,7 +139,7 @@ impl NeighbourParams {
     /// neighbour lies near `1.13 sqrt(k)` spacings on uniform samples (more
     /// on scans); the reverse shift's reach adds the shift, about one more
     /// radius. The kernel asks for more when it is short.
-    pub fn initial_margin(&self, spacing: f64) -> f64 {
+    pub(crate) fn initial_margin(&self, spacing: f64) -> f64 {
         let factor = match self.neighbourhood {
             Neighbourhood::Topological(_) => 6.0,
             Neighbourhood::Knn { .. } => 3.0,

@@ -38,7 +38,7 @@ pub struct Edge {
 
 impl Edge {
     /// The paper's edge: cost `1 - |n_a . n_b|`.
-    pub fn new(a: u32, b: u32, dot: f64) -> Self {
+    pub(crate) fn new(a: u32, b: u32, dot: f64) -> Self {
         Edge::with_cost(a, b, 1.0 - dot.abs(), dot)
     }
 
@@ -49,7 +49,7 @@ impl Edge {
     }
 
     /// As [`Edge::with_cost`], each end given as `[id, slot]`.
-    pub fn between(x: [u32; 2], y: [u32; 2], cost: f64, dot: f64) -> Self {
+    pub(crate) fn between(x: [u32; 2], y: [u32; 2], cost: f64, dot: f64) -> Self {
         let w = cost.max(0.0).copysign(dot);
         let (x, y) = if x[0] < y[0] { (x, y) } else { (y, x) };
         Edge {
@@ -61,17 +61,17 @@ impl Edge {
     }
 
     /// Total order used everywhere: cost, then the two ids.
-    pub fn key(&self) -> (u64, u32, u32) {
+    pub(crate) fn key(&self) -> (u64, u32, u32) {
         (self.w.abs().to_bits(), self.a, self.b)
     }
 
-    pub fn flips(&self) -> bool {
+    pub(crate) fn flips(&self) -> bool {
         self.w.is_sign_negative()
     }
 
     pub const BYTES: usize = 24;
 
-    pub fn to_bytes(self) -> [u8; Self::BYTES] {
+    pub(crate) fn to_bytes(self) -> [u8; Self::BYTES] {
         let mut out = [0u8; Self::BYTES];
         out[..8].copy_from_slice(&self.w.to_le_bytes());
         let words = [self.a, self.b, self.slots[0], self.slots[1]];
@@ -81,7 +81,7 @@ impl Edge {
         out
     }
 
-    pub fn from_bytes(b: &[u8; Self::BYTES]) -> Self {
+    pub(crate) fn from_bytes(b: &[u8; Self::BYTES]) -> Self {
         let word = |k: usize| u32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
         let mut w = [0u8; 8];
         w.copy_from_slice(&b[..8]);

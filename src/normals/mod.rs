@@ -12,14 +12,14 @@ mod contract;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
-pub mod hood;
-pub mod kernel;
-pub mod labels;
-pub mod orient;
+pub(crate) mod hood;
+pub(crate) mod kernel;
+pub(crate) mod labels;
+pub(crate) mod orient;
 pub mod pca;
-pub mod runs;
+pub(crate) mod runs;
 pub mod sources;
-pub mod unionfind;
+pub(crate) mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
@@ -32,7 +32,7 @@ use runs::EdgeRuns;
 
 /// Bytes per point of an input-order output window of positions, normals
 /// and flags (the record and its share of the reorder buffers).
-pub const EXPORT_BYTES_PER_POINT: u64 = 48;
+pub(crate) const EXPORT_BYTES_PER_POINT: u64 = 48;
 
 /// The neighbourhood was too small or degenerate (colinear, coincident) for
 /// a tangent plane: the normal is zero, never made up.
@@ -90,7 +90,7 @@ pub enum NormalHood {
 impl NormalHood {
     /// The mean reverse shift's parameters for `k` neighbours per query
     /// (`None` for kNN).
-    pub fn topo_params(&self, k: usize) -> Option<TopoParams> {
+    pub(crate) fn topo_params(&self, k: usize) -> Option<TopoParams> {
         match *self {
             NormalHood::Knn => None,
             NormalHood::Topological { max_iterations } => Some(TopoParams { k, max_iterations }),
@@ -155,7 +155,7 @@ impl NormalParams {
     }
 
     /// The parameters as the manifest records them for the normals column.
-    pub fn provenance(&self) -> Provenance {
+    pub(crate) fn provenance(&self) -> Provenance {
         Provenance::of("normals", self)
     }
 
@@ -163,7 +163,7 @@ impl NormalParams {
     /// normals, edges), for the memory planner. Topological: the R*-tree's
     /// entries and nodes (~40 more bytes a point) and lists of about 2k
     /// (paper 3: `|T|` in `[k, 3k]`).
-    pub fn bytes_per_point(&self) -> u64 {
+    pub(crate) fn bytes_per_point(&self) -> u64 {
         let k = self.k as u64;
         match self.neighbourhood {
             NormalHood::Knn => 120 + 20 * k,
@@ -197,7 +197,7 @@ impl NormalParams {
     /// reach is about twice the k-th neighbour distance (the shift plus the
     /// shifted query's radius), so the topological margin is doubled, as
     /// in [`crate::neighbours::NeighbourParams::initial_margin`].
-    pub fn initial_margin(&self, spacing: f64) -> f64 {
+    pub(crate) fn initial_margin(&self, spacing: f64) -> f64 {
         let factor = match self.neighbourhood {
             NormalHood::Knn => 1.0,
             NormalHood::Topological { .. } => 2.0,
@@ -237,7 +237,7 @@ pub struct NormalsReport {
 /// a surface sampled at `spacing`, where the k-th neighbour lies at about
 /// `1.13 sqrt(k)` spacings for uniform sampling (scans are not: 4 rather
 /// than 2.3 spacings per sqrt(k)). The kernel asks for more when it is short.
-pub fn initial_margin(spacing: f64, k: usize) -> f64 {
+pub(crate) fn initial_margin(spacing: f64, k: usize) -> f64 {
     4.0 * spacing * (k as f64).sqrt()
 }
 
@@ -269,7 +269,7 @@ pub fn has_normals_of(store: &PointStore, params: &NormalParams) -> bool {
 
 /// Computes normals with `params` unless the store holds them already;
 /// the report when it computed them.
-pub fn ensure_normals(
+pub(crate) fn ensure_normals(
     store: &mut PointStore,
     params: &NormalParams,
     opts: RunOptions,

@@ -24,7 +24,7 @@ use crate::spatial::Neighbour;
 /// `f64::EPSILON * l2 / (l1 - l0)` radians, so this keeps that error under
 /// ~1e-6 rad; it flags strips thinner than ~1e-5 of their length (variance
 /// ratio 1e-10), i.e. colinear points up to rounding.
-pub const COLINEAR_TOLERANCE: f64 = 1e-10;
+pub(crate) const COLINEAR_TOLERANCE: f64 = 1e-10;
 
 /// A fitted tangent plane.
 #[derive(Clone, Copy, Debug, PartialEq)]

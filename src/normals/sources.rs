@@ -79,7 +79,7 @@ impl SourceParams {
     /// radius for a cloud whose mean nearest-neighbour distance is
     /// `nn`, bridges to the same k nearest as the tangent planes and the
     /// spanning tree's edge cost; `None` for other orientations.
-    pub fn for_normals(params: &NormalParams, nn: f64) -> Option<Self> {
+    pub(crate) fn for_normals(params: &NormalParams, nn: f64) -> Option<Self> {
         let (sources, tau) = match params.orientation {
             Orientation::SixSources { tau } => (Sources::Six, tau),
             Orientation::SingleSource { direction, tau } => (Sources::Single(direction), tau),
@@ -96,12 +96,12 @@ impl SourceParams {
     }
 
     /// The direction that roots parts no pair reaches (+X for six sources).
-    pub fn first_direction(&self) -> DVec3 {
+    pub(crate) fn first_direction(&self) -> DVec3 {
         let d = self.sources.directions();
         d.first().copied().unwrap_or(DVec3::X)
     }
 
-    pub fn validate(&self) -> Result<(), SourcesError> {
+    pub(crate) fn validate(&self) -> Result<(), SourcesError> {
         if !(0.0..=1.0).contains(&self.tau) {
             return Err(SourcesError::BadTau { tau: self.tau });
         }

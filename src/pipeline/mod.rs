@@ -62,7 +62,7 @@ pub enum PipelineError {
 
 impl PipelineError {
     /// A seam policy's own error, kept typed.
-    pub fn seam(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+    pub(crate) fn seam(e: impl std::error::Error + Send + Sync + 'static) -> Self {
         PipelineError::Seam(Box::new(e))
     }
 }

@@ -7,14 +7,14 @@
 //! every primitive is depth-tested per pixel, so drawing order only matters
 //! for exact ties (the first drawn wins).
 
-pub mod png;
+pub(crate) mod png;
 pub mod scene;
 
 use glam::DVec3;
 
 /// An orthographic camera looking along `forward`, framing a box.
 #[derive(Clone, Copy, Debug)]
-pub struct Camera {
+pub(crate) struct Camera {
     right: DVec3,
     up: DVec3,
     forward: DVec3,
@@ -31,7 +31,7 @@ impl Camera {
     /// that the box `[min, max]` fills `width x height` less a margin of
     /// `margin` (a fraction of the smaller side). `None` for a degenerate
     /// direction or an empty image.
-    pub fn framing(
+    pub(crate) fn framing(
         forward: DVec3,
         up: DVec3,
         min: DVec3,
@@ -73,7 +73,7 @@ impl Camera {
     }
 
     /// Pixel coordinates (x right, y down) and depth of `p`.
-    pub fn project(&self, p: DVec3) -> (f64, f64, f64) {
+    pub(crate) fn project(&self, p: DVec3) -> (f64, f64, f64) {
         let d = p - self.centre;
         (
             self.width as f64 * 0.5 + d.dot(self.right) * self.scale,
@@ -100,7 +100,7 @@ pub struct Canvas {
 }
 
 impl Canvas {
-    pub fn new(camera: Camera, background: [u8; 3]) -> Canvas {
+    pub(crate) fn new(camera: Camera, background: [u8; 3]) -> Canvas {
         let n = camera.width * camera.height;
         Canvas {
             width: camera.width,
@@ -111,7 +111,7 @@ impl Canvas {
         }
     }
 
-    pub fn camera(&self) -> &Camera {
+    pub(crate) fn camera(&self) -> &Camera {
         &self.camera
     }
 
@@ -128,7 +128,7 @@ impl Canvas {
     }
 
     /// A round splat of `radius` pixels at `p`.
-    pub fn point(&mut self, p: DVec3, radius: f64, color: [u8; 3]) {
+    pub(crate) fn point(&mut self, p: DVec3, radius: f64, color: [u8; 3]) {
         let (x, y, z) = self.camera.project(p);
         let r = radius.max(0.5);
         let (x0, x1) = ((x - r).floor() as i64, (x + r).ceil() as i64);
@@ -146,7 +146,7 @@ impl Canvas {
     /// A line `width` pixels wide from `a` to `b`, depth interpolated;
     /// `bias` is subtracted from its depth so lines lying on a surface
     /// win over it.
-    pub fn line(&mut self, a: DVec3, b: DVec3, width: f64, bias: f64, color: [u8; 3]) {
+    pub(crate) fn line(&mut self, a: DVec3, b: DVec3, width: f64, bias: f64, color: [u8; 3]) {
         let (ax, ay, az) = self.camera.project(a);
         let (bx, by, bz) = self.camera.project(b);
         let steps = (bx - ax).abs().max((by - ay).abs()).ceil().max(1.0) as usize;
@@ -170,7 +170,7 @@ impl Canvas {
 
     /// A filled triangle, Lambert-shaded by its normal (two-sided) from
     /// the camera's light, over an ambient term.
-    pub fn triangle(&mut self, a: DVec3, b: DVec3, c: DVec3, color: [u8; 3]) {
+    pub(crate) fn triangle(&mut self, a: DVec3, b: DVec3, c: DVec3, color: [u8; 3]) {
         let Some(n) = (b - a).cross(c - a).try_normalize() else {
             return;
         };
@@ -205,7 +205,7 @@ impl Canvas {
     }
 
     /// The colour at pixel `(x, y)`.
-    pub fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
+    pub(crate) fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
         self.rgb[y * self.width + x]
     }
 

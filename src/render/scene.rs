@@ -27,8 +27,8 @@ pub struct Style {
     pub line_width: f64,
 }
 
-pub const RIDGE: [u8; 3] = [214, 39, 40];
-pub const VALLEY: [u8; 3] = [31, 90, 200];
+pub(crate) const RIDGE: [u8; 3] = [214, 39, 40];
+pub(crate) const VALLEY: [u8; 3] = [31, 90, 200];
 const BACKGROUND: [u8; 3] = [255, 255, 255];
 
 impl Scene {

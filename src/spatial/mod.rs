@@ -10,8 +10,8 @@
 
 use glam::DVec3;
 
-pub mod brute;
-pub mod grid;
+pub(crate) mod brute;
+pub(crate) mod grid;
 mod kdtree;
 pub mod rtree;
 pub mod topological;

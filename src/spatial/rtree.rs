@@ -138,17 +138,17 @@ impl<'a> RTreeIndex<'a> {
         })
     }
 
-    pub fn points(&self) -> &'a [DVec3] {
+    pub(crate) fn points(&self) -> &'a [DVec3] {
         self.points
     }
 
-    pub fn ties(&self) -> &'a [u64] {
+    pub(crate) fn ties(&self) -> &'a [u64] {
         self.tie
     }
 
     /// Typical nearest-neighbour distance (from a fixed sample of points),
     /// the density estimate that sizes the first shell.
-    pub fn spacing(&self) -> f64 {
+    pub(crate) fn spacing(&self) -> f64 {
         self.spacing
     }
 

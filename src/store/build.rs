@@ -53,7 +53,7 @@ pub enum TileTarget {
 impl TileTarget {
     /// Core points per tile for a store of `count` points, or why the
     /// budget fits no plan.
-    pub fn points(&self, count: u64) -> Result<u64, BudgetError> {
+    pub(crate) fn points(&self, count: u64) -> Result<u64, BudgetError> {
         match *self {
             TileTarget::Points(n) => Ok(n.max(1)),
             TileTarget::Budget { budget, cost } => {

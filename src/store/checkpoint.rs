@@ -44,7 +44,7 @@ pub enum TileSet {
 
 impl TileSet {
     /// The tiles of `0..n` in this set.
-    pub fn tiles(&self, n: usize) -> std::ops::Range<usize> {
+    pub(crate) fn tiles(&self, n: usize) -> std::ops::Range<usize> {
         match *self {
             TileSet::Range { first, last } => first.min(n)..last.saturating_add(1).min(n),
             TileSet::Share { index, count } => {
@@ -86,7 +86,7 @@ impl Checkpoints {
     }
 
     /// Records that the job is done at `stage`.
-    pub fn stop_at(&self, stage: &str) {
+    pub(crate) fn stop_at(&self, stage: &str) {
         let _ = self.stopped.set(stage.to_string());
     }
 
@@ -130,12 +130,12 @@ impl Checkpoints {
     }
 
     /// Whether `tile` has a saved result (not checked: [`Self::load`] does).
-    pub fn has(&self, stage: &str, tile: usize) -> bool {
+    pub(crate) fn has(&self, stage: &str, tile: usize) -> bool {
         self.tile_path(stage, tile).is_file()
     }
 
     /// Saves `tile`'s payload: temporary name, fsync, rename.
-    pub fn save(&self, stage: &str, tile: usize, payload: &[u8]) -> Result<(), StoreError> {
+    pub(crate) fn save(&self, stage: &str, tile: usize, payload: &[u8]) -> Result<(), StoreError> {
         let dir = self.stage_dir(stage);
         std::fs::create_dir_all(&dir).map_err(|e| StoreError::os(&dir, e))?;
         let path = self.tile_path(stage, tile);
@@ -154,7 +154,7 @@ impl Checkpoints {
     }
 
     /// How many of `n` tiles of `stage` have a saved result.
-    pub fn count(&self, stage: &str, n: usize) -> usize {
+    pub(crate) fn count(&self, stage: &str, n: usize) -> usize {
         (0..n).filter(|&t| self.has(stage, t)).count()
     }
 
@@ -179,7 +179,7 @@ impl Checkpoints {
         Ok(removed)
     }
 
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.dir
     }
 }
@@ -205,7 +205,7 @@ pub const FNV_SEED: u64 = 0xcbf2_9ce4_8422_2325;
 /// FNV-1a, 64 bits, continuing from `h` (start at [`FNV_SEED`]): a
 /// checksum against torn and damaged files, not an adversary (a run
 /// directory is the user's own).
-pub fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
     bytes
         .iter()
         .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))

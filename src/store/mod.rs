@@ -14,13 +14,13 @@ pub mod build;
 mod cells;
 pub mod checkpoint;
 mod column;
-pub mod columns;
-pub mod export;
+pub(crate) mod columns;
+pub(crate) mod export;
 mod lock;
 pub mod manifest;
 mod reorder;
 mod replay;
-pub mod sampling;
+pub(crate) mod sampling;
 mod sort;
 mod source;
 pub mod spacing;
@@ -41,11 +41,11 @@ use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// Points per bounds block inside a tile.
-pub const BLOCK: u64 = 512;
+pub(crate) const BLOCK: u64 = 512;
 
-pub const XYZ_FILE: &str = "xyz.f32";
-pub const INDEX_FILE: &str = "index.u64";
-pub const BLOCKS_FILE: &str = "blocks.f32";
+pub(crate) const XYZ_FILE: &str = "xyz.f32";
+pub(crate) const INDEX_FILE: &str = "index.u64";
+pub(crate) const BLOCKS_FILE: &str = "blocks.f32";
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -75,7 +75,7 @@ pub enum StoreError {
 }
 
 impl StoreError {
-    pub fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub(crate) fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         StoreError::Os {
             path: path.into(),
             source,
@@ -158,7 +158,7 @@ impl PointStore {
     }
 
     /// Checks the tile table against the counts: contiguous, complete.
-    pub fn validate(&self) -> Result<(), StoreError> {
+    pub(crate) fn validate(&self) -> Result<(), StoreError> {
         let mut next = 0;
         for (i, t) in self.manifest.tiles.iter().enumerate() {
             if t.start != next {
@@ -185,11 +185,11 @@ impl PointStore {
     }
 
     /// Marks the store as scratch: it is deleted at the end of the run.
-    pub fn mark_scratch(&mut self) {
+    pub(crate) fn mark_scratch(&mut self) {
         self.scratch = true;
     }
 
-    pub fn is_scratch(&self) -> bool {
+    pub(crate) fn is_scratch(&self) -> bool {
         self.scratch
     }
 
@@ -199,7 +199,7 @@ impl PointStore {
     }
 
     /// Where tile results are kept, if this store's run is resumable.
-    pub fn checkpoints(&self) -> Option<&Checkpoints> {
+    pub(crate) fn checkpoints(&self) -> Option<&Checkpoints> {
         self.checkpoints.as_ref()
     }
 
@@ -207,7 +207,7 @@ impl PointStore {
         self.manifest.count
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.manifest.count == 0
     }
 
@@ -220,7 +220,7 @@ impl PointStore {
     }
 
     /// Bounds of all stored points, relative to the origin.
-    pub fn relative_bounds(&self) -> Aabb {
+    pub(crate) fn relative_bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
         for t in &self.manifest.tiles {
             b.add(DVec3::from_array(t.points_min.map(f64::from)));
@@ -248,7 +248,7 @@ impl PointStore {
 
     /// Stored coordinates as flat f32 `x, y, z` triples (relative to the
     /// origin), without widening to f64: for passes that read one axis.
-    pub fn read_coords(
+    pub(crate) fn read_coords(
         &self,
         first: u64,
         count: u64,
@@ -268,7 +268,7 @@ impl PointStore {
     }
 
     /// Bounds of blocks `[first, first+count)` (relative to the origin).
-    pub fn read_blocks(
+    pub(crate) fn read_blocks(
         &self,
         first: u64,
         count: u64,
@@ -287,7 +287,7 @@ impl PointStore {
     }
 
     /// The store's directory.
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.dir
     }
 
@@ -297,7 +297,10 @@ impl PointStore {
     }
 
     /// Keeps the sampling statistics a normals pass measured.
-    pub fn set_sampling(&mut self, stats: sampling::SamplingStats) -> Result<(), StoreError> {
+    pub(crate) fn set_sampling(
+        &mut self,
+        stats: sampling::SamplingStats,
+    ) -> Result<(), StoreError> {
         self.manifest.sampling = Some(stats);
         self.save_manifest()
     }
@@ -309,7 +312,7 @@ impl PointStore {
 
 /// Writes the manifest atomically (temp + rename): a store whose manifest
 /// exists is complete.
-pub fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
+pub(crate) fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
     let path = dir.join(manifest::MANIFEST_FILE);
     let text = serde_json::to_string_pretty(manifest).map_err(|e| StoreError::Corrupt {
         path: path.clone(),

@@ -18,7 +18,7 @@ mod creased;
 mod error;
 pub mod fibonacci;
 mod mesh;
-pub mod rng;
+pub(crate) mod rng;
 mod sheets;
 mod stream;
 mod terrain;
@@ -43,7 +43,7 @@ pub struct Sample {
 }
 
 /// A noise-free point source on one surface.
-pub trait Sampler {
+pub(crate) trait Sampler {
     /// One point, distributed by the surface's sampling density.
     fn sample(&self, rng: &mut Rng) -> Sample;
     /// Total surface area.
@@ -210,7 +210,7 @@ impl Scan {
     pub fn len(&self) -> usize {
         self.points.len()
     }
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.points.is_empty()
     }
 }

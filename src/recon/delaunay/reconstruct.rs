@@ -27,7 +27,7 @@ const MARGIN_SPACINGS: f64 = 40.0;
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
 /// edge index, the tile's own columns.
-pub const BYTES_PER_POINT: u64 = 900;
+pub(crate) const BYTES_PER_POINT: u64 = 900;
 
 /// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
 /// per loaded point and nothing per stored point beyond the seam side's

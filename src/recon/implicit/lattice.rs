@@ -13,19 +13,19 @@
 use glam::DVec3;
 
 /// Bits of the x and y corner index in an edge key.
-pub const XY_BITS: u32 = 21;
+pub(crate) const XY_BITS: u32 = 21;
 /// Bits of the z corner index in an edge key. One less than x and y because
 /// the axis needs 2 bits and 3 x 21 + 2 = 65 does not fit; scans are wider
 /// than they are tall, so z gives up the bit.
-pub const Z_BITS: u32 = 20;
+pub(crate) const Z_BITS: u32 = 20;
 /// Smallest and largest x or y corner index an edge key can hold:
 /// `[-2^20, 2^20 - 1]`.
-pub const XY_MIN: i64 = -(1 << (XY_BITS - 1));
-pub const XY_MAX: i64 = (1 << (XY_BITS - 1)) - 1;
+pub(crate) const XY_MIN: i64 = -(1 << (XY_BITS - 1));
+pub(crate) const XY_MAX: i64 = (1 << (XY_BITS - 1)) - 1;
 /// Smallest and largest z corner index an edge key can hold:
 /// `[-2^19, 2^19 - 1]`.
-pub const Z_MIN: i64 = -(1 << (Z_BITS - 1));
-pub const Z_MAX: i64 = (1 << (Z_BITS - 1)) - 1;
+pub(crate) const Z_MIN: i64 = -(1 << (Z_BITS - 1));
+pub(crate) const Z_MAX: i64 = (1 << (Z_BITS - 1)) - 1;
 
 const AXIS_BITS: u32 = 2;
 const Z_SHIFT: u32 = AXIS_BITS;
@@ -104,7 +104,7 @@ impl Lattice {
 }
 
 /// Whether corner `c` can be packed into an edge key.
-pub fn in_key_range(c: [i64; 3]) -> bool {
+pub(crate) fn in_key_range(c: [i64; 3]) -> bool {
     (XY_MIN..=XY_MAX).contains(&c[0])
         && (XY_MIN..=XY_MAX).contains(&c[1])
         && (Z_MIN..=Z_MAX).contains(&c[2])

@@ -105,11 +105,11 @@ pub struct MeshWelder {
 }
 
 impl MeshWelder {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
-    pub fn push(&mut self, tri: &[CubeVertex; 3]) -> Result<(), LatticeError> {
+    pub(crate) fn push(&mut self, tri: &[CubeVertex; 3]) -> Result<(), LatticeError> {
         let mut ids = [0u32; 3];
         for (id, v) in ids.iter_mut().zip(tri) {
             *id = self.vertex_id(v)?;
@@ -130,7 +130,7 @@ impl MeshWelder {
         Ok(id)
     }
 
-    pub fn finish(self) -> IndexedMesh {
+    pub(crate) fn finish(self) -> IndexedMesh {
         self.mesh
     }
 }

@@ -89,7 +89,7 @@ impl ImplicitParams {
 /// a closed scan is of objects, and a piece with a hundredth of the main
 /// one's triangles is a stray cluster closed on itself (the 10M dragon's
 /// ten are 4 to 258 triangles beside 2.8 million).
-pub const CLOSED_MIN_PIECE: f64 = 0.01;
+pub(crate) const CLOSED_MIN_PIECE: f64 = 0.01;
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ImplicitReport {
@@ -206,7 +206,7 @@ pub fn reconstruct_implicit(
 /// mean distance to the true surface in spacings at cells of 3.7 / 2.9 /
 /// 2.2 spacings: 0.069 / 0.060 / 0.055 (Open3D Poisson depth 9: 0.072),
 /// the time about inversely proportional to the cell squared.
-pub const MLS_CELL_SPACINGS: f64 = 3.0;
+pub(crate) const MLS_CELL_SPACINGS: f64 = 3.0;
 
 /// The default cell: paper 1's `rho + delta` (section 2.6) for its own
 /// field; [`MLS_CELL_SPACINGS`] for the MLS field.

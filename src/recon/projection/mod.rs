@@ -34,23 +34,23 @@
 //! once fronts from different seeds or tiles meet (`surface.rs`,
 //! `orient.rs`).
 
-pub mod cloud;
-pub mod fan;
-pub mod frame;
-pub mod grow;
-pub mod holes;
-pub mod job;
-pub mod kernel;
-pub mod lattice;
-pub mod local;
-pub mod orient;
-pub mod params;
-pub mod reconstruct;
-pub mod star;
-pub mod stitch;
-pub mod surface;
-pub mod thin;
-pub mod triangulate;
+pub(crate) mod cloud;
+pub(crate) mod fan;
+pub(crate) mod frame;
+pub(crate) mod grow;
+pub(crate) mod holes;
+pub(crate) mod job;
+pub(crate) mod kernel;
+pub(crate) mod lattice;
+pub(crate) mod local;
+pub(crate) mod orient;
+pub(crate) mod params;
+pub(crate) mod reconstruct;
+pub(crate) mod star;
+pub(crate) mod stitch;
+pub(crate) mod surface;
+pub(crate) mod thin;
+pub(crate) mod triangulate;
 
 pub use params::ProjectionParams;
 pub use reconstruct::{reconstruct_projection, ProjectionError, ProjectionReport};

@@ -36,7 +36,6 @@ pub fn triangulate_tile(
         hoods: &hoods,
         centre: &centre,
         joinable: &joinable,
-        ids: &tile.ids,
         index: index.as_knn(),
     };
     let mut surface = Surface::new(tile.points.len());
