@@ -16,10 +16,13 @@ use crate::synth::{generate, mean_spacing_hint, Scan, Shape, SynthError, TriMesh
 
 const DRAGON_PLY_GZ: &[u8] = include_bytes!("../assets/dragon_q20k.ply.gz");
 
+/// Why the demo could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum DemoError {
+    /// Reading the embedded sample or writing an output failed.
     #[error(transparent)]
     Io(#[from] IoError),
+    /// A synthetic shape could not be sampled.
     #[error(transparent)]
     Synth(#[from] SynthError),
 }

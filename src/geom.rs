@@ -3,12 +3,14 @@
 use glam::DVec3;
 
 /// The scalar of all geometry that must be exact or reproducible.
-pub(crate) type Real = f64;
+pub type Real = f64;
 
 /// Axis-aligned box, `min <= max` on every axis once a point was added.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Corner of smallest coordinates.
     pub min: DVec3,
+    /// Corner of largest coordinates.
     pub max: DVec3,
 }
 
@@ -19,6 +21,7 @@ impl Aabb {
         max: DVec3::splat(f64::NEG_INFINITY),
     };
 
+    /// The box from `min` to `max` (not checked: `min > max` on an axis makes it empty).
     pub fn new(min: DVec3, max: DVec3) -> Self {
         Aabb { min, max }
     }
@@ -27,6 +30,7 @@ impl Aabb {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
+    /// Grows the box to contain `p`.
     pub fn add(&mut self, p: DVec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);

@@ -192,10 +192,13 @@ impl CurvatureKernel {
 /// was made with the same neighbourhood.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvatureMeta {
+    /// How the neighbourhood was chosen.
     pub hood: HoodChoice,
     /// Paper's mean spacing `d`.
     pub spacing: f64,
+    /// The neighbourhood the fits used, in absolute units.
     pub resolved: CurvatureHood,
+    /// Points of the store.
     pub points: u64,
     /// Points per flag bit: sparse, degenerate, ill-conditioned, unoriented.
     pub flagged: [u64; 4],
@@ -203,6 +206,7 @@ pub struct CurvatureMeta {
     pub rms: f64,
     /// Median of the points' RMS residuals (log-histogram bin edge).
     pub median_residual: f64,
+    /// The largest `|E_j|` of any fit (the paper's residual).
     pub max_error: f64,
     /// Percentiles 0..=100 of `|k_i|` (larger-magnitude principal curvature)
     /// over the oriented points (log-histogram bin edges: at most 1.1 % high).
@@ -222,6 +226,7 @@ impl CurvatureMeta {
         p[lo] * (1.0 - t) + p[hi] * t
     }
 
+    /// The metadata saved beside `store`'s curvature column, if any (`None` when absent or unreadable).
     pub fn load(store: &PointStore) -> Option<CurvatureMeta> {
         let text = std::fs::read_to_string(store.dir().join(CURVATURE_META_FILE)).ok()?;
         serde_json::from_str(&text).ok()
@@ -249,8 +254,11 @@ pub(crate) fn provenance(params: &CurvatureParams) -> Provenance {
 /// The curvature pass's outcome.
 #[derive(Clone, Debug)]
 pub struct CurvatureReport {
+    /// What the curvature column was made with and measured.
     pub meta: CurvatureMeta,
+    /// Tiles processed.
     pub tiles: usize,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
     /// Whether the normals were computed first (the store had none).
     pub computed_normals: bool,

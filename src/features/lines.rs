@@ -12,7 +12,9 @@ use std::path::Path;
 /// Polylines as a graph.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LineGraph {
+    /// Polyline vertex positions.
     pub vertices: Vec<DVec3>,
+    /// Segments `(a, b, kind)` between vertices `a` and `b`.
     pub edges: Vec<(u32, u32, LineKind)>,
     /// Per vertex: a corner (lines meet there).
     pub corners: Vec<bool>,

@@ -70,7 +70,12 @@ pub enum CurvatureHood {
     /// The k nearest points.
     Knn(usize),
     /// Paper 3's topological neighbours, k per query.
-    Topological { k: usize, max_iterations: usize },
+    Topological {
+        /// Neighbours per query.
+        k: usize,
+        /// Cap on the mean reverse shift's iterations per point.
+        max_iterations: usize,
+    },
 }
 
 /// How the neighbourhood is chosen, before the data's spacing is known.
@@ -82,13 +87,19 @@ pub enum HoodChoice {
     Auto,
     /// Radius in units of the mean spacing `d` (paper: 2..4; its dragon 2.8).
     Radius {
+        /// The radius, in mean spacings.
         spacings: f64,
     },
+    /// The k nearest points.
     Knn {
+        /// Neighbours per point.
         k: usize,
     },
+    /// Paper 3's topological neighbours, k per query.
     Topological {
+        /// Neighbours per query.
         k: usize,
+        /// Cap on the mean reverse shift's iterations per point.
         max_iterations: usize,
     },
 }
@@ -127,6 +138,7 @@ impl HoodChoice {
         }
     }
 
+    /// Refuses a radius that is not positive and finite, or a k too small for a quadric fit.
     pub fn validate(&self) -> Result<(), FeaturesError> {
         let ok = match *self {
             HoodChoice::Auto => true,
@@ -149,27 +161,37 @@ impl HoodChoice {
 /// Parameters of the curvature pass.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct CurvatureParams {
+    /// Which neighbourhood the quadrics are fitted to.
     pub hood: HoodChoice,
     /// Normals to compute first when the store has none.
     pub normals: NormalParams,
 }
 
+/// Errors of the curvature and feature-line passes.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum FeaturesError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Computing the normals first failed.
     #[error(transparent)]
     Normals(#[from] crate::normals::NormalsError),
+    /// Writing an output failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// A parameter is out of range; the message says which and why.
     #[error("{0}")]
     BadParameter(String),
+    /// The curvature metadata beside the store cannot be written.
     #[error("{path}: {reason}")]
     Meta {
+        /// The metadata file.
         path: std::path::PathBuf,
+        /// Why it cannot be written.
         reason: String,
     },
 }

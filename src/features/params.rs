@@ -10,6 +10,7 @@ use std::f64::consts::PI;
 /// User-facing parameters; lengths in mean spacings `d`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FeatureParams {
+    /// The curvature pass (and the normals it computes first when the store has none).
     pub curvature: CurvatureParams,
     /// Curvature threshold `alpha` (absolute, 1 / length); default
     /// [`default_alpha`].
@@ -27,7 +28,9 @@ pub struct FeatureParams {
     pub epsilon: f64,
     /// Smoothing radius: start, growth factor, limit (section 4).
     pub delta: f64,
+    /// Growth factor of the smoothing radius.
     pub delta_growth: f64,
+    /// Largest smoothing radius.
     pub delta_max: f64,
     /// Correlation the smoothing neighbourhood must reach (paper: 0.6).
     pub rho: f64,
@@ -36,6 +39,7 @@ pub struct FeatureParams {
     /// Connection cone: length in `gamma_max` (the paper's `alpha`),
     /// half-angle `mu` in radians.
     pub cone_length: f64,
+    /// Half-angle `mu` of the connection cone, radians.
     pub cone_angle: f64,
     /// Relaxation passes (paper: 1-2).
     pub relax_passes: usize,
@@ -44,6 +48,7 @@ pub struct FeatureParams {
     /// 10 (100k points, seed 1, noise 0.1 sp, ridge recall: stepped block
     /// 94.2 / 94.5 / 95.4 %, wavy sheet 93.6 / 93.3 / 93.3 %).
     pub refine: f64,
+    /// Width of the across-line refinement, in `d`.
     pub refine_width: f64,
     /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
     pub cell: f64,
@@ -81,22 +86,39 @@ impl Default for FeatureParams {
 /// Thresholds in absolute units, for one cloud.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolved {
+    /// Curvature threshold `alpha` (1 / length).
     pub alpha: f64,
+    /// Enhancement radius `phi`.
     pub phi: f64,
+    /// Growth-circle radius `R`.
     pub growth_radius: f64,
+    /// Growth-circle sector angle, radians.
     pub sector: f64,
+    /// Fewest points a curve-fitting set keeps.
     pub min_curve_points: usize,
+    /// Distance below which corners merge.
     pub epsilon: f64,
+    /// First smoothing radius.
     pub delta: f64,
+    /// Growth factor of the smoothing radius.
     pub delta_growth: f64,
+    /// Largest smoothing radius.
     pub delta_max: f64,
+    /// Correlation the smoothing neighbourhood must reach.
     pub rho: f64,
+    /// Polyline growth radius `gamma_max`.
     pub gamma_max: f64,
+    /// Connection cone length.
     pub cone_length: f64,
+    /// Connection cone half-angle `mu`, radians.
     pub cone_angle: f64,
+    /// Relaxation passes.
     pub relax_passes: usize,
+    /// Across-line refinement radius (0: off).
     pub refine: f64,
+    /// Across-line refinement width.
     pub refine_width: f64,
+    /// Side of the lattice cells polylines grow in.
     pub cell: f64,
     /// The curvature neighbourhood, to recompute a feature point's quadric.
     pub hood: CurvatureHood,
@@ -126,6 +148,7 @@ pub(crate) fn default_alpha(meta: &CurvatureMeta) -> f64 {
 }
 
 impl FeatureParams {
+    /// Refuses a threshold that is not finite, or not positive where a length or count must be.
     pub fn validate(&self) -> Result<(), FeaturesError> {
         self.curvature.hood.validate()?;
         let positive = [
@@ -224,7 +247,7 @@ impl Resolved {
 
     /// Radius around a point that its quadric's neighbourhood needs, for a
     /// radius neighbourhood (0 for k nearest: checked per point).
-    pub(crate) fn fit_radius(&self) -> f64 {
+    pub fn fit_radius(&self) -> f64 {
         match self.hood {
             CurvatureHood::Radius(r) => r,
             _ => 0.0,

@@ -66,6 +66,7 @@ pub struct KernelCost {
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[non_exhaustive]
 pub enum BudgetError {
+    /// No plan fits the budget: the run needs at least `needed` bytes.
     #[error(
         "--mem {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
         budget = crate::units::human_bytes(*.budget),
@@ -73,9 +74,13 @@ pub enum BudgetError {
         for_points = if *.points > 0 { format!(" for {} points", .points) } else { String::new() }
     )]
     TooSmall {
+        /// The budget, in bytes.
         budget: u64,
+        /// Points the run processes (0 when not known yet).
         points: u64,
+        /// The smallest budget that fits, in bytes.
         needed: u64,
+        /// Which part of the run does not fit.
         reason: &'static str,
     },
 }
@@ -83,7 +88,9 @@ pub enum BudgetError {
 /// Every size a run uses, fitted to the promise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MemoryPlan {
+    /// The budget the plan fits.
     pub budget: MemoryBudget,
+    /// Points of the run the plan is sized for.
     pub points: u64,
     /// Core points per tile the planner aims for.
     pub tile_points: u64,
@@ -91,8 +98,11 @@ pub struct MemoryPlan {
     pub global_in_memory: bool,
     /// Bytes kept beside the tiles for state that grows with the points.
     pub reserved: u64,
+    /// Most occupied histogram cells held at once while the store is laid out.
     pub histogram_cells: usize,
+    /// Bytes of per-tile write buffers during the scatter pass, in total.
     pub scatter_buffer: usize,
+    /// Input-order records held at once when exporting.
     pub window_points: u64,
     /// Estimated nodes of the external global pass (0 in memory).
     pub nodes: u64,

@@ -25,6 +25,7 @@ pub(crate) const SLIVER_DEGREES: f64 = 10.0;
 /// Triangles per parallel chunk; fixed so float sums are reproducible.
 const CHUNK: usize = 1 << 16;
 
+/// The distribution of the triangles' smallest angles: how far a mesh is from slivers.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct AngleReport {
     /// Triangles measured.
@@ -35,6 +36,7 @@ pub struct AngleReport {
     pub slivers: u64,
     /// `slivers / triangles` (0 for no triangle).
     pub sliver_share: f64,
+    /// Mean of the triangles' smallest angles, in degrees (0 for no triangle).
     pub mean_min_angle_deg: f64,
     /// The smallest angle of the whole mesh (`None` for no triangle).
     pub smallest_angle_deg: Option<f64>,

@@ -46,11 +46,14 @@ use glam::DVec3;
 /// below tolerate invalid data (they skip and count it) rather than panic.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions.
     pub vertices: Vec<DVec3>,
+    /// Triangles as three indices into `vertices`; the order of the corners sets the orientation.
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl Mesh {
+    /// The mesh of `vertices` and `triangles` (not validated).
     pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
         Mesh {
             vertices,
@@ -96,7 +99,7 @@ impl Mesh {
 
     /// Sum of triangle areas, skipping invalid triangles. Summed in fixed
     /// order, so the result is reproducible.
-    pub(crate) fn area(&self) -> f64 {
+    pub fn area(&self) -> f64 {
         self.triangles
             .iter()
             .filter_map(|&t| self.corners(t))

@@ -51,11 +51,16 @@ pub enum Neighbourhood {
     /// Paper 3's topological neighbours (k per query, capped iterations).
     Topological(TopoParams),
     /// The exact k nearest neighbours.
-    Knn { k: usize },
+    Knn {
+        /// Neighbours per point, the point itself excluded.
+        k: usize,
+    },
 }
 
+/// What the neighbours pass computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NeighbourParams {
+    /// Which neighbourhood every point gets.
     pub neighbourhood: Neighbourhood,
     /// kNN structure for [`Neighbourhood::Knn`] (the topological mode uses
     /// the paper's R*-tree).
@@ -72,6 +77,7 @@ impl Default for NeighbourParams {
 }
 
 impl NeighbourParams {
+    /// The exact `k` nearest neighbours, default backend.
     pub fn knn(k: usize) -> Self {
         NeighbourParams {
             neighbourhood: Neighbourhood::Knn { k },
@@ -79,6 +85,7 @@ impl NeighbourParams {
         }
     }
 
+    /// Paper 3's topological neighbours of `k` per query, at most `max_iterations` reverse shifts.
     pub fn topological(k: usize, max_iterations: usize) -> Self {
         NeighbourParams {
             neighbourhood: Neighbourhood::Topological(TopoParams { k, max_iterations }),
@@ -86,6 +93,7 @@ impl NeighbourParams {
         }
     }
 
+    /// The `k` of either neighbourhood.
     pub fn k(&self) -> usize {
         match self.neighbourhood {
             Neighbourhood::Topological(p) => p.k,
@@ -161,34 +169,52 @@ impl NeighbourParams {
 /// How the lists are written.
 #[derive(Clone, Copy, Debug)]
 pub struct OutputOptions {
+    /// The file format of the lists.
     pub format: OutputFormat,
     /// Points per output window (memory: see
     /// [`NeighbourParams::window_bytes_per_point`]).
     pub window_points: u64,
 }
 
+/// Errors of the neighbours pass.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NeighboursError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Writing the output failed.
     #[error(transparent)]
     Io(#[from] IoError),
+    /// The parameters are out of range.
     #[error("bad neighbourhood parameters: {reason}")]
-    BadParams { reason: String },
+    BadParams {
+        /// Which parameter and why.
+        reason: String,
+    },
+    /// The spilled per-tile lists do not add up (a damaged scratch file).
     #[error("neighbour scratch records are inconsistent: {reason}")]
-    Scratch { reason: String },
+    Scratch {
+        /// What does not add up.
+        reason: String,
+    },
 }
 
+/// What the neighbours pass did.
 #[derive(Clone, Debug, Default)]
 pub struct NeighboursReport {
+    /// Points given a list.
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
     /// Total neighbour entries written.
     pub neighbours: u64,
+    /// Size and iteration histograms over all points.
     pub stats: HoodStats,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 

@@ -29,8 +29,11 @@ use super::unionfind::UnionFind;
 /// never enter [`Edge::key`], so the tree does not depend on the tiling.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
+    /// Edge cost, its sign bit set when the edge flips the orientation (`n_a . n_b < 0`).
     pub w: f64,
+    /// Store index of one end.
     pub a: u32,
+    /// Store index of the other end.
     pub b: u32,
     /// Union-find slots of `a` and `b`, in that order.
     pub slots: [u32; 2],
@@ -38,7 +41,7 @@ pub struct Edge {
 
 impl Edge {
     /// The paper's edge: cost `1 - |n_a . n_b|`.
-    pub(crate) fn new(a: u32, b: u32, dot: f64) -> Self {
+    pub fn new(a: u32, b: u32, dot: f64) -> Self {
         Edge::with_cost(a, b, 1.0 - dot.abs(), dot)
     }
 
@@ -69,6 +72,7 @@ impl Edge {
         self.w.is_sign_negative()
     }
 
+    /// Bytes of one edge on disk.
     pub const BYTES: usize = 24;
 
     pub(crate) fn to_bytes(self) -> [u8; Self::BYTES] {

@@ -50,10 +50,18 @@ pub enum Orientation {
     Viewpoint(DVec3),
     /// Paper 5's six sources (extreme points along +-X, +-Y, +-Z), spread
     /// where `|n_i . n_j| >= tau` ([`sources`]).
-    SixSources { tau: f64 },
+    SixSources {
+        /// Least `|n_i . n_j|` across which the orientation spreads, in `[0, 1]`.
+        tau: f64,
+    },
     /// One source, the point farthest along `direction` (single-sheet
     /// models, e.g. terrain with +Z).
-    SingleSource { direction: DVec3, tau: f64 },
+    SingleSource {
+        /// The direction the source point is farthest along (not zero).
+        direction: DVec3,
+        /// Least `|n_i . n_j|` across which the orientation spreads, in `[0, 1]`.
+        tau: f64,
+    },
     /// Leave the canonical PCA sign (largest component positive).
     None,
 }
@@ -84,7 +92,10 @@ pub enum NormalHood {
     /// [`crate::spatial::topological`]): k per query, so `|T|` lies in
     /// `[k, ~3k]`. Near a density change the k nearest crowd to the dense
     /// side; T adds the sparse side, which balances the plane fit.
-    Topological { max_iterations: usize },
+    Topological {
+        /// Cap on the mean reverse shift's iterations per point.
+        max_iterations: usize,
+    },
 }
 
 impl NormalHood {
@@ -98,6 +109,7 @@ impl NormalHood {
     }
 }
 
+/// How normals are computed: the tangent-plane neighbourhood and how the normals get their sign.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NormalParams {
     /// Neighbours per point besides the point itself (paper: 8..15); per
@@ -105,8 +117,11 @@ pub struct NormalParams {
     pub k: usize,
     /// kNN structure (the topological neighbourhood uses paper 3's R*-tree).
     pub backend: KnnBackend,
+    /// Which neighbourhood a tangent plane uses.
     pub neighbourhood: NormalHood,
+    /// How the normals get their sign.
     pub orientation: Orientation,
+    /// Cost of a spanning-tree edge (with [`Orientation::SpanningTree`]).
     pub cost: EdgeCost,
 }
 
@@ -206,30 +221,45 @@ impl NormalParams {
     }
 }
 
+/// Errors of the normals pass.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NormalsError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// The six-source (or single-source) orientation failed.
     #[error(transparent)]
     Sources(#[from] sources::SourcesError),
+    /// The parameters cannot give normals; the message says which and why.
     #[error("normal parameters: {0}")]
     BadParameter(String),
 }
 
+/// What the normals pass did.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NormalsReport {
+    /// Points given a normal (or flagged degenerate).
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
+    /// Points whose neighbourhood spans no plane: normal zero, flagged.
     pub degenerate: u64,
+    /// Points with a normal the orientation could not reach: sign left as PCA gave it, flagged.
     pub unoriented: u64,
+    /// Connected components the orientation found.
     pub components: usize,
+    /// Edges of the spanning forest over all tiles.
     pub forest_edges: u64,
+    /// Sampling density and noise measured on the way.
     pub sampling: SamplingStats,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 

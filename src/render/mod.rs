@@ -14,7 +14,7 @@ use glam::DVec3;
 
 /// An orthographic camera looking along `forward`, framing a box.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Camera {
+pub struct Camera {
     right: DVec3,
     up: DVec3,
     forward: DVec3,
@@ -92,8 +92,11 @@ impl Camera {
 /// An RGB image with a depth buffer.
 #[derive(Clone, Debug)]
 pub struct Canvas {
+    /// Image width, pixels.
     pub width: usize,
+    /// Image height, pixels.
     pub height: usize,
+    /// Pixels row by row from the top left.
     pub rgb: Vec<[u8; 3]>,
     depth: Vec<f64>,
     camera: Camera,
@@ -111,7 +114,8 @@ impl Canvas {
         }
     }
 
-    pub(crate) fn camera(&self) -> &Camera {
+    /// The camera the image was drawn with.
+    pub fn camera(&self) -> &Camera {
         &self.camera
     }
 
@@ -205,7 +209,7 @@ impl Canvas {
     }
 
     /// The colour at pixel `(x, y)`.
-    pub(crate) fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
+    pub fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
         self.rgb[y * self.width + x]
     }
 

@@ -29,17 +29,32 @@ pub enum Job {
     Until(String),
     /// Only `tiles` of the tile stage `stage`, then stop; earlier tile
     /// stages must be complete.
-    Tiles { stage: String, tiles: TileSet },
+    Tiles {
+        /// The tile stage.
+        stage: String,
+        /// The tiles of that stage to run.
+        tiles: TileSet,
+    },
 }
 
 /// Some tiles of a stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TileSet {
     /// Tiles `first..=last`.
-    Range { first: usize, last: usize },
+    Range {
+        /// First tile of the range.
+        first: usize,
+        /// Last tile of the range (inclusive).
+        last: usize,
+    },
     /// The `index`-th of `count` contiguous, nearly equal shares (a
     /// scheduler's array task does not know the tile count when submitted).
-    Share { index: usize, count: usize },
+    Share {
+        /// Which share, 0-based.
+        index: usize,
+        /// How many shares the stage is cut into.
+        count: usize,
+    },
 }
 
 impl TileSet {
@@ -69,6 +84,7 @@ impl std::fmt::Display for TileSet {
 #[derive(Clone, Debug)]
 pub struct Checkpoints {
     dir: PathBuf,
+    /// What this process is to do in the run directory.
     pub job: Job,
     /// The stage where the job stopped as asked, shared by the clones (the
     /// application learns it there rather than from an error chain).
@@ -179,7 +195,8 @@ impl Checkpoints {
         Ok(removed)
     }
 
-    pub(crate) fn dir(&self) -> &Path {
+    /// The run directory holding the tile results.
+    pub fn dir(&self) -> &Path {
         &self.dir
     }
 }

@@ -47,31 +47,64 @@ pub(crate) const XYZ_FILE: &str = "xyz.f32";
 pub(crate) const INDEX_FILE: &str = "index.u64";
 pub(crate) const BLOCKS_FILE: &str = "blocks.f32";
 
+/// Errors of the point store; each names the store (or input) path concerned.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum StoreError {
+    /// The operating system refused a read or write of `path`.
     #[error("{path}: {source}")]
     Os {
+        /// The file read or written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
+    /// The directory is not a point store this version can read.
     #[error("{path}: not a valid point store: {reason}")]
-    Corrupt { path: PathBuf, reason: String },
+    Corrupt {
+        /// The store directory or file.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The input could not be read.
     #[error(transparent)]
     Input(#[from] crate::io::IoError),
+    /// The input holds no point.
     #[error("{path}: no points to process")]
-    Empty { path: PathBuf },
+    Empty {
+        /// The input read.
+        path: PathBuf,
+    },
+    /// The input holds more points than a store can index.
     #[error("{path}: {count} points exceed the supported {max}")]
-    TooMany { path: PathBuf, count: u64, max: u64 },
+    TooMany {
+        /// The input read.
+        path: PathBuf,
+        /// Points found.
+        count: u64,
+        /// Most points a store holds.
+        max: u64,
+    },
+    /// The spatial index could not be built over the points.
     #[error(transparent)]
     Index(#[from] crate::spatial::IndexError),
+    /// A pass needs a column the store does not have.
     #[error("store has no `{column}` column (run the pass that computes it first)")]
-    MissingColumn { column: String },
+    MissingColumn {
+        /// The column's file name.
+        column: String,
+    },
+    /// The memory budget cannot hold what the plan needs.
     #[error(transparent)]
     Budget(#[from] crate::memory::BudgetError),
+    /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
-    Busy { path: PathBuf },
+    Busy {
+        /// The store directory.
+        path: PathBuf,
+    },
 }
 
 impl StoreError {
@@ -189,7 +222,8 @@ impl PointStore {
         self.scratch = true;
     }
 
-    pub(crate) fn is_scratch(&self) -> bool {
+    /// Whether the store is scratch (deleted at the end of the run).
+    pub fn is_scratch(&self) -> bool {
         self.scratch
     }
 
@@ -203,18 +237,22 @@ impl PointStore {
         self.checkpoints.as_ref()
     }
 
+    /// Points in the store.
     pub fn len(&self) -> u64 {
         self.manifest.count
     }
 
-    pub(crate) fn is_empty(&self) -> bool {
+    /// Whether the store holds no point.
+    pub fn is_empty(&self) -> bool {
         self.manifest.count == 0
     }
 
+    /// The tiles, in store order.
     pub fn tiles(&self) -> &[TileEntry] {
         &self.manifest.tiles
     }
 
+    /// The f64 origin the f32 stored coordinates are relative to.
     pub fn origin(&self) -> DVec3 {
         DVec3::from_array(self.manifest.origin)
     }

@@ -63,6 +63,7 @@ struct Planned {
     transform: Transform,
 }
 
+/// A reader of an E57 file: the selected scans in file order, each point moved into the world frame by its scan's pose.
 pub struct E57Reader {
     info: SourceInfo,
     scans: Vec<ScanInfo>,

@@ -46,47 +46,72 @@ pub fn cost() -> KernelCost {
     }
 }
 
+/// Parameters of the Delaunay-based (paper 4) reconstruction.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelaunayParams {
     /// Absolute hole radius; default: [`Hole::Local`] with [`LOCAL_HOLE`].
     pub hole: Option<f64>,
 }
 
+/// What the Delaunay-based reconstruction did.
 #[derive(Clone, Debug, Default)]
 pub struct DelaunayReport {
+    /// Vertices of the mesh written.
     pub vertices: u64,
+    /// Triangles of the mesh written.
     pub triangles: u64,
+    /// Connected components of the mesh.
     pub components: u64,
+    /// Components that could not be wound consistently (non-orientable).
     pub non_orientable: u64,
+    /// Input points that repeat another point's coordinates, left out of the triangulations.
     pub duplicates: u64,
+    /// Incompatible triangles deleted as type 1 (paper 4 section 2.3).
     pub type1: u64,
+    /// Incompatible triangles deleted as type 2.
     pub type2: u64,
+    /// Triangles deleted by the forced choice at incompatible edges.
     pub forced: u64,
+    /// Triangles added to close small holes.
     pub patches: u64,
+    /// Incompatible edges left after the last cleanup round.
     pub incompatible_left: u64,
     /// Largest triangulation of a tile, bytes per loaded point.
     pub triangulation_bytes_per_point: f64,
+    /// The hole-closing rule used, for the report.
     pub hole: String,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 
+/// Errors of the Delaunay-based reconstruction.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DelaunayReconError {
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Writing the mesh failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// The hole radius given is zero, negative or not finite.
     #[error("--hole {0} must be a positive finite number")]
     BadHole(f64),
+    /// The store holds more points than a PLY index can name.
     #[error("{points} points: more than the 2^31 vertices a PLY index holds")]
-    TooManyPoints { points: u64 },
+    TooManyPoints {
+        /// Points of the store.
+        points: u64,
+    },
+    /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] crate::store::StoreError),
+    /// The scratch file of the seam triangles could not be written or read.
     #[error("triangle spool: {0}")]
     Spool(#[from] std::io::Error),
 }
 
+/// Reconstructs a mesh from the points of `store` with paper 4's Delaunay-based method, tile by tile, writing it to `output` in `format`; tiled output equals untiled.
 pub fn reconstruct_delaunay(
     store: &mut PointStore,
     params: &DelaunayParams,

@@ -6,11 +6,13 @@
 use crate::memory::plan::KernelCost;
 use crate::normals::{NormalHood, NormalParams};
 
+/// Parameters of the local-projection triangulation (paper 2); lengths in local spacings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionParams {
     /// Neighbourhood of each vertex: the k nearest (paper 2 section 2.4,
     /// k in 6..15) or paper 3's topological neighbours.
     pub k: usize,
+    /// Which neighbourhood `k` counts (the k nearest, or paper 3's topological neighbours).
     pub neighbourhood: NormalHood,
     /// A point closer than this many local spacings to a point of smaller
     /// input id is left out (0 keeps every point); see `thin.rs`.

@@ -20,6 +20,7 @@ pub struct TileSurface {
     pub processed: u64,
 }
 
+/// Grows the local-projection surface over the points of one tile, margins included.
 pub fn triangulate_tile(
     tile: &TilePoints,
     params: &ProjectionParams,
