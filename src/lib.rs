@@ -4,7 +4,7 @@
 //! One data flow serves every capability (see `ARCHITECTURE.md`): a reader
 //! ([`io`]) streams points into a point store ([`store`]), a memory-mapped
 //! directory sorted into spatial tiles; a tile kernel runs on each tile with
-//! an overlap margin ([`tiling`], scheduled by [`pipeline`]); its seam
+//! an overlap margin (`tiling`, scheduled by [`pipeline`]); its seam
 //! policy joins the tiles exactly; outputs stream to disk. Memory stays
 //! within a budget ([`memory`]) whatever the input size.
 //!

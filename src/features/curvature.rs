@@ -1,6 +1,6 @@
 //! The curvature pass (paper 5 section 2): per point, the quadric of its
 //! neighbourhood in the PCA frame oriented by the store's normals
-//! ([`super::quadric`]), and at the point `k1 >= k2`, `H`, `K` and the fit's
+//! (`super::quadric`), and at the point `k1 >= k2`, `H`, `K` and the fit's
 //! RMS residual, into the store columns [`super::CURVATURE`] and
 //! [`super::CURVATURE_FLAGS`].
 //!
@@ -188,7 +188,7 @@ impl CurvatureKernel {
 }
 
 /// What produced a store's curvature column and what it measured, saved
-/// beside it ([`CURVATURE_META_FILE`]) so `features` reuses it only when it
+/// beside it (`CURVATURE_META_FILE`) so `features` reuses it only when it
 /// was made with the same neighbourhood.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvatureMeta {
@@ -272,7 +272,7 @@ pub fn compute_curvature(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<CurvatureReport, FeaturesError> {
-    params.hood.validate()?;
+    params.validate()?;
     let computed_normals = ensure_normals(store, &params.normals, opts, progress)?.is_some();
     let estimate = ensure_spacing(store)?;
     let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;

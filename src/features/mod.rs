@@ -3,7 +3,7 @@
 //!
 //! - Curvature (section 2, [`curvature`]): per point, the quadratic height
 //!   function over the PCA frame of the neighbourhood within `r = 2..4 d`
-//!   (`d` the mean distance to the 6 nearest neighbours, [`spacing`]), its
+//!   (`d` the mean distance to the 6 nearest neighbours, `spacing`), its
 //!   principal, mean and Gaussian curvatures and MLS residual. A tile
 //!   kernel, per-point local: tiled equals untiled bit for bit. Results land
 //!   in the store columns [`CURVATURE`] and [`CURVATURE_FLAGS`].
@@ -82,7 +82,7 @@ pub enum CurvatureHood {
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
 pub enum HoodChoice {
     /// The default: a radius of 3 mean spacings `d`, more on noisy input
-    /// ([`noise_adaptive_radius`]).
+    /// (`noise_adaptive_radius`).
     #[default]
     Auto,
     /// Radius in units of the mean spacing `d` (paper: 2..4; its dragon 2.8).
@@ -165,6 +165,15 @@ pub struct CurvatureParams {
     pub hood: HoodChoice,
     /// Normals to compute first when the store has none.
     pub normals: NormalParams,
+}
+
+impl CurvatureParams {
+    /// Refuses an unusable neighbourhood, or normal parameters that cannot
+    /// give normals.
+    pub fn validate(&self) -> Result<(), FeaturesError> {
+        self.hood.validate()?;
+        Ok(self.normals.validate()?)
+    }
 }
 
 /// Errors of the curvature and feature-line passes.

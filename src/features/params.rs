@@ -13,7 +13,7 @@ pub struct FeatureParams {
     /// The curvature pass (and the normals it computes first when the store has none).
     pub curvature: CurvatureParams,
     /// Curvature threshold `alpha` (absolute, 1 / length); default
-    /// [`default_alpha`].
+    /// `default_alpha`.
     pub alpha: Option<f64>,
     /// Enhancement radius `phi` (section 3).
     pub phi: f64,
@@ -50,7 +50,7 @@ pub struct FeatureParams {
     pub refine: f64,
     /// Width of the across-line refinement, in `d`.
     pub refine_width: f64,
-    /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
+    /// Side of the lattice cells polylines grow in (see `super::kernel`).
     pub cell: f64,
 }
 
@@ -150,7 +150,7 @@ pub(crate) fn default_alpha(meta: &CurvatureMeta) -> f64 {
 impl FeatureParams {
     /// Refuses a threshold that is not finite, or not positive where a length or count must be.
     pub fn validate(&self) -> Result<(), FeaturesError> {
-        self.curvature.hood.validate()?;
+        self.curvature.validate()?;
         let positive = [
             ("phi", self.phi),
             ("growth radius", self.growth_radius),

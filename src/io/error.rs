@@ -52,7 +52,7 @@ pub enum IoError {
         found: u64,
     },
     /// A record has a NaN or infinite coordinate and the policy rejects such records.
-    #[error("{path}: record {record}: coordinate is not finite ({value}); use --skip-invalid to drop such points")]
+    #[error("{path}: record {record}: coordinate is not finite ({value})")]
     NonFinite {
         /// The file read.
         path: PathBuf,

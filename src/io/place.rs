@@ -83,7 +83,7 @@ pub fn check_space(
                 return Err(IoError::Unwritable {
                     path: dir.to_path_buf(),
                     reason: format!(
-                        "the {what} need about {} here but only {} is free (--scratch-dir puts the scratch files elsewhere)",
+                        "the {what} need about {} here but only {} is free",
                         crate::units::human_bytes(bytes),
                         crate::units::human_bytes(free)
                     ),

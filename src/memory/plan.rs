@@ -13,9 +13,9 @@
 //!   loaded point;
 //! - global pass: the kernel's per-point state when it fits half the
 //!   budget; otherwise the contracted graph of the external pass, whose
-//!   nodes are the tiles' boundary points: about [`NODES_PER_SQRT_TILE`] /
+//!   nodes are the tiles' boundary points: about `NODES_PER_SQRT_TILE` /
 //!   sqrt(tile points) of all points on a scanned surface, at
-//!   [`BYTES_PER_NODE`] each;
+//!   `BYTES_PER_NODE` each;
 //! - export: a window of `window_points` input-order records.
 
 use super::MemoryBudget;
@@ -68,7 +68,7 @@ pub struct KernelCost {
 pub enum BudgetError {
     /// No plan fits the budget: the run needs at least `needed` bytes.
     #[error(
-        "--mem {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
+        "memory budget {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
         budget = crate::units::human_bytes(*.budget),
         needed = crate::units::human_bytes(*.needed),
         for_points = if *.points > 0 { format!(" for {} points", .points) } else { String::new() }
@@ -193,7 +193,7 @@ impl MemoryPlan {
                 budget: self.budget.bytes,
                 points: self.points,
                 needed: (BASE_BYTES + reserved + per_tile).div_ceil(1 << 20) << 20,
-                reason: "the store's largest tile (rebuild it with `scanmesh tile --mem`)",
+                reason: "the store's largest tile: the store was tiled for a larger budget",
             });
         }
         Ok((self.budget.threads + 1).min(fit))

@@ -30,9 +30,9 @@ const CHUNK: usize = 1 << 16;
 pub struct AngleReport {
     /// Triangles measured.
     pub triangles: u64,
-    /// Count per [`BIN_DEGREES`] bin of the smallest angle.
+    /// Count per `BIN_DEGREES` bin of the smallest angle.
     pub min_angle_histogram: [u64; BINS],
-    /// Smallest angle below [`SLIVER_DEGREES`].
+    /// Smallest angle below `SLIVER_DEGREES`.
     pub slivers: u64,
     /// `slivers / triangles` (0 for no triangle).
     pub sliver_share: f64,

@@ -1,6 +1,6 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
 //! topology metrics (`quality`), smallest angles ([`angles`]),
-//! self-intersecting pairs ([`self_intersect`]), distances to a reference ([`distance`]),
+//! self-intersecting pairs (`self_intersect`), distances to a reference ([`distance`]),
 //! streaming PLY/OBJ output (`write`) and procedural shapes for tests and
 //! benches ([`shapes`]).
 //!

@@ -100,7 +100,7 @@ pub struct QualityReport {
     pub degenerate_triangles: u64,
     /// Triangles that use one vertex twice.
     pub repeated_index_triangles: u64,
-    /// Triangles whose corners are collinear up to [`ZERO_AREA_RELATIVE_HEIGHT`].
+    /// Triangles whose corners are collinear up to `ZERO_AREA_RELATIVE_HEIGHT`.
     pub zero_area_triangles: u64,
     /// Manifold edges whose two triangles run it in the same direction.
     pub inconsistent_edges: u64,

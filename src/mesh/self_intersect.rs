@@ -31,7 +31,7 @@ pub struct SelfIntersectionReport {
     pub pairs: u64,
     /// Triangles in at least one intersecting pair.
     pub triangles_involved: u64,
-    /// The first [`LISTED_PAIRS`] pairs (triangle indices, lower first),
+    /// The first `LISTED_PAIRS` pairs (triangle indices, lower first),
     /// in order.
     pub first_pairs: Vec<[u32; 2]>,
 }

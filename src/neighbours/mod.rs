@@ -9,10 +9,10 @@
 //! output is in input order:
 //!
 //! 1. each tile's records, sorted by id, are appended to a scratch file with
-//!    a per-tile index of output-window boundaries ([`spill`]);
+//!    a per-tile index of output-window boundaries (`spill`);
 //! 2. a final pass fills one window of consecutive input ids at a time (one
 //!    contiguous byte range per tile, like `store::export`) and appends it to
-//!    the output ([`csr`]: binary CSR or text), written under a temporary
+//!    the output (`csr`: binary CSR or text), written under a temporary
 //!    name and renamed into place only when complete.
 //!
 //! Memory is the tiles in flight plus one window of lists (sized by the
@@ -155,7 +155,8 @@ impl NeighbourParams {
         factor * spacing * (self.k() as f64).sqrt()
     }
 
-    fn validate(&self) -> Result<(), NeighboursError> {
+    /// Refuses a `k` outside `1..=MAX_K`.
+    pub fn validate(&self) -> Result<(), NeighboursError> {
         let k = self.k();
         if !(1..=MAX_K).contains(&k) {
             return Err(NeighboursError::BadParams {
@@ -172,7 +173,7 @@ pub struct OutputOptions {
     /// The file format of the lists.
     pub format: OutputFormat,
     /// Points per output window (memory: see
-    /// [`NeighbourParams::window_bytes_per_point`]).
+    /// `NeighbourParams::window_bytes_per_point`).
     pub window_points: u64,
 }
 

@@ -26,7 +26,7 @@ use super::unionfind::UnionFind;
 /// global union-find keeps the two ends (their store indices), so Kruskal
 /// walks the union-find in the store's spatial order where input ids jump
 /// at random (10M points: the orientation passes 4.3 s -> 2.7 s). Slots
-/// never enter [`Edge::key`], so the tree does not depend on the tiling.
+/// never enter `Edge::key`, so the tree does not depend on the tiling.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
     /// Edge cost, its sign bit set when the edge flips the orientation (`n_a . n_b < 0`).
@@ -99,7 +99,7 @@ impl Edge {
 }
 
 /// Minimum spanning forest of `edges` over `n` local vertices, in
-/// [`Edge::key`] order. The same as sorting by key, dropping repeats of a
+/// `Edge::key` order. The same as sorting by key, dropping repeats of a
 /// pair and running Kruskal, but computed by filter-Kruskal (see the module
 /// doc); a pair given twice with one key and both signs keeps the sign that
 /// sorts first by the `w` bits (a tie the old sort left to chance).

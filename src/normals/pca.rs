@@ -61,7 +61,7 @@ pub enum Degenerate {
     /// All points at one location.
     #[error("all points coincide")]
     Coincident,
-    /// The two smallest eigenvalues agree within [`COLINEAR_TOLERANCE`] of
+    /// The two smallest eigenvalues agree within `COLINEAR_TOLERANCE` of
     /// the largest: points on a line, or an isotropic blob. Either way the
     /// normal is undetermined.
     #[error("normal undetermined (colinear or isotropic points)")]

@@ -63,7 +63,7 @@ pub trait TileKernel: Sync {
     /// Computes the tile's result from its core and margin points.
     fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
     /// The store columns the kernel reads: each tile carries their values
-    /// for every loaded point ([`TilePoints::column`]).
+    /// for every loaded point (`TilePoints::column`).
     fn reads(&self) -> &[ColumnSpec] {
         &[]
     }

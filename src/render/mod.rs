@@ -1,7 +1,7 @@
 //! A small software rasteriser for pictures of clouds, feature lines and
 //! meshes: an orthographic camera, a depth buffer, round point splats,
 //! depth-tested lines and Lambert-shaded triangles, written as PNG
-//! ([`png`]). No GPU, no window: the project draws its own figures.
+//! (`png`). No GPU, no window: the project draws its own figures.
 //!
 //! Depth is the distance along the viewing direction (smaller is nearer);
 //! every primitive is depth-tested per pixel, so drawing order only matters

@@ -80,6 +80,6 @@ pub struct TileEntry {
     pub points_min: [f32; 3],
     /// Upper corner of the tile's stored points (relative to the origin).
     pub points_max: [f32; 3],
-    /// First block (of [`super::BLOCK`] points) of this tile in the block table.
+    /// First block (of `super::BLOCK` points) of this tile in the block table.
     pub first_block: u64,
 }

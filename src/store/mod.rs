@@ -3,7 +3,7 @@
 //!
 //! Columns: `xyz.f32` (f32 x,y,z relative to the f64 origin), `index.u64`
 //! (each point's position in input order), `blocks.f32` (bounds of every
-//! [`BLOCK`] consecutive points of a tile, to find margin points without
+//! `BLOCK` consecutive points of a tile, to find margin points without
 //! reading whole neighbour tiles), and attribute columns later passes add
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 //! The input's own attributes (intensity, colour, ...) are kept in input

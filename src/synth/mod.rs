@@ -7,7 +7,7 @@
 //! Everything streams: [`stream`] yields one [`Sample`] at a time (or fills
 //! bounded chunks), so 10^7 points never need to be in memory at once;
 //! [`generate`] collects a small scan. Output is a pure function of
-//! `(shape, n, noise, seed)`, bit-identical across platforms (see [`rng`]).
+//! `(shape, n, noise, seed)`, bit-identical across platforms (see `rng`).
 //!
 //! Noise is isotropic Gaussian on positions (truth normals unchanged), drawn
 //! from a second generator so that the noise-free scan with the same seed

@@ -126,7 +126,7 @@ fn selected(
         return Err(IoError::E57 {
             path: path.to_path_buf(),
             reason: format!(
-                "--scans asks for scan {bad}, but the file has {} (0..{})",
+                "the scan selection names scan {bad}, but the file has {} (0..{})",
                 scans.len(),
                 scans.len().saturating_sub(1)
             ),

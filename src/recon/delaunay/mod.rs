@@ -1,10 +1,10 @@
 //! Reconstruction from the 3-D Delaunay triangulation by local flatness
 //! (paper 4, `/work/shared/papers/README.md` section 4): the triangulation
-//! ([`triangulation`], exact predicates with a symbolic tie-break in
-//! [`predicates`], insertion order in [`order`], invariants in [`check`]),
-//! the fans of nearly flat small triangles ([`umbrella`], [`fan`]), the
-//! deletion of incompatible triangles ([`cleanup`]), all three over one
-//! point set in [`select`], and the output winding ([`wind`]).
+//! (`triangulation`, exact predicates with a symbolic tie-break in
+//! `predicates`, insertion order in `order`, invariants in `check`),
+//! the fans of nearly flat small triangles (`umbrella`, `fan`), the
+//! deletion of incompatible triangles (`cleanup`), all three over one
+//! point set in `select`, and the output winding (`wind`).
 //!
 //! Rust has no production 3-D Delaunay triangulation: the `delaunay` crate
 //! is general-dimension and far too slow (about 1.7k points/s in its own

@@ -1,5 +1,5 @@
 //! `reconstruct --method delaunay` end to end over a store: the tile kernel
-//! ([`super::kernel`]), then the seam side: every tile's core points become
+//! (`super::kernel`), then the seam side: every tile's core points become
 //! the output vertices (store order), its owned triangles go to a spool
 //! with a global component number, and seam edges met from both sides join
 //! components in a parity union-find (the two triangles must run the edge
@@ -49,8 +49,18 @@ pub fn cost() -> KernelCost {
 /// Parameters of the Delaunay-based (paper 4) reconstruction.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelaunayParams {
-    /// Absolute hole radius; default: [`Hole::Local`] with [`LOCAL_HOLE`].
+    /// Absolute hole radius; default: `Hole::Local` with `LOCAL_HOLE`.
     pub hole: Option<f64>,
+}
+
+impl DelaunayParams {
+    /// Refuses a hole radius that is not positive and finite.
+    pub fn validate(&self) -> Result<(), DelaunayReconError> {
+        match self.hole {
+            Some(h) if !(h.is_finite() && h > 0.0) => Err(DelaunayReconError::BadHole(h)),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// What the Delaunay-based reconstruction did.
@@ -95,7 +105,7 @@ pub enum DelaunayReconError {
     #[error(transparent)]
     Mesh(#[from] MeshError),
     /// The hole radius given is zero, negative or not finite.
-    #[error("--hole {0} must be a positive finite number")]
+    #[error("hole radius {0} must be a positive finite number")]
     BadHole(f64),
     /// The store holds more points than a PLY index can name.
     #[error("{points} points: more than the 2^31 vertices a PLY index holds")]
@@ -120,9 +130,9 @@ pub fn reconstruct_delaunay(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<DelaunayReport, DelaunayReconError> {
+    params.validate()?;
     let hole = match params.hole {
-        Some(h) if h.is_finite() && h > 0.0 => Hole::Absolute(h),
-        Some(h) => return Err(DelaunayReconError::BadHole(h)),
+        Some(h) => Hole::Absolute(h),
         None => Hole::Local(LOCAL_HOLE),
     };
     if store.len() > i32::MAX as u64 {

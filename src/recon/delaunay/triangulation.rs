@@ -177,7 +177,7 @@ impl EdgeTable {
 }
 
 /// The Delaunay triangulation of a point set; ranks (input ids) break ties,
-/// see [`super::predicates`]. Vertices are numbered in insertion order (so
+/// see `super::predicates`. Vertices are numbered in insertion order (so
 /// the cells of one region address nearby memory) and keep their position,
 /// rank and index in the input.
 pub struct Delaunay {

@@ -21,7 +21,7 @@
 //! the neighbouring tile brings its twin, so the map is about the seam's
 //! size; an edge with a vertex private to the tile is settled within it.
 //! The mesh edges a patch must not repeat are kept only while one of their
-//! vertices is incomplete (a later tile may name it, [`super::owners`]) or
+//! vertices is incomplete (a later tile may name it, `super::owners`) or
 //! both are on the boundary.
 
 use super::hole_guard::{placed, NearHoles, MAX_TRIES};
@@ -61,7 +61,7 @@ pub(crate) struct BoundaryEdges {
     near: NearHoles,
 }
 
-/// What [`BoundaryEdges::fill`] did.
+/// What `BoundaryEdges::fill` did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HoleReport {
     pub filled: u64,

@@ -114,7 +114,7 @@ impl McCase {
     }
 }
 
-/// All 256 cases, indexed by [`case_index`].
+/// All 256 cases, indexed by `case_index`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct McTable {
     cases: [McCase; 256],

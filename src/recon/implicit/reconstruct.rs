@@ -27,7 +27,7 @@ pub struct ImplicitParams {
     /// The surface is closed: every corner is defined (paper 1 section 4.1).
     pub closed: bool,
     /// Drop connected pieces with fewer triangles than this share of the
-    /// largest piece's; default [`CLOSED_MIN_PIECE`] with `closed`, else 0.
+    /// largest piece's; default `CLOSED_MIN_PIECE` with `closed`, else 0.
     pub min_piece: Option<f64>,
     /// The signed distance (default: moving least squares).
     pub field: Field,

@@ -54,12 +54,12 @@ const CLOSED_WIDTH: f64 = 0.8;
 /// Which signed distance the corners and vertices take.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Field {
-    /// The moving-least-squares average of nearby planes ([`super::mls`]),
+    /// The moving-least-squares average of nearby planes (`super::mls`),
     /// vertices moved onto its zero set along their lattice edges.
     #[default]
     Mls,
     /// Paper 1 section 2.5: the nearest sample's plane (with `--closed`,
-    /// [`CLOSED_PLANES`] averaged), vertices linearly interpolated.
+    /// `CLOSED_PLANES` averaged), vertices linearly interpolated.
     Paper1,
 }
 

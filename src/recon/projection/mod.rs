@@ -3,14 +3,14 @@
 //! the surface. Each vertex's neighbours are projected on its tangent plane,
 //! the ones it can see are joined to it as a Delaunay fan in that plane.
 //!
-//! Layers, each over plain data: [`surface`] (the mesh under construction,
-//! vertex states, the directed-edge rule, orientation pieces), [`frame`]
-//! (section 2.7), [`star`] (sections 2.6, 2.8: the oriented plane, the
-//! visible region, the candidates), [`fan`] (section 2.9), [`grow`] (the
-//! front), [`thin`] and [`local`] (sections 2.4-2.5: lists, planes, local
-//! spacing), [`triangulate`] (one tile, or points in memory), and the
-//! pipeline glue: [`lattice`] and [`job`] (where the growth runs, so
-//! that tiles do not change it), [`kernel`], [`stitch`], [`reconstruct`].
+//! Layers, each over plain data: `surface` (the mesh under construction,
+//! vertex states, the directed-edge rule, orientation pieces), `frame`
+//! (section 2.7), `star` (sections 2.6, 2.8: the oriented plane, the
+//! visible region, the candidates), `fan` (section 2.9), `grow` (the
+//! front), `thin` and `local` (sections 2.4-2.5: lists, planes, local
+//! spacing), `triangulate` (one tile, or points in memory), and the
+//! pipeline glue: `lattice` and `job` (where the growth runs, so
+//! that tiles do not change it), `kernel`, `stitch`, `reconstruct`.
 //!
 //! Output: every input point is a vertex, in store order (a vertex's index
 //! is its store index; unused points, e.g. thinned ones, are unreferenced
@@ -52,6 +52,6 @@ pub(crate) mod surface;
 pub(crate) mod thin;
 pub(crate) mod triangulate;
 
-pub use params::ProjectionParams;
+pub use params::{BadParameter, ProjectionParams};
 pub use reconstruct::{reconstruct_projection, ProjectionError, ProjectionReport};
 pub use triangulate::{triangulate_points, triangulate_tile};
