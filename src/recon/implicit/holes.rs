@@ -64,6 +64,7 @@ pub(crate) struct BoundaryEdges {
 /// What `BoundaryEdges::fill` did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HoleReport {
+    /// Boundary loops closed with a patch.
     pub filled: u64,
     /// Loops longer than [`MAX_FILLED_LOOP`], passing a vertex twice, or
     /// whose every patch would repeat a mesh edge or cross the mesh.

@@ -121,6 +121,7 @@ pub struct McTable {
 }
 
 impl McTable {
+    /// The triangles of the cube case `index` (bit `c` set when corner `c` is positive).
     pub fn case(&self, index: u8) -> &McCase {
         &self.cases[usize::from(index)]
     }

@@ -20,6 +20,7 @@ pub mod reconstruct;
 pub(crate) mod refine;
 pub mod sdf;
 pub(crate) mod stitch;
+mod validate;
 
 pub use lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 pub use polygonize::{polygonize_cube, polygonize_field, CubeVertex, IndexedMesh, MeshWelder};
