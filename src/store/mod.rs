@@ -286,7 +286,7 @@ impl PointStore {
 
     /// Stored coordinates as flat f32 `x, y, z` triples (relative to the
     /// origin), without widening to f64: for passes that read one axis.
-    pub(crate) fn read_coords(
+    pub fn read_coords(
         &self,
         first: u64,
         count: u64,
