@@ -61,8 +61,8 @@ impl TileKernel for DelaunayKernel {
         let region = Region {
             loaded: tile.loaded,
         };
-        let sel = select(&tile.points, &tile.ids, self.hole, region)
-            .map_err(|e| KernelError::Failed(e.to_string()))?;
+        let sel =
+            select(&tile.points, &tile.ids, self.hole, region).map_err(KernelError::failed)?;
         if sel.doubtful[..tile.n_core].iter().any(|&d| d) {
             // A doubtful fan says the margin is short, not by how much.
             KernelError::unless_short(f64::INFINITY, tile.margin)?;

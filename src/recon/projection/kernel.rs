@@ -110,7 +110,7 @@ impl TileKernel for ProjectionKernel {
                     |local, &k| run_job(k, lat, &view, &lower, &self.params, local),
                 )
                 .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| KernelError::Failed(e.to_string()))?;
+                .map_err(KernelError::failed)?;
             for (k, out) in keys.into_iter().zip(outputs) {
                 done.insert(k, out);
             }

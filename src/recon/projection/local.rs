@@ -66,7 +66,7 @@ pub(crate) fn local_data<'a>(
     let margin_count = tile.points.len() - n_core;
     let (margin, margin_info) = index.hoods(tile, margin_count, |i| n_core + i, visit)?;
     info.extend(margin_info);
-    let n_core = u32::try_from(n_core).map_err(|e| KernelError::Failed(e.to_string()))?;
+    let n_core = u32::try_from(n_core).map_err(KernelError::failed)?;
     Ok((
         index,
         TileHoods {
