@@ -16,16 +16,19 @@ use crate::synth::{generate, mean_spacing_hint, Scan, Shape, SynthError, TriMesh
 
 const DRAGON_PLY_GZ: &[u8] = include_bytes!("../assets/dragon_q20k.ply.gz");
 
+/// Why the demo could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum DemoError {
+    /// Reading the embedded sample or writing an output failed.
     #[error(transparent)]
     Io(#[from] IoError),
+    /// A synthetic shape could not be sampled.
     #[error(transparent)]
     Synth(#[from] SynthError),
 }
 
 /// The embedded dragon mesh, read straight from the binary.
-pub fn dragon_mesh() -> Result<TriMesh, DemoError> {
+pub(crate) fn dragon_mesh() -> Result<TriMesh, DemoError> {
     let name = std::path::Path::new("dragon_q20k.ply.gz (embedded)");
     let (vertices, faces) = read_mesh_from(name, DRAGON_PLY_GZ)?;
     Ok(TriMesh { vertices, faces })

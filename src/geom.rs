@@ -8,7 +8,9 @@ pub type Real = f64;
 /// Axis-aligned box, `min <= max` on every axis once a point was added.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Corner of smallest coordinates.
     pub min: DVec3,
+    /// Corner of largest coordinates.
     pub max: DVec3,
 }
 
@@ -19,24 +21,26 @@ impl Aabb {
         max: DVec3::splat(f64::NEG_INFINITY),
     };
 
+    /// The box from `min` to `max` (not checked: `min > max` on an axis makes it empty).
     pub fn new(min: DVec3, max: DVec3) -> Self {
         Aabb { min, max }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
+    /// Grows the box to contain `p`.
     pub fn add(&mut self, p: DVec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
-    pub fn union(&self, o: &Aabb) -> Aabb {
+    pub(crate) fn union(&self, o: &Aabb) -> Aabb {
         Aabb::new(self.min.min(o.min), self.max.max(o.max))
     }
 
-    pub fn extent(&self) -> DVec3 {
+    pub(crate) fn extent(&self) -> DVec3 {
         if self.is_empty() {
             DVec3::ZERO
         } else {
@@ -44,7 +48,7 @@ impl Aabb {
         }
     }
 
-    pub fn center(&self) -> DVec3 {
+    pub(crate) fn center(&self) -> DVec3 {
         (self.min + self.max) * 0.5
     }
 
@@ -58,7 +62,7 @@ impl Aabb {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
-    pub fn intersects(&self, o: &Aabb) -> bool {
+    pub(crate) fn intersects(&self, o: &Aabb) -> bool {
         self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
     }
 }

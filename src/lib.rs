@@ -4,7 +4,7 @@
 //! One data flow serves every capability (see `ARCHITECTURE.md`): a reader
 //! ([`io`]) streams points into a point store ([`store`]), a memory-mapped
 //! directory sorted into spatial tiles; a tile kernel runs on each tile with
-//! an overlap margin ([`tiling`], scheduled by [`pipeline`]); its seam
+//! an overlap margin (`tiling`, scheduled by [`pipeline`]); its seam
 //! policy joins the tiles exactly; outputs stream to disk. Memory stays
 //! within a budget ([`memory`]) whatever the input size.
 //!
@@ -39,6 +39,7 @@
 //!
 //! `examples/reconstruct.rs` reconstructs a mesh from a file in ten lines.
 #![deny(unsafe_code)]
+#![warn(missing_docs)]
 #![deny(rustdoc::broken_intra_doc_links)]
 
 pub mod demo;
@@ -50,13 +51,13 @@ pub mod mesh;
 pub mod neighbours;
 pub mod normals;
 pub mod pipeline;
-pub mod progress;
+pub(crate) mod progress;
 pub mod recon;
 pub mod render;
 pub mod spatial;
 pub mod store;
 pub mod synth;
-pub mod tiling;
+pub(crate) mod tiling;
 pub mod units;
 
 pub use io::{

@@ -7,7 +7,9 @@ pub trait Progress: Sync {
     /// A stage starts; `total` is in the stage's own unit (points, tiles,
     /// bytes), 0 when unknown.
     fn begin(&self, stage: &str, total: u64);
+    /// `n` more units of the current stage are done.
     fn advance(&self, n: u64);
+    /// The current stage is over.
     fn end(&self);
 }
 

@@ -5,12 +5,16 @@
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum UnitError {
+    /// The size string is empty.
     #[error("empty size")]
     Empty,
+    /// The size string is not a number with an optional unit.
     #[error("size `{0}`: expected a number, optionally followed by B, KB, MB, GB, TB, KiB, MiB, GiB or TiB")]
     Malformed(String),
+    /// The unit (second field) of the size string (first field) is not one scanmesh knows.
     #[error("size `{0}`: unknown unit `{1}` (use B, KB, MB, GB, TB, KiB, MiB, GiB or TiB)")]
     UnknownUnit(String, String),
+    /// The size does not fit in 64 bits of bytes.
     #[error("size `{0}` is too large (more than 2^64 - 1 bytes)")]
     Overflow(String),
 }

@@ -257,3 +257,26 @@ fn curvature_made_from_other_normals_is_recomputed() {
         assert_eq!(lines(store), (fresh, true), "stale curvature was reused");
     });
 }
+
+#[test]
+fn curvature_parameters_refuse_a_bad_radius_or_bad_normals() {
+    use scanmesh::features::FeaturesError;
+    use scanmesh::normals::NormalsError;
+    for spacings in [f64::NAN, 0.0, -2.0] {
+        let p = CurvatureParams {
+            hood: HoodChoice::Radius { spacings },
+            ..CurvatureParams::default()
+        };
+        assert!(
+            matches!(p.validate(), Err(FeaturesError::BadParameter(_))),
+            "radius {spacings} accepted"
+        );
+    }
+    let mut p = CurvatureParams::default();
+    p.normals.k = 0;
+    assert!(matches!(
+        p.validate(),
+        Err(FeaturesError::Normals(NormalsError::BadParameter(_)))
+    ));
+    assert!(CurvatureParams::default().validate().is_ok());
+}

@@ -339,7 +339,7 @@ fn scans_are_selected_by_index() {
     let ply = dir.path().join("x.ply");
     convert(&path, &ply, InvalidPolicy::Reject, &NoProgress).unwrap();
     let e = open_reader(&ply, pick(vec![0])).err().unwrap().to_string();
-    assert!(e.contains("x.ply") && e.contains("--scans"), "{e}");
+    assert!(e.contains("x.ply") && e.contains("scan selection"), "{e}");
 }
 
 /// Runs the binary with `args` then `paths`; its stdout, once it succeeded.

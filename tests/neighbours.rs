@@ -478,3 +478,18 @@ fn cli_writes_text_binary_and_summary() {
         "scratch left behind"
     );
 }
+
+#[test]
+fn a_k_outside_its_range_is_refused() {
+    for bad in [
+        NeighbourParams::knn(0),
+        NeighbourParams::topological(0, 4),
+        NeighbourParams::knn(1 << 20),
+    ] {
+        assert!(
+            matches!(bad.validate(), Err(NeighboursError::BadParams { .. })),
+            "{bad:?} accepted"
+        );
+    }
+    assert!(NeighbourParams::knn(8).validate().is_ok());
+}

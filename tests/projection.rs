@@ -116,3 +116,38 @@ fn duplicate_points_never_make_degenerate_triangles() {
     assert_sound(&m, "duplicates");
     assert_eq!(quality(&m).zero_area_triangles, 0);
 }
+
+#[test]
+fn projection_parameters_out_of_range_are_refused_by_name() {
+    let d = ProjectionParams::default();
+    for (bad, name) in [
+        (ProjectionParams { k: 0, ..d }, "k"),
+        (
+            ProjectionParams {
+                thin: f64::NAN,
+                ..d
+            },
+            "thin",
+        ),
+        (ProjectionParams { thin: -0.1, ..d }, "thin"),
+        (ProjectionParams { max_edge: 0.0, ..d }, "max_edge"),
+        (
+            ProjectionParams {
+                max_edge: f64::NAN,
+                ..d
+            },
+            "max_edge",
+        ),
+        (
+            ProjectionParams {
+                max_angle_deg: f64::NAN,
+                ..d
+            },
+            "max_angle_deg",
+        ),
+    ] {
+        let e = bad.validate().expect_err("accepted");
+        assert_eq!(e.name, name, "{e}");
+    }
+    assert!(d.validate().is_ok());
+}

@@ -82,3 +82,17 @@ fn one_thread_equals_two_threads() {
     let (two, _) = reconstruct(&points, 300, 2);
     assert!(one.vertices == two.vertices && one.triangles == two.triangles);
 }
+
+#[test]
+fn a_hole_radius_that_is_not_positive_and_finite_is_refused() {
+    use scanmesh::recon::delaunay::reconstruct::DelaunayReconError;
+    for bad in [f64::NAN, 0.0, -1.0, f64::INFINITY] {
+        let params = DelaunayParams { hole: Some(bad) };
+        match params.validate() {
+            Err(DelaunayReconError::BadHole(h)) => assert!(h.is_nan() || h == bad),
+            other => panic!("hole {bad} gave {other:?}"),
+        }
+    }
+    assert!(DelaunayParams { hole: Some(0.5) }.validate().is_ok());
+    assert!(DelaunayParams::default().validate().is_ok());
+}

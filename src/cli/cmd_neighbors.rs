@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
-    compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions, MAX_K,
+    compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -49,13 +49,14 @@ enum Layout {
 
 impl NeighborsArgs {
     fn params(&self) -> Result<NeighbourParams> {
-        if !(1..=MAX_K).contains(&self.k) {
-            bail!("--k must be in 1..={MAX_K}");
-        }
-        Ok(match self.neighbours {
+        let params = match self.neighbours {
             HoodKind::Topological => NeighbourParams::topological(self.k, self.max_iterations),
             HoodKind::Knn => NeighbourParams::knn(self.k),
-        })
+        };
+        params
+            .validate()
+            .with_context(|| format!("--k {}", self.k))?;
+        Ok(params)
     }
 
     fn format(&self) -> OutputFormat {

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
-    reconstruct_implicit, ImplicitParams, ImplicitReport,
+    reconstruct_implicit, ImplicitParams, ImplicitReport, ReconError,
 };
 use scanmesh::recon::implicit::sdf::Field;
 use scanmesh::recon::projection::ProjectionParams;
@@ -149,11 +149,15 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         },
         ..ImplicitParams::default()
     };
-    // Checked again by the library; here before any input is read.
-    params.min_piece_share()?;
     params.normals.k = a.k;
     params.normals.neighbourhood = a.hood.hood();
-    params.normals.validate()?;
+    // Checked again by the library; here before any input is read.
+    params.validate().map_err(|e| match e {
+        ReconError::BadShare(v) => anyhow::anyhow!("--min-piece {v}: {e}"),
+        ReconError::BadParameter { what, value } => anyhow::anyhow!("--{what} {value}: {e}"),
+        ReconError::Normals(_) => anyhow::anyhow!("--k {}: {e}", a.k),
+        e => e.into(),
+    })?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;

@@ -16,15 +16,14 @@ pub fn run(
     format: MeshFormat,
     hole: Option<f64>,
 ) -> Result<()> {
-    if let Some(h) = hole {
-        if !(h.is_finite() && h > 0.0) {
-            bail!("--hole {h} must be a positive finite number");
-        }
+    let params = DelaunayParams { hole };
+    // Checked again by the library; here before any input is read.
+    if let Err(e) = params.validate() {
+        bail!("--hole: {e}");
     }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut prepared = s.open_input(input, output, cost(), progress.as_ref())?;
-    let params = DelaunayParams { hole };
     let r = reconstruct_delaunay(
         &mut prepared.ws.store,
         &params,

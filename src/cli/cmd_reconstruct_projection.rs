@@ -16,7 +16,9 @@ pub fn run(
     params: &ProjectionParams,
 ) -> Result<()> {
     // Checked again by the library; here before any input is read.
-    params.validate()?;
+    params
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--{} {}: {}", e.name.replace('_', "-"), e.value, e.why))?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut prepared = s.open_input(input, output, params.cost(), progress.as_ref())?;

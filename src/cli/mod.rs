@@ -18,6 +18,7 @@ mod cmd_run_job;
 mod cmd_status;
 mod cmd_tile;
 mod emit;
+mod hints;
 mod progress;
 mod report;
 mod rundir;
@@ -340,7 +341,8 @@ impl Settings {
                 n.saturating_mul(scratch),
                 &output_dir,
                 n.saturating_mul(out),
-            )?;
+            )
+            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
         }
         Ok(scratch_dir)
     }
@@ -384,7 +386,8 @@ pub fn run() -> Result<()> {
         Command::RunJob(a) => cmd_run_job::run(a),
         Command::Status(a) => cmd_status::run(a),
         command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
-    };
+    }
+    .map_err(hints::with_flag_hints);
     if let Some(path) = &report {
         report::write(path, &start, &outcome)?;
     }

@@ -1,6 +1,6 @@
 //! The curvature pass (paper 5 section 2): per point, the quadric of its
 //! neighbourhood in the PCA frame oriented by the store's normals
-//! ([`super::quadric`]), and at the point `k1 >= k2`, `H`, `K` and the fit's
+//! (`super::quadric`), and at the point `k1 >= k2`, `H`, `K` and the fit's
 //! RMS residual, into the store columns [`super::CURVATURE`] and
 //! [`super::CURVATURE_FLAGS`].
 //!
@@ -30,14 +30,14 @@ use serde::{Deserialize, Serialize};
 pub const VALUES: usize = 5;
 
 /// One tile's curvature of its core points.
-pub struct CurvatureTile {
+pub(crate) struct CurvatureTile {
     /// `k1, k2, H, K, residual` per core point.
     pub values: Vec<f32>,
     pub flags: Vec<u8>,
     pub stats: CurvatureStats,
 }
 
-pub struct CurvatureKernel {
+pub(crate) struct CurvatureKernel {
     pub hood: CurvatureHood,
     pub margin: f64,
     /// Mean spacing `d` (the statistics' scale).
@@ -55,7 +55,7 @@ pub(crate) fn oriented_normal(tile: &TilePoints, i: usize) -> Option<DVec3> {
 /// The quadric of point `i` and its neighbours `nbrs` (the point first,
 /// then neighbours in their order), its frame's normal turned toward
 /// `toward` (canonical PCA sign when `None`).
-pub fn point_quadric(
+pub(crate) fn point_quadric(
     points: &[DVec3],
     i: usize,
     nbrs: &[Neighbour],
@@ -70,7 +70,7 @@ pub fn point_quadric(
 }
 
 /// The curvatures of a fitted quadric at the point it was fitted for.
-pub fn curvature_of(q: &Quadric, p: DVec3) -> Curvature {
+pub(crate) fn curvature_of(q: &Quadric, p: DVec3) -> Curvature {
     let l = q.frame.local(p);
     q.curvature_at(l.x, l.y)
 }
@@ -188,14 +188,17 @@ impl CurvatureKernel {
 }
 
 /// What produced a store's curvature column and what it measured, saved
-/// beside it ([`CURVATURE_META_FILE`]) so `features` reuses it only when it
+/// beside it (`CURVATURE_META_FILE`) so `features` reuses it only when it
 /// was made with the same neighbourhood.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvatureMeta {
+    /// How the neighbourhood was chosen.
     pub hood: HoodChoice,
     /// Paper's mean spacing `d`.
     pub spacing: f64,
+    /// The neighbourhood the fits used, in absolute units.
     pub resolved: CurvatureHood,
+    /// Points of the store.
     pub points: u64,
     /// Points per flag bit: sparse, degenerate, ill-conditioned, unoriented.
     pub flagged: [u64; 4],
@@ -203,6 +206,7 @@ pub struct CurvatureMeta {
     pub rms: f64,
     /// Median of the points' RMS residuals (log-histogram bin edge).
     pub median_residual: f64,
+    /// The largest `|E_j|` of any fit (the paper's residual).
     pub max_error: f64,
     /// Percentiles 0..=100 of `|k_i|` (larger-magnitude principal curvature)
     /// over the oriented points (log-histogram bin edges: at most 1.1 % high).
@@ -222,6 +226,7 @@ impl CurvatureMeta {
         p[lo] * (1.0 - t) + p[hi] * t
     }
 
+    /// The metadata saved beside `store`'s curvature column, if any (`None` when absent or unreadable).
     pub fn load(store: &PointStore) -> Option<CurvatureMeta> {
         let text = std::fs::read_to_string(store.dir().join(CURVATURE_META_FILE)).ok()?;
         serde_json::from_str(&text).ok()
@@ -242,15 +247,18 @@ impl CurvatureMeta {
 
 /// What the curvature columns record as their making: the curvature
 /// parameters, which include the normals' own.
-pub fn provenance(params: &CurvatureParams) -> Provenance {
+pub(crate) fn provenance(params: &CurvatureParams) -> Provenance {
     Provenance::of("curvature", params)
 }
 
 /// The curvature pass's outcome.
 #[derive(Clone, Debug)]
 pub struct CurvatureReport {
+    /// What the curvature column was made with and measured.
     pub meta: CurvatureMeta,
+    /// Tiles processed.
     pub tiles: usize,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
     /// Whether the normals were computed first (the store had none).
     pub computed_normals: bool,
@@ -264,7 +272,7 @@ pub fn compute_curvature(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<CurvatureReport, FeaturesError> {
-    params.hood.validate()?;
+    params.validate()?;
     let computed_normals = ensure_normals(store, &params.normals, opts, progress)?.is_some();
     let estimate = ensure_spacing(store)?;
     let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;

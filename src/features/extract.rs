@@ -21,20 +21,29 @@ use std::time::Instant;
 /// What a feature run found and measured.
 #[derive(Clone, Debug)]
 pub struct FeaturesReport {
+    /// Points of the store.
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
+    /// What the curvature column was made with and measured.
     pub curvature: CurvatureMeta,
     /// Whether the curvature was computed (not reused from the store).
     pub computed_curvature: bool,
+    /// The thresholds, in absolute units, the run used.
     pub params: Resolved,
+    /// Feature points and curve sets found at each stage.
     pub counts: FeatureCounts,
     /// Connected polylines, corners and total length after repair.
     pub polylines: usize,
+    /// Points where lines meet.
     pub corners: usize,
+    /// Total length of the polylines, in the store's coordinate units.
     pub length: f64,
     /// Seconds: curvature (with normals when computed), lines.
     pub curvature_secs: f64,
+    /// Seconds spent growing and repairing the lines.
     pub lines_secs: f64,
 }
 

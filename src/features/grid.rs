@@ -26,7 +26,6 @@ pub struct BallGrid<'a> {
     points: &'a [DVec3],
     ids: &'a [u64],
     inv: f64,
-    cell: f64,
     /// Point indices sorted by cell; `cells` maps a cell to its range.
     order: Vec<u32>,
     cells: HashMap<u64, (u32, u32), BuildHasherDefault<CellHasher>>,
@@ -65,22 +64,13 @@ impl<'a> BallGrid<'a> {
             points,
             ids,
             inv,
-            cell,
             order: keyed.into_iter().map(|(_, _, i)| i).collect(),
             cells,
         })
     }
 
-    pub fn cell(&self) -> f64 {
-        self.cell
-    }
-
     pub fn points(&self) -> &'a [DVec3] {
         self.points
-    }
-
-    pub fn ids(&self) -> &'a [u64] {
-        self.ids
     }
 
     /// Every point within `radius` (at most 8 cells) of `q`, except

@@ -12,7 +12,9 @@ use std::path::Path;
 /// Polylines as a graph.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LineGraph {
+    /// Polyline vertex positions.
     pub vertices: Vec<DVec3>,
+    /// Segments `(a, b, kind)` between vertices `a` and `b`.
     pub edges: Vec<(u32, u32, LineKind)>,
     /// Per vertex: a corner (lines meet there).
     pub corners: Vec<bool>,
@@ -29,7 +31,7 @@ impl LineGraph {
     }
 
     /// Removes vertices no edge uses (renumbering the rest in order).
-    pub fn drop_isolated(&mut self) {
+    pub(crate) fn drop_isolated(&mut self) {
         let deg = self.degrees();
         let mut map = vec![u32::MAX; self.vertices.len()];
         let mut next = 0u32;
@@ -53,7 +55,7 @@ impl LineGraph {
 
     /// The chains between fixed vertices (degree other than 2, or
     /// corners), and cycles, as vertex sequences.
-    pub fn chains(&self) -> Vec<Vec<u32>> {
+    pub(crate) fn chains(&self) -> Vec<Vec<u32>> {
         let n = self.vertices.len();
         let mut adj: Vec<Vec<(u32, usize)>> = vec![Vec::new(); n];
         for (e, &(a, b, _)) in self.edges.iter().enumerate() {
@@ -98,7 +100,7 @@ impl LineGraph {
     /// interior vertex in turn moves onto the perpendicular bisector of its
     /// two neighbours (the earlier one already moved) in their plane,
     /// keeping the triangle's area; chain ends stay.
-    pub fn relax(&mut self, passes: usize) {
+    pub(crate) fn relax(&mut self, passes: usize) {
         let chains = self.chains();
         for _ in 0..passes {
             for c in &chains {
@@ -112,7 +114,7 @@ impl LineGraph {
     }
 
     /// Total length of the edges.
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         self.edges
             .iter()
             .map(|&(a, b, _)| self.vertices[a as usize].distance(self.vertices[b as usize]))
@@ -120,7 +122,7 @@ impl LineGraph {
     }
 
     /// Connected components with at least one edge (the polylines).
-    pub fn components(&self) -> usize {
+    pub(crate) fn components(&self) -> usize {
         let mut uf: Vec<u32> = (0..self.vertices.len() as u32).collect();
         fn find(uf: &mut [u32], mut v: u32) -> u32 {
             while uf[v as usize] != v {
@@ -140,7 +142,7 @@ impl LineGraph {
         count - self.degrees().iter().filter(|d| **d == 0).count()
     }
 
-    pub fn corner_count(&self) -> usize {
+    pub(crate) fn corner_count(&self) -> usize {
         self.corners.iter().filter(|c| **c).count()
     }
 

@@ -3,7 +3,7 @@
 //!
 //! - Curvature (section 2, [`curvature`]): per point, the quadratic height
 //!   function over the PCA frame of the neighbourhood within `r = 2..4 d`
-//!   (`d` the mean distance to the 6 nearest neighbours, [`spacing`]), its
+//!   (`d` the mean distance to the 6 nearest neighbours, `spacing`), its
 //!   principal, mean and Gaussian curvatures and MLS residual. A tile
 //!   kernel, per-point local: tiled equals untiled bit for bit. Results land
 //!   in the store columns [`CURVATURE`] and [`CURVATURE_FLAGS`].
@@ -11,30 +11,30 @@
 //! Flags of a point's curvature (a bit set means the values it names are
 //! not available, and they are NaN, never made up).
 
-pub mod cost;
-pub mod crest;
+pub(crate) mod cost;
+pub(crate) mod crest;
 pub mod curvature;
-pub mod curve;
-pub mod enhance;
+pub(crate) mod curve;
+pub(crate) mod enhance;
 pub mod export;
 pub mod extract;
-pub mod grid;
+pub(crate) mod grid;
 pub(crate) mod hood;
-pub mod kernel;
-pub mod lift;
+pub(crate) mod kernel;
+pub(crate) mod lift;
 pub mod lines;
-pub mod order;
+pub(crate) mod order;
 pub mod params;
-pub mod polyline;
-pub mod quadric;
-pub mod refine;
-pub mod repair;
+pub(crate) mod polyline;
+pub(crate) mod quadric;
+pub(crate) mod refine;
+pub(crate) mod repair;
 pub mod score;
-pub mod seams;
-pub mod smooth;
-pub mod spacing;
+pub(crate) mod seams;
+pub(crate) mod smooth;
+pub(crate) mod spacing;
 pub(crate) mod stages;
-pub mod stats;
+pub(crate) mod stats;
 
 pub use curvature::{compute_curvature, CurvatureReport};
 
@@ -45,23 +45,23 @@ use serde::{Deserialize, Serialize};
 
 /// Fewer than [`quadric::MIN_FIT_POINTS`] points in the neighbourhood: no
 /// curvature.
-pub const FLAG_SPARSE: u8 = 1;
+pub(crate) const FLAG_SPARSE: u8 = 1;
 /// The neighbourhood's PCA frame is undetermined (colinear, coincident): no
 /// curvature.
-pub const FLAG_DEGENERATE: u8 = 2;
+pub(crate) const FLAG_DEGENERATE: u8 = 2;
 /// The neighbourhood does not span the `(u, v)` plane well enough for a
 /// quadratic (a pivot of the 6x6 solve vanished): no curvature.
-pub const FLAG_ILL_CONDITIONED: u8 = 4;
+pub(crate) const FLAG_ILL_CONDITIONED: u8 = 4;
 /// The point has no oriented normal: `K` and the residual are given, `H`,
 /// `k1`, `k2` (whose signs need the outside) are NaN.
-pub const FLAG_UNORIENTED: u8 = 8;
+pub(crate) const FLAG_UNORIENTED: u8 = 8;
 
 /// Per-point curvature column: `k1, k2, H, K, residual` as f32.
 pub const CURVATURE: ColumnSpec = ColumnSpec::new("curvature.f32", Item::F32(curvature::VALUES));
 /// Per-point curvature flags (u8).
 pub const CURVATURE_FLAGS: ColumnSpec = ColumnSpec::new("curvature_flags.u8", Item::U8);
 /// The parameters and statistics that produced the curvature column (JSON).
-pub const CURVATURE_META_FILE: &str = "curvature.json";
+pub(crate) const CURVATURE_META_FILE: &str = "curvature.json";
 
 /// Which neighbourhood the quadratic is fitted to.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,31 +71,42 @@ pub enum CurvatureHood {
     /// The k nearest points.
     Knn(usize),
     /// Paper 3's topological neighbours, k per query.
-    Topological { k: usize, max_iterations: usize },
+    Topological {
+        /// Neighbours per query.
+        k: usize,
+        /// Cap on the mean reverse shift's iterations per point.
+        max_iterations: usize,
+    },
 }
 
 /// How the neighbourhood is chosen, before the data's spacing is known.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
 pub enum HoodChoice {
     /// The default: a radius of 3 mean spacings `d`, more on noisy input
-    /// ([`noise_adaptive_radius`]).
+    /// (`noise_adaptive_radius`).
     #[default]
     Auto,
     /// Radius in units of the mean spacing `d` (paper: 2..4; its dragon 2.8).
     Radius {
+        /// The radius, in mean spacings.
         spacings: f64,
     },
+    /// The k nearest points.
     Knn {
+        /// Neighbours per point.
         k: usize,
     },
+    /// Paper 3's topological neighbours, k per query.
     Topological {
+        /// Neighbours per query.
         k: usize,
+        /// Cap on the mean reverse shift's iterations per point.
         max_iterations: usize,
     },
 }
 
 /// Default curvature radius in mean spacings (on clean input).
-pub const DEFAULT_RADIUS_SPACINGS: f64 = 3.0;
+pub(crate) const DEFAULT_RADIUS_SPACINGS: f64 = 3.0;
 
 /// The default radius in mean spacings for a cloud whose tangent-plane
 /// noise estimate (the normals pass's `2 x` median plane residual) is
@@ -105,7 +116,7 @@ pub const DEFAULT_RADIUS_SPACINGS: f64 = 3.0;
 /// with noise too (its Table 1: 1.8-2.8 d clean, 2.6-3.5 d at noise 1.0 d).
 /// Measured on the wavy sheet at noise 0.5 sp (ratio 0.73, so r = 3.95 d):
 /// recall/precision 78/74 % at 3 d, 92/91 % at 4 d.
-pub fn noise_adaptive_radius(noise_ratio: f64) -> f64 {
+pub(crate) fn noise_adaptive_radius(noise_ratio: f64) -> f64 {
     let extra = if noise_ratio.is_finite() {
         (2.0 * (noise_ratio - 0.25)).clamp(0.0, 1.5)
     } else {
@@ -117,7 +128,7 @@ pub fn noise_adaptive_radius(noise_ratio: f64) -> f64 {
 impl HoodChoice {
     /// The neighbourhood for a cloud of mean spacing `d` whose normals pass
     /// measured `noise_ratio` (see [`noise_adaptive_radius`]).
-    pub fn resolve(&self, d: f64, noise_ratio: f64) -> CurvatureHood {
+    pub(crate) fn resolve(&self, d: f64, noise_ratio: f64) -> CurvatureHood {
         match *self {
             HoodChoice::Auto => CurvatureHood::Radius(noise_adaptive_radius(noise_ratio) * d),
             HoodChoice::Radius { spacings } => CurvatureHood::Radius(spacings * d),
@@ -128,6 +139,7 @@ impl HoodChoice {
         }
     }
 
+    /// Refuses a radius that is not positive and finite, or a k too small for a quadric fit.
     pub fn validate(&self) -> Result<(), FeaturesError> {
         let ok = match *self {
             HoodChoice::Auto => true,
@@ -150,27 +162,46 @@ impl HoodChoice {
 /// Parameters of the curvature pass.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct CurvatureParams {
+    /// Which neighbourhood the quadrics are fitted to.
     pub hood: HoodChoice,
     /// Normals to compute first when the store has none.
     pub normals: NormalParams,
 }
 
+impl CurvatureParams {
+    /// Refuses an unusable neighbourhood, or normal parameters that cannot
+    /// give normals.
+    pub fn validate(&self) -> Result<(), FeaturesError> {
+        self.hood.validate()?;
+        Ok(self.normals.validate()?)
+    }
+}
+
+/// Errors of the curvature and feature-line passes.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum FeaturesError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Computing the normals first failed.
     #[error(transparent)]
     Normals(#[from] crate::normals::NormalsError),
+    /// Writing an output failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// A parameter is out of range; the message says which and why.
     #[error("{0}")]
     BadParameter(String),
+    /// The curvature metadata beside the store cannot be written.
     #[error("{path}: {reason}")]
     Meta {
+        /// The metadata file.
         path: std::path::PathBuf,
+        /// Why it cannot be written.
         reason: String,
     },
 }

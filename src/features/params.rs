@@ -11,9 +11,10 @@ use std::f64::consts::PI;
 /// User-facing parameters; lengths in mean spacings `d`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FeatureParams {
+    /// The curvature pass (and the normals it computes first when the store has none).
     pub curvature: CurvatureParams,
     /// Curvature threshold `alpha` (absolute, 1 / length); default
-    /// [`default_alpha`].
+    /// `default_alpha`.
     pub alpha: Option<f64>,
     /// Enhancement radius `phi` (section 3).
     pub phi: f64,
@@ -28,7 +29,9 @@ pub struct FeatureParams {
     pub epsilon: f64,
     /// Smoothing radius: start, growth factor, limit (section 4).
     pub delta: f64,
+    /// Growth factor of the smoothing radius.
     pub delta_growth: f64,
+    /// Largest smoothing radius.
     pub delta_max: f64,
     /// Correlation the smoothing neighbourhood must reach (paper: 0.6).
     pub rho: f64,
@@ -37,6 +40,7 @@ pub struct FeatureParams {
     /// Connection cone: length in `gamma_max` (the paper's `alpha`),
     /// half-angle `mu` in radians.
     pub cone_length: f64,
+    /// Half-angle `mu` of the connection cone, radians.
     pub cone_angle: f64,
     /// Relaxation passes (paper: 1-2).
     pub relax_passes: usize,
@@ -45,12 +49,13 @@ pub struct FeatureParams {
     /// 10 (100k points, seed 1, noise 0.1 sp, ridge recall: stepped block
     /// 94.2 / 94.5 / 95.4 %, wavy sheet 93.6 / 93.3 / 93.3 %).
     pub refine: f64,
+    /// Width of the across-line refinement, in `d`.
     pub refine_width: f64,
     /// Line vertices moved onto the crest of the curvature profile across
     /// the line (`crest.rs`): the half-width of the profile's slab, in
     /// curvature fit radii (0: off); its half-length is one fit radius.
     pub crest: f64,
-    /// Side of the lattice cells polylines grow in (see [`super::kernel`]).
+    /// Side of the lattice cells polylines grow in (see `super::kernel`).
     pub cell: f64,
 }
 
@@ -87,24 +92,41 @@ impl Default for FeatureParams {
 /// Thresholds in absolute units, for one cloud.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolved {
+    /// Curvature threshold `alpha` (1 / length).
     pub alpha: f64,
+    /// Enhancement radius `phi`.
     pub phi: f64,
+    /// Growth-circle radius `R`.
     pub growth_radius: f64,
+    /// Growth-circle sector angle, radians.
     pub sector: f64,
+    /// Fewest points a curve-fitting set keeps.
     pub min_curve_points: usize,
+    /// Distance below which corners merge.
     pub epsilon: f64,
+    /// First smoothing radius.
     pub delta: f64,
+    /// Growth factor of the smoothing radius.
     pub delta_growth: f64,
+    /// Largest smoothing radius.
     pub delta_max: f64,
+    /// Correlation the smoothing neighbourhood must reach.
     pub rho: f64,
+    /// Polyline growth radius `gamma_max`.
     pub gamma_max: f64,
+    /// Connection cone length.
     pub cone_length: f64,
+    /// Connection cone half-angle `mu`, radians.
     pub cone_angle: f64,
+    /// Relaxation passes.
     pub relax_passes: usize,
+    /// Across-line refinement radius (0: off).
     pub refine: f64,
+    /// Across-line refinement width.
     pub refine_width: f64,
     /// The crest's slab (`crest.rs`), absolute; `None` when off.
     pub crest: Option<Slab>,
+    /// Side of the lattice cells polylines grow in.
     pub cell: f64,
     /// The curvature neighbourhood, to recompute a feature point's quadric.
     pub hood: CurvatureHood,
@@ -114,16 +136,16 @@ pub struct Resolved {
 
 /// Multiple of the noise-induced curvature scale `sigma / r^2` the default
 /// threshold stays above.
-pub const NOISE_FACTOR: f64 = 8.0;
+pub(crate) const NOISE_FACTOR: f64 = 8.0;
 /// Share of the points the default threshold leaves below it at least.
-pub const QUANTILE: f64 = 0.7;
+pub(crate) const QUANTILE: f64 = 0.7;
 
 /// The default `alpha`: the larger of the 70th percentile of `|k_i|` (the
 /// paper's dragon kept 30 % of its points) and eight times the curvature
 /// that fit noise alone produces, `sigma / r^2` with `sigma` the median fit
 /// residual (on crease models most points are flat and the percentile falls
 /// into the noise).
-pub fn default_alpha(meta: &CurvatureMeta) -> f64 {
+pub(crate) fn default_alpha(meta: &CurvatureMeta) -> f64 {
     let r = match meta.resolved {
         CurvatureHood::Radius(r) => r,
         // The k nearest hold about as many points as the default radius.
@@ -134,8 +156,9 @@ pub fn default_alpha(meta: &CurvatureMeta) -> f64 {
 }
 
 impl FeatureParams {
+    /// Refuses a threshold that is not finite, or not positive where a length or count must be.
     pub fn validate(&self) -> Result<(), FeaturesError> {
-        self.curvature.hood.validate()?;
+        self.curvature.validate()?;
         let positive = [
             ("phi", self.phi),
             ("growth radius", self.growth_radius),
@@ -193,7 +216,7 @@ impl FeatureParams {
     }
 
     /// Absolute thresholds for a cloud with the curvature `meta`.
-    pub fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
+    pub(crate) fn resolve(&self, meta: &CurvatureMeta) -> Resolved {
         let d = meta.spacing;
         // The fit radius: the neighbourhood's, or for k nearest about as
         // far as the default radius.
@@ -238,12 +261,12 @@ impl Resolved {
     /// Cells of the smoothing's grid: the first radius, where most points
     /// settle, but wide enough that `delta_max` spans at most the 8 cells
     /// a grid query reaches (`grid.rs`).
-    pub fn smooth_cell(&self) -> f64 {
+    pub(crate) fn smooth_cell(&self) -> f64 {
         self.delta.max(self.delta_max / 8.0)
     }
 
     /// How far the priority of a polyline seed looks for corners.
-    pub fn corner_cap(&self) -> f64 {
+    pub(crate) fn corner_cap(&self) -> f64 {
         3.0 * self.gamma_max
     }
 
@@ -261,7 +284,7 @@ impl Resolved {
     /// status (corners within `epsilon`, each within `phi` of its source),
     /// then smoothing (enhanced points within `delta_max`) and the corner
     /// distance (corners within the cap). See `kernel.rs`.
-    pub fn chain(&self) -> f64 {
+    pub(crate) fn chain(&self) -> f64 {
         let corner_status = 2.0 * self.phi + self.epsilon;
         corner_status + 2.0 * self.phi + self.delta_max + self.corner_cap()
     }

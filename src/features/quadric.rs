@@ -76,17 +76,6 @@ pub struct Curvature {
     pub gauss: f64,
 }
 
-impl Curvature {
-    /// The principal curvature of larger magnitude (paper's `k_i`).
-    pub fn dominant(&self) -> f64 {
-        if self.k1.abs() >= self.k2.abs() {
-            self.k1
-        } else {
-            self.k2
-        }
-    }
-}
-
 impl Quadric {
     /// `g(x, y)`.
     pub fn height(&self, x: f64, y: f64) -> f64 {

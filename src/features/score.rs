@@ -14,9 +14,13 @@ use std::collections::HashMap;
 /// measure on that side).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KindScore {
+    /// Share of the true length found within the tolerance (`None` without true lines).
     pub recall: Option<f64>,
+    /// Share of the found length within the tolerance of a true line (`None` without found lines).
     pub precision: Option<f64>,
+    /// Length of the true lines of this kind.
     pub true_length: f64,
+    /// Length of the found lines of this kind.
     pub found_length: f64,
 }
 
@@ -73,8 +77,11 @@ fn covered(lines: &[(DVec3, DVec3)], other: &[(DVec3, DVec3)], tol: f64, step: f
 /// within `tol` of a line of the other kind.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Misses {
+    /// `counts[e][n]`: missed samples by distance class to their own segment's end (`e`) and to the other side (`n`).
     pub counts: [[u64; 3]; 5],
+    /// Missed samples within the tolerance of a line of the other kind.
     pub other_kind: u64,
+    /// Samples taken on the true lines.
     pub samples: u64,
 }
 

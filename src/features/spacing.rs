@@ -33,8 +33,8 @@ impl TileKernel for SpacingKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ExactSum, KernelError> {
-        let index = build_index(KnnBackend::Grid, &tile.points, &tile.ids)
-            .map_err(|e| KernelError::Failed(e.to_string()))?;
+        let index =
+            build_index(KnnBackend::Grid, &tile.points, &tile.ids).map_err(KernelError::failed)?;
         let k = SPACING_NEIGHBOURS;
         let parts: Vec<(ExactSum, f64)> = (0..tile.n_core)
             .into_par_iter()

@@ -45,10 +45,6 @@ impl ExactSum {
         self.count += o.count;
     }
 
-    pub fn count(&self) -> u64 {
-        self.count
-    }
-
     /// Mean of the values (0 for none).
     pub fn mean(&self) -> f64 {
         if self.count == 0 {

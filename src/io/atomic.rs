@@ -9,6 +9,7 @@ use super::IoError;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
+/// An output file written under a temporary sibling name and renamed into place by [`AtomicFile::commit`].
 #[derive(Debug)]
 pub struct AtomicFile {
     final_path: PathBuf,
@@ -47,14 +48,16 @@ impl AtomicFile {
         })
     }
 
+    /// The temporary file, to write the output into.
     pub fn file(&mut self) -> &mut File {
         &mut self.file
     }
 
-    pub fn final_path(&self) -> &Path {
+    pub(crate) fn final_path(&self) -> &Path {
         &self.final_path
     }
 
+    /// Where the output is written until the commit (`.name.partial-<pid>` beside the final path).
     pub fn temp_path(&self) -> &Path {
         &self.temp_path
     }

@@ -14,14 +14,20 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Attribute {
+    /// Return intensity (u16, as in LAS).
     Intensity,
+    /// Colour as red, green, blue (u16 each; 8-bit sources widened by x257).
     Rgb,
+    /// Classification code (u8, as in LAS).
     Classification,
+    /// Return number of a multi-return pulse (u8).
     ReturnNumber,
+    /// GPS time of the pulse (f64 seconds).
     GpsTime,
 }
 
 impl Attribute {
+    /// Every kind, in the order files and columns list them.
     pub const ALL: [Attribute; 5] = [
         Attribute::Intensity,
         Attribute::Rgb,
@@ -61,24 +67,30 @@ impl Attribute {
 pub struct AttributeSet(u8);
 
 impl AttributeSet {
+    /// No attribute.
     pub const EMPTY: AttributeSet = AttributeSet(0);
 
+    /// The set of the kinds in `attrs`.
     pub fn of(attrs: &[Attribute]) -> Self {
         AttributeSet(attrs.iter().fold(0, |m, a| m | a.bit()))
     }
 
+    /// Every kind of [`Attribute::ALL`].
     pub fn all() -> Self {
         Self::of(&Attribute::ALL)
     }
 
+    /// Whether `a` is in the set.
     pub fn contains(self, a: Attribute) -> bool {
         self.0 & a.bit() != 0
     }
 
+    /// The set plus `a`.
     pub fn with(self, a: Attribute) -> Self {
         AttributeSet(self.0 | a.bit())
     }
 
+    /// Whether the set has no attribute.
     pub fn is_empty(self) -> bool {
         self.0 == 0
     }
@@ -93,12 +105,14 @@ impl AttributeSet {
         AttributeSet(self.0 & !other.0)
     }
 
+    /// The kinds in the set, in the order of [`Attribute::ALL`].
     pub fn iter(self) -> impl Iterator<Item = Attribute> {
         Attribute::ALL
             .into_iter()
             .filter(move |a| self.contains(*a))
     }
 
+    /// The kinds in the set as a vector, in the order of [`Attribute::ALL`].
     pub fn to_vec(self) -> Vec<Attribute> {
         self.iter().collect()
     }
@@ -124,10 +138,15 @@ impl AttributeSet {
 /// One point's attribute values (those outside a set are ignored).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AttributeValues {
+    /// Return intensity.
     pub intensity: u16,
+    /// Red, green, blue, 16 bits each.
     pub rgb: [u16; 3],
+    /// Classification code.
     pub classification: u8,
+    /// Return number.
     pub return_number: u8,
+    /// GPS time in seconds.
     pub gps_time: f64,
 }
 
@@ -154,10 +173,15 @@ pub fn to_unsigned(v: f64, max: u16) -> u16 {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Attributes {
     set: AttributeSet,
+    /// Intensities, one per point when the set has [`Attribute::Intensity`].
     pub intensity: Vec<u16>,
+    /// Colours (red, green, blue), one per point when the set has [`Attribute::Rgb`].
     pub rgb: Vec<[u16; 3]>,
+    /// Classification codes, one per point when the set has [`Attribute::Classification`].
     pub classification: Vec<u8>,
+    /// Return numbers, one per point when the set has [`Attribute::ReturnNumber`].
     pub return_number: Vec<u8>,
+    /// GPS times in seconds, one per point when the set has [`Attribute::GpsTime`].
     pub gps_time: Vec<f64>,
 }
 
@@ -169,6 +193,7 @@ impl Attributes {
         self.clear();
     }
 
+    /// Empties every column, keeping the set and the allocations.
     pub fn clear(&mut self) {
         self.intensity.clear();
         self.rgb.clear();
@@ -177,6 +202,7 @@ impl Attributes {
         self.gps_time.clear();
     }
 
+    /// The attributes the columns hold.
     pub fn set(&self) -> AttributeSet {
         self.set
     }

@@ -10,9 +10,12 @@ use crate::geom::Aabb;
 use crate::progress::Progress;
 use std::path::Path;
 
+/// What a conversion did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ConvertStats {
+    /// Points written.
     pub points: u64,
+    /// Input records dropped (non-finite coordinates under the skip policy, or flagged invalid by the file).
     pub skipped: u64,
     /// Attributes carried from the input to the output.
     pub carried: AttributeSet,
@@ -67,7 +70,7 @@ pub fn convert(
 }
 
 /// Bounding box of all points of `path`, by one streaming pass.
-pub fn scan_bounds(
+pub(crate) fn scan_bounds(
     path: &Path,
     read: impl Into<ReadOptions>,
     progress: &dyn Progress,

@@ -2,52 +2,107 @@
 
 use std::path::PathBuf;
 
+/// Errors of the format layer; every variant names the file it concerns.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum IoError {
+    /// The operating system refused a read or write of `path`.
     #[error("{path}: {source}")]
     Os {
+        /// The file read or written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
+    /// The file name's extension is none scanmesh reads or writes.
     #[error(
         "{path}: unknown format (expected .ply, .xyz/.txt/.csv, .las, .laz, .pcd or .e57; text, PLY and PCD optionally .gz)"
     )]
-    UnknownFormat { path: PathBuf },
-    #[error("{path}: bad header: {reason}")]
-    BadHeader { path: PathBuf, reason: String },
-    #[error("{path}: record {record}: {reason}")]
-    BadRecord {
+    UnknownFormat {
+        /// The file whose format is unknown.
         path: PathBuf,
-        record: u64,
+    },
+    /// The header is malformed or declares something unusable.
+    #[error("{path}: bad header: {reason}")]
+    BadHeader {
+        /// The file read.
+        path: PathBuf,
+        /// What is wrong with the header.
         reason: String,
     },
+    /// A record (point) cannot be parsed.
+    #[error("{path}: record {record}: {reason}")]
+    BadRecord {
+        /// The file read.
+        path: PathBuf,
+        /// 0-based index of the record in the file.
+        record: u64,
+        /// What is wrong with the record.
+        reason: String,
+    },
+    /// The file ends before the number of points its header declares.
     #[error("{path}: truncated: header declares {declared} points, file ends after {found}")]
     Truncated {
+        /// The file read.
         path: PathBuf,
+        /// Points the header declares.
         declared: u64,
+        /// Points the file holds.
         found: u64,
     },
-    #[error("{path}: record {record}: coordinate is not finite ({value}); use --skip-invalid to drop such points")]
+    /// A record has a NaN or infinite coordinate and the policy rejects such records.
+    #[error("{path}: record {record}: coordinate is not finite ({value})")]
     NonFinite {
+        /// The file read.
         path: PathBuf,
+        /// 0-based index of the record in the file.
         record: u64,
+        /// The offending coordinate value.
         value: f64,
     },
+    /// The file uses a feature scanmesh does not support, or a request does not fit the file.
     #[error("{path}: {reason}")]
-    Unsupported { path: PathBuf, reason: String },
+    Unsupported {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is unsupported.
+        reason: String,
+    },
+    /// An output cannot be written where asked (no file name, unwritable directory, ...).
     #[error("{path}: cannot write here: {reason}")]
-    Unwritable { path: PathBuf, reason: String },
+    Unwritable {
+        /// The output path.
+        path: PathBuf,
+        /// Why it cannot be written.
+        reason: String,
+    },
+    /// The LAS/LAZ library reported an error.
     #[error("{path}: LAS: {reason}")]
-    Las { path: PathBuf, reason: String },
+    Las {
+        /// The file concerned.
+        path: PathBuf,
+        /// The LAS library's message.
+        reason: String,
+    },
+    /// The E57 library reported an error, or the file's structure is unusable.
     #[error("{path}: E57: {reason}")]
-    E57 { path: PathBuf, reason: String },
+    E57 {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The file has no header and no points.
     #[error("{path}: file is empty (no header, no points)")]
-    Empty { path: PathBuf },
+    Empty {
+        /// The empty file.
+        path: PathBuf,
+    },
 }
 
 impl IoError {
+    /// An operating-system error on `path`.
     pub fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         IoError::Os {
             path: path.into(),

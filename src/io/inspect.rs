@@ -12,11 +12,16 @@ use std::path::Path;
 /// Points used for the spacing estimate.
 const SPACING_SAMPLE: usize = 1 << 16;
 
+/// What a pass over a whole input found (`scanmesh info`).
 #[derive(Clone, Debug)]
 pub struct Inspection {
+    /// What the header declares.
     pub info: SourceInfo,
+    /// Points read (after dropping skipped records).
     pub count: u64,
+    /// Records dropped (non-finite, or flagged invalid by the file).
     pub skipped: u64,
+    /// Bounding box of the points read.
     pub bounds: Aabb,
     /// Mean nearest-neighbour distance among the first points (duplicates
     /// left out); `None` with fewer than two distinct points.
@@ -75,11 +80,14 @@ fn prefix_spacing(sample: &[DVec3]) -> Option<f64> {
 /// a pass over its records found.
 #[derive(Clone, Debug)]
 pub struct ScanInspection {
+    /// What the file declares about the scan.
     pub scan: super::e57::ScanInfo,
+    /// Points of the scan that were read.
     pub points: u64,
     /// Records flagged invalid by the file (or non-finite, under
     /// [`super::InvalidPolicy::Skip`]).
     pub skipped: u64,
+    /// Bounding box of the scan's points read, in the world frame.
     pub bounds: Aabb,
 }
 

@@ -13,6 +13,7 @@ pub struct MemoryReader {
 }
 
 impl MemoryReader {
+    /// A reader over points already in memory, reported under the name `name`; `normals`, when given, has one normal per point.
     pub fn new(name: &str, xyz: Vec<DVec3>, normals: Option<Vec<Vec3>>) -> Self {
         let info = SourceInfo {
             path: PathBuf::from(name),

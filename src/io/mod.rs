@@ -6,26 +6,26 @@
 //! consistent with headers), so nothing downstream checks again.
 
 pub mod atomic;
-pub mod attributes;
+pub(crate) mod attributes;
 pub mod cleanup;
 pub mod convert;
 pub mod e57;
-pub mod error;
+pub(crate) mod error;
 pub mod inspect;
-pub mod las;
+pub(crate) mod las;
 mod las_extra;
 pub mod memory;
-pub mod obj;
-pub mod open;
-pub mod pcd;
+pub(crate) mod obj;
+pub(crate) mod open;
+pub(crate) mod pcd;
 pub mod place;
-pub mod ply;
+pub(crate) mod ply;
 mod policy;
 pub(crate) mod scratch;
 mod source;
 mod text;
 pub mod write;
-pub mod xyz;
+pub(crate) mod xyz;
 
 pub use atomic::AtomicFile;
 pub use attributes::{Attribute, AttributeSet, AttributeValues, Attributes};
@@ -45,11 +45,17 @@ pub const DEFAULT_CHUNK: usize = 1 << 15;
 /// File formats scanmesh reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Format {
+    /// PLY, ASCII encoding.
     PlyAscii,
+    /// PLY, binary little-endian encoding.
     PlyBinaryLe,
+    /// PLY, binary big-endian encoding.
     PlyBinaryBe,
+    /// Text, one point per line: x y z, optionally followed by nx ny nz (`.xyz`, `.txt`, `.csv`).
     Xyz,
+    /// ASPRS LAS (1.2 to 1.4).
     Las,
+    /// LAS compressed with LASzip.
     Laz,
     /// PCL's Point Cloud Data: read as ASCII, binary or binary_compressed,
     /// written binary.
@@ -82,7 +88,9 @@ impl Format {
 /// the input file.
 #[derive(Clone, Debug, Default)]
 pub struct PointChunk {
+    /// 0-based input index of `xyz[0]`.
     pub first_index: u64,
+    /// Point positions.
     pub xyz: Vec<DVec3>,
     /// Present when the source carries normals (PLY nx/ny/nz, XYZ 6 columns).
     pub normals: Option<Vec<Vec3>>,
@@ -95,13 +103,15 @@ pub struct PointChunk {
 }
 
 impl PointChunk {
+    /// Points in the chunk.
     pub fn len(&self) -> usize {
         self.xyz.len()
     }
+    /// Whether the chunk holds no point.
     pub fn is_empty(&self) -> bool {
         self.xyz.is_empty()
     }
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.xyz.clear();
         if let Some(n) = &mut self.normals {
             n.clear();
@@ -123,11 +133,15 @@ impl PointChunk {
 /// What a reader knows from the header, before reading any point.
 #[derive(Clone, Debug)]
 pub struct SourceInfo {
+    /// The file read.
     pub path: PathBuf,
+    /// The file's format.
     pub format: Format,
+    /// Whether the file is gzip-compressed.
     pub gzip: bool,
     /// Point count the header declares (PLY, LAS); `None` for text formats.
     pub declared_count: Option<u64>,
+    /// Whether the records carry normals.
     pub has_normals: bool,
     /// Per-point attributes the records carry (intensity, colour, ...).
     pub attributes: AttributeSet,
@@ -140,7 +154,9 @@ pub struct SourceInfo {
 /// LAS integer-coordinate transform: `x = xi * scale.x + offset.x`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LasTransform {
+    /// Size of one integer coordinate step, per axis.
     pub scale: DVec3,
+    /// Coordinate of integer 0, per axis.
     pub offset: DVec3,
 }
 
@@ -158,6 +174,7 @@ pub enum InvalidPolicy {
 /// file of several scans (E57), which scans to read (`None`: all).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ReadOptions {
+    /// What to do with records whose coordinates are not finite.
     pub policy: InvalidPolicy,
     /// Scan indices, as `scanmesh info` lists them; read in file order.
     pub scans: Option<Vec<usize>>,
@@ -180,6 +197,7 @@ impl From<&ReadOptions> for ReadOptions {
 
 /// A streaming source of points.
 pub trait PointReader: Send {
+    /// What the header says about the source.
     fn info(&self) -> &SourceInfo;
     /// Clears `chunk`, then fills it with up to `max` points. Returns the
     /// number read; 0 means the input is exhausted (and its declared count,
@@ -201,7 +219,9 @@ pub trait PointReader: Send {
 /// What a point writer is asked to produce.
 #[derive(Clone, Debug)]
 pub struct WriterSpec {
+    /// The format to write.
     pub format: Format,
+    /// Write each point's normal (nx, ny, nz as f32).
     pub with_normals: bool,
     /// Write a per-point `flags` byte (u8) property where the format allows.
     pub with_flags: bool,
@@ -211,6 +231,7 @@ pub struct WriterSpec {
     /// Bounds of all points to be written, needed by LAS to choose its
     /// quantisation when no `las_transform` is given.
     pub bounds: Option<crate::geom::Aabb>,
+    /// The LAS scale and offset to use (LAS only); `None` chooses one from `bounds`.
     pub las_transform: Option<LasTransform>,
 }
 
@@ -234,6 +255,7 @@ impl WriterSpec {
 pub trait PointWriter: Send {
     /// `flags`, when the spec asked for them, has one byte per point.
     fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError>;
+    /// Completes the output and renames it into place; returns the number of points written.
     fn finish(self: Box<Self>) -> Result<u64, IoError>;
 }
 

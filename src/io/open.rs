@@ -38,7 +38,7 @@ pub fn open_reader(
     if read.scans.is_some() {
         return Err(IoError::Unsupported {
             path: path.to_path_buf(),
-            reason: "--scans selects scans of an E57 file; this file is not one".into(),
+            reason: "a scan selection applies to E57 files only; this file is not one".into(),
         });
     }
     if is_e57_magic(&opened.magic) {
@@ -79,7 +79,7 @@ pub fn open_stream_reader(
     if read.scans.is_some() {
         return Err(IoError::Unsupported {
             path: name.to_path_buf(),
-            reason: "--scans selects scans of an E57 file; this stream is not one".into(),
+            reason: "a scan selection applies to E57 files only; this stream is not one".into(),
         });
     }
     let inner = streamed_format(name, opened, read.policy)?;

@@ -48,7 +48,7 @@ pub fn check_output(output: &Path) -> Result<(), IoError> {
 }
 
 /// Bytes available to this user on the file system holding `dir`.
-pub fn available_bytes(dir: &Path) -> Option<u64> {
+pub(crate) fn available_bytes(dir: &Path) -> Option<u64> {
     let s = rustix::fs::statvfs(dir).ok()?;
     Some(s.f_bavail.saturating_mul(s.f_frsize))
 }
@@ -83,7 +83,7 @@ pub fn check_space(
                 return Err(IoError::Unwritable {
                     path: dir.to_path_buf(),
                     reason: format!(
-                        "the {what} need about {} here but only {} is free (--scratch-dir puts the scratch files elsewhere)",
+                        "the {what} need about {} here but only {} is free",
                         crate::units::human_bytes(bytes),
                         crate::units::human_bytes(free)
                     ),

@@ -4,13 +4,16 @@
 /// Peak-RSS budget split between fixed costs and tiles in flight.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MemoryBudget {
+    /// Peak resident memory the run promises to stay under, in bytes.
     pub bytes: u64,
+    /// Worker threads (at least 1).
     pub threads: usize,
 }
 
 use super::plan::BASE_BYTES;
 
 impl MemoryBudget {
+    /// A budget of `bytes` for `threads` workers (0 threads counts as 1).
     pub fn new(bytes: u64, threads: usize) -> Self {
         MemoryBudget {
             bytes,

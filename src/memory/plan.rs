@@ -13,9 +13,9 @@
 //!   loaded point;
 //! - global pass: the kernel's per-point state when it fits half the
 //!   budget; otherwise the contracted graph of the external pass, whose
-//!   nodes are the tiles' boundary points: about [`NODES_PER_SQRT_TILE`] /
+//!   nodes are the tiles' boundary points: about `NODES_PER_SQRT_TILE` /
 //!   sqrt(tile points) of all points on a scanned surface, at
-//!   [`BYTES_PER_NODE`] each;
+//!   `BYTES_PER_NODE` each;
 //! - export: a window of `window_points` input-order records.
 
 use super::MemoryBudget;
@@ -31,12 +31,12 @@ pub const MARGIN_FACTOR: f64 = 1.5;
 /// Boundary nodes of the external orientation per point, times the square
 /// root of the tile size: 10.4 measured on the 10M-point noisy dragon with
 /// tiles of 17k, 77k and 312k points (k = 12); 13 allows for rougher scans.
-pub const NODES_PER_SQRT_TILE: f64 = 13.0;
+pub(crate) const NODES_PER_SQRT_TILE: f64 = 13.0;
 /// Bytes per node of the external orientation's global solve (the rank
 /// table, the union-find, the accepted-edge bits).
-pub const BYTES_PER_NODE: u64 = 10;
+pub(crate) const BYTES_PER_NODE: u64 = 10;
 /// Peak bytes per occupied histogram cell.
-pub const BYTES_PER_CELL: u64 = 36;
+pub(crate) const BYTES_PER_CELL: u64 = 36;
 
 /// What a tile kernel and the passes around it cost, as it declares.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,16 +66,21 @@ pub struct KernelCost {
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[non_exhaustive]
 pub enum BudgetError {
+    /// No plan fits the budget: the run needs at least `needed` bytes.
     #[error(
-        "--mem {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
+        "memory budget {budget} is too small{for_points}: this run needs at least {needed} ({reason})",
         budget = crate::units::human_bytes(*.budget),
         needed = crate::units::human_bytes(*.needed),
         for_points = if *.points > 0 { format!(" for {} points", .points) } else { String::new() }
     )]
     TooSmall {
+        /// The budget, in bytes.
         budget: u64,
+        /// Points the run processes (0 when not known yet).
         points: u64,
+        /// The smallest budget that fits, in bytes.
         needed: u64,
+        /// Which part of the run does not fit.
         reason: &'static str,
     },
 }
@@ -83,7 +88,9 @@ pub enum BudgetError {
 /// Every size a run uses, fitted to the promise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MemoryPlan {
+    /// The budget the plan fits.
     pub budget: MemoryBudget,
+    /// Points of the run the plan is sized for.
     pub points: u64,
     /// Core points per tile the planner aims for.
     pub tile_points: u64,
@@ -91,8 +98,11 @@ pub struct MemoryPlan {
     pub global_in_memory: bool,
     /// Bytes kept beside the tiles for state that grows with the points.
     pub reserved: u64,
+    /// Most occupied histogram cells held at once while the store is laid out.
     pub histogram_cells: usize,
+    /// Bytes of per-tile write buffers during the scatter pass, in total.
     pub scatter_buffer: usize,
+    /// Input-order records held at once when exporting.
     pub window_points: u64,
     /// Estimated nodes of the external global pass (0 in memory).
     pub nodes: u64,
@@ -169,7 +179,11 @@ impl MemoryPlan {
     /// points: `threads + 1` when that many such tiles fit the plan, else
     /// fewer (a store built under a larger budget), down to one; none
     /// fitting is an error naming the budget needed.
-    pub fn tiles_in_flight(&self, cost: &KernelCost, largest: u64) -> Result<usize, BudgetError> {
+    pub(crate) fn tiles_in_flight(
+        &self,
+        cost: &KernelCost,
+        largest: u64,
+    ) -> Result<usize, BudgetError> {
         let reserved = self.reserved;
         let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
         let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
@@ -179,7 +193,7 @@ impl MemoryPlan {
                 budget: self.budget.bytes,
                 points: self.points,
                 needed: (BASE_BYTES + reserved + per_tile).div_ceil(1 << 20) << 20,
-                reason: "the store's largest tile (rebuild it with `scanmesh tile --mem`)",
+                reason: "the store's largest tile: the store was tiled for a larger budget",
             });
         }
         Ok((self.budget.threads + 1).min(fit))
@@ -216,13 +230,13 @@ fn external_nodes(points: u64, tile_points: u64) -> u64 {
 }
 
 /// Histogram cells the budget holds: half of what is free.
-pub fn histogram_cells(budget: MemoryBudget) -> usize {
+pub(crate) fn histogram_cells(budget: MemoryBudget) -> usize {
     (budget.bytes.saturating_sub(BASE_BYTES) / 2 / BYTES_PER_CELL).max(1024) as usize
 }
 
 /// Scatter buffers: an eighth of the budget, at most 64 MiB (larger ones
 /// buy nothing: the writes are already long).
-pub fn scatter_buffer(budget: MemoryBudget) -> usize {
+pub(crate) fn scatter_buffer(budget: MemoryBudget) -> usize {
     (budget.bytes / 8).min(64 << 20) as usize
 }
 

@@ -16,25 +16,27 @@ use rayon::prelude::*;
 use std::fmt;
 
 /// Width of a histogram bin, degrees.
-pub const BIN_DEGREES: f64 = 5.0;
+pub(crate) const BIN_DEGREES: f64 = 5.0;
 /// Bins: 0-5, 5-10, ..., 55-60 (60 itself, an equilateral, in the last).
-pub const BINS: usize = 12;
+pub(crate) const BINS: usize = 12;
 /// A triangle whose smallest angle is below this is a sliver.
-pub const SLIVER_DEGREES: f64 = 10.0;
+pub(crate) const SLIVER_DEGREES: f64 = 10.0;
 
 /// Triangles per parallel chunk; fixed so float sums are reproducible.
 const CHUNK: usize = 1 << 16;
 
+/// The distribution of the triangles' smallest angles: how far a mesh is from slivers.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct AngleReport {
     /// Triangles measured.
     pub triangles: u64,
-    /// Count per [`BIN_DEGREES`] bin of the smallest angle.
+    /// Count per `BIN_DEGREES` bin of the smallest angle.
     pub min_angle_histogram: [u64; BINS],
-    /// Smallest angle below [`SLIVER_DEGREES`].
+    /// Smallest angle below `SLIVER_DEGREES`.
     pub slivers: u64,
     /// `slivers / triangles` (0 for no triangle).
     pub sliver_share: f64,
+    /// Mean of the triangles' smallest angles, in degrees (0 for no triangle).
     pub mean_min_angle_deg: f64,
     /// The smallest angle of the whole mesh (`None` for no triangle).
     pub smallest_angle_deg: Option<f64>,

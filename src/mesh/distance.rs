@@ -23,7 +23,9 @@ use std::fmt;
 /// What a mesh is compared against.
 #[derive(Clone, Copy, Debug)]
 pub enum Reference<'a> {
+    /// A triangle mesh: distances go to its nearest triangle.
     Mesh(&'a Mesh),
+    /// A point set: distances go to its nearest point.
     Points(&'a [DVec3]),
 }
 
@@ -33,11 +35,12 @@ pub struct CompareOptions {
     /// Area-uniform samples per mesh side, beside its vertices. `None`:
     /// one per triangle, clamped to [`MIN_AUTO_SAMPLES`, `MAX_AUTO_SAMPLES`].
     pub samples: Option<usize>,
+    /// Seed of the area-uniform sampling, so a comparison repeats exactly.
     pub seed: u64,
 }
 
-pub const MIN_AUTO_SAMPLES: usize = 10_000;
-pub const MAX_AUTO_SAMPLES: usize = 1_000_000;
+pub(crate) const MIN_AUTO_SAMPLES: usize = 10_000;
+pub(crate) const MAX_AUTO_SAMPLES: usize = 1_000_000;
 
 impl Default for CompareOptions {
     fn default() -> Self {
@@ -52,9 +55,13 @@ impl Default for CompareOptions {
 /// percentile: the smallest value at or above 95 % of the set.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct DistanceStats {
+    /// Mean distance.
     pub mean: f64,
+    /// Root mean square distance.
     pub rms: f64,
+    /// Nearest-rank 95th percentile.
     pub p95: f64,
+    /// Largest distance.
     pub max: f64,
 }
 
@@ -69,16 +76,22 @@ pub struct DirectionReport {
     pub in_spacing: Option<DistanceStats>,
 }
 
+/// A two-sided comparison of a mesh with a reference: distances each way and the Hausdorff distance.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct DistanceReport {
+    /// From the mesh's vertices and samples to the reference.
     pub mesh_to_reference: DirectionReport,
+    /// From the reference's vertices (or points) and samples to the mesh.
     pub reference_to_mesh: DirectionReport,
     /// Larger of the two maxima; `None` if either side is unmeasurable.
     pub hausdorff: Option<f64>,
     /// Mean nearest-neighbour distance of the reference's vertices/points.
     pub reference_spacing: Option<f64>,
+    /// `hausdorff` divided by `reference_spacing`, when both are known.
     pub hausdorff_in_spacing: Option<f64>,
+    /// Area-uniform samples taken on the mesh, besides its vertices.
     pub mesh_samples: u64,
+    /// Area-uniform samples taken on the reference, besides its vertices (0 for points).
     pub reference_samples: u64,
 }
 

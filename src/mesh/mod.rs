@@ -1,6 +1,6 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
 //! topology metrics (`quality`), smallest angles ([`angles`]),
-//! self-intersecting pairs ([`self_intersect`]), distances to a reference ([`distance`]),
+//! self-intersecting pairs (`self_intersect`), distances to a reference ([`distance`]),
 //! streaming PLY/OBJ output (`write`) and procedural shapes for tests and
 //! benches ([`shapes`]).
 //!
@@ -12,17 +12,17 @@
 
 pub mod angles;
 pub mod distance;
-pub mod error;
+pub(crate) mod error;
 mod paged;
-pub mod pieces;
-pub mod quality;
-pub mod self_intersect;
+pub(crate) mod pieces;
+pub(crate) mod quality;
+pub(crate) mod self_intersect;
 pub mod shapes;
-pub mod write;
+pub(crate) mod write;
 
 mod bvh;
 mod closest;
-pub mod intersect;
+pub(crate) mod intersect;
 mod nearest;
 mod sampling;
 mod topology;
@@ -46,11 +46,14 @@ use glam::DVec3;
 /// below tolerate invalid data (they skip and count it) rather than panic.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions.
     pub vertices: Vec<DVec3>,
+    /// Triangles as three indices into `vertices`; the order of the corners sets the orientation.
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl Mesh {
+    /// The mesh of `vertices` and `triangles` (not validated).
     pub fn new(vertices: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
         Mesh {
             vertices,
@@ -106,6 +109,6 @@ impl Mesh {
 }
 
 /// Area of the triangle `abc`.
-pub fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(crate) fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     0.5 * (b - a).cross(c - a).length()
 }

@@ -36,10 +36,13 @@ const BATCH: usize = 1 << 16;
 /// What the filter dropped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PieceReport {
+    /// Connected pieces left out.
     pub pieces_dropped: u64,
+    /// Triangles of those pieces.
     pub triangles_dropped: u64,
 }
 
+/// A [`MeshWriter`] that drops the small pieces of the mesh written through it (see the module doc).
 pub struct PieceFilter {
     out: MeshWriter,
     spool: Option<Spool>,

@@ -36,15 +36,25 @@ const CHUNK: usize = 1 << 16;
 pub struct ComponentQuality {
     /// Smallest vertex index in the component (components are listed by it).
     pub first_vertex: u32,
+    /// Vertices the component's triangles use.
     pub vertices: u64,
+    /// Triangles of the component.
     pub triangles: u64,
+    /// Distinct undirected edges.
     pub edges: u64,
+    /// Edges used by one triangle only.
     pub boundary_edges: u64,
+    /// Closed loops the boundary edges form.
     pub boundary_loops: u64,
+    /// Edges used by more than two triangles.
     pub non_manifold_edges: u64,
+    /// Vertices whose triangles do not form one fan (a disc or a half-disc).
     pub non_manifold_vertices: u64,
+    /// Manifold edges whose two triangles run it in the same direction.
     pub inconsistent_edges: u64,
+    /// Whether the component can be oriented consistently by flipping triangles.
     pub orientable: bool,
+    /// V - E + F of the component.
     pub euler_characteristic: i64,
     /// No boundary edge, no non-manifold edge or vertex.
     pub closed: bool,
@@ -52,12 +62,14 @@ pub struct ComponentQuality {
     pub genus: Option<u64>,
 }
 
+/// The topology and validity of a whole mesh: counts, boundaries, manifoldness, orientation, per component.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct QualityReport {
     /// Every vertex of the array, referenced or not.
     pub vertices: u64,
     /// Every triangle, valid or not.
     pub triangles: u64,
+    /// Vertices some topological triangle uses.
     pub referenced_vertices: u64,
     /// Vertices no topological triangle uses (isolated points).
     pub unreferenced_vertices: u64,
@@ -68,19 +80,29 @@ pub struct QualityReport {
     pub topological_triangles: u64,
     /// Distinct undirected edges.
     pub edges: u64,
+    /// Connected components (by shared vertices) of the topological triangles.
     pub components: u64,
+    /// Edges used by one triangle only.
     pub boundary_edges: u64,
+    /// Closed loops the boundary edges form.
     pub boundary_loops: u64,
+    /// Edges used by more than two triangles.
     pub non_manifold_edges: u64,
+    /// Vertices whose triangles do not form one fan (a disc or a half-disc).
     pub non_manifold_vertices: u64,
+    /// V - E + F over the referenced vertices and topological triangles.
     pub euler_characteristic: i64,
     /// At least one triangle, no boundary edge, no non-manifold edge.
     pub watertight: bool,
+    /// Triangles with the same three vertices as an earlier one (in any order).
     pub duplicate_triangles: u64,
     /// `repeated_index_triangles + zero_area_triangles`.
     pub degenerate_triangles: u64,
+    /// Triangles that use one vertex twice.
     pub repeated_index_triangles: u64,
+    /// Triangles whose corners are collinear up to `ZERO_AREA_RELATIVE_HEIGHT`.
     pub zero_area_triangles: u64,
+    /// Manifold edges whose two triangles run it in the same direction.
     pub inconsistent_edges: u64,
     /// No inconsistent edge.
     pub consistently_oriented: bool,
@@ -90,6 +112,7 @@ pub struct QualityReport {
     pub total_area: f64,
     /// The genus when the mesh is one closed, consistently oriented component.
     pub genus: Option<u64>,
+    /// One entry per connected component, by smallest vertex index.
     pub component_details: Vec<ComponentQuality>,
 }
 

@@ -20,6 +20,7 @@ use std::fmt;
 /// Pairs listed in the report, lowest first, to find them in a viewer.
 pub const LISTED_PAIRS: usize = 10;
 
+/// Pairs of triangles that cross each other (sharing no vertex), counted and the lowest listed.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SelfIntersectionReport {
     /// Triangles taken into the test.
@@ -30,7 +31,7 @@ pub struct SelfIntersectionReport {
     pub pairs: u64,
     /// Triangles in at least one intersecting pair.
     pub triangles_involved: u64,
-    /// The first [`LISTED_PAIRS`] pairs (triangle indices, lower first),
+    /// The first `LISTED_PAIRS` pairs (triangle indices, lower first),
     /// in order.
     pub first_pairs: Vec<[u32; 2]>,
 }

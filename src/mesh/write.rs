@@ -21,13 +21,18 @@ use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+/// The mesh file formats [`MeshWriter`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Binary little-endian PLY.
     PlyBinary,
+    /// ASCII PLY.
     PlyAscii,
+    /// Wavefront OBJ (vertices and faces only).
     Obj,
 }
 
+/// Options of a mesh output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WriteOptions {
     /// Write vertex coordinates as 32-bit floats instead of doubles.
@@ -46,6 +51,7 @@ struct CountOffsets {
     faces: u64,
 }
 
+/// A streaming mesh writer: vertices go to the output as they come, triangles to a scratch file appended on finish; the file appears under its name only then.
 pub struct MeshWriter {
     // Sinks first: they drop (and flush into the doomed temporary) before
     // `out` removes it.
@@ -62,10 +68,12 @@ pub struct MeshWriter {
 }
 
 impl MeshWriter {
+    /// A writer of `path` in `format`, coordinates as doubles.
     pub fn create(path: &Path, format: MeshFormat) -> Result<Self, MeshError> {
         Self::create_with(path, format, WriteOptions::default())
     }
 
+    /// A writer of `path` in `format` with `options`.
     pub fn create_with(
         path: &Path,
         format: MeshFormat,
@@ -89,6 +97,7 @@ impl MeshWriter {
         })
     }
 
+    /// The final path of the output.
     pub fn path(&self) -> &Path {
         self.out.final_path()
     }

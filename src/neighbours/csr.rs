@@ -34,7 +34,9 @@ pub const HEADER_BYTES: u64 = 32;
 /// Bytes per id in the CSR file and the scratch records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IdWidth {
+    /// Four-byte little-endian ids.
     U32,
+    /// Eight-byte little-endian ids.
     U64,
 }
 
@@ -48,6 +50,7 @@ impl IdWidth {
         }
     }
 
+    /// Bytes of one id.
     pub fn bytes(self) -> usize {
         match self {
             IdWidth::U32 => 4,
@@ -214,16 +217,21 @@ fn header(points: u64, neighbours: u64, width: IdWidth) -> Vec<u8> {
 /// A whole CSR file in memory (for tests and small outputs).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Csr {
+    /// `neighbours[offsets[i]..offsets[i + 1]]` is the list of point `i`; one more entry than points.
     pub offsets: Vec<u64>,
+    /// Every list, concatenated in point order.
     pub neighbours: Vec<u64>,
+    /// Width of the ids in the file.
     pub width: IdWidth,
 }
 
 impl Csr {
+    /// Points (lists) in the file.
     pub fn len(&self) -> usize {
         self.offsets.len().saturating_sub(1)
     }
 
+    /// Whether the file holds no list.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

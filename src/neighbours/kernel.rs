@@ -29,11 +29,15 @@ pub struct NeighboursTile {
     pub offsets: Vec<u64>,
     /// Input-order ids, each list sorted by (distance, id).
     pub neighbours: Vec<u64>,
+    /// Size and iteration histograms of the core points.
     pub stats: HoodStats,
 }
 
+/// The tile kernel of the neighbours pass: each core point's list in input-order ids.
 pub struct NeighboursKernel {
+    /// Which neighbourhood to compute.
     pub params: NeighbourParams,
+    /// Margin the first load of each tile gets, in the store's coordinate units.
     pub initial_margin: f64,
 }
 

@@ -9,10 +9,10 @@
 //! output is in input order:
 //!
 //! 1. each tile's records, sorted by id, are appended to a scratch file with
-//!    a per-tile index of output-window boundaries ([`spill`]);
+//!    a per-tile index of output-window boundaries (`spill`);
 //! 2. a final pass fills one window of consecutive input ids at a time (one
 //!    contiguous byte range per tile, like `store::export`) and appends it to
-//!    the output ([`csr`]: binary CSR or text), written under a temporary
+//!    the output (`csr`: binary CSR or text), written under a temporary
 //!    name and renamed into place only when complete.
 //!
 //! Memory is the tiles in flight plus one window of lists (sized by the
@@ -24,9 +24,9 @@
 //! 46 MiB at `--mem 128MiB` (64 tiles, byte-identical output); kNN 3.9 s.
 //! Iterations: median 1, max 5, none capped; |T| 15..45, mean 17.2.
 
-pub mod csr;
+pub(crate) mod csr;
 mod kernel;
-pub mod spill;
+pub(crate) mod spill;
 mod stats;
 
 pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
@@ -51,11 +51,16 @@ pub enum Neighbourhood {
     /// Paper 3's topological neighbours (k per query, capped iterations).
     Topological(TopoParams),
     /// The exact k nearest neighbours.
-    Knn { k: usize },
+    Knn {
+        /// Neighbours per point, the point itself excluded.
+        k: usize,
+    },
 }
 
+/// What the neighbours pass computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NeighbourParams {
+    /// Which neighbourhood every point gets.
     pub neighbourhood: Neighbourhood,
     /// kNN structure for [`Neighbourhood::Knn`] (the topological mode uses
     /// the paper's R*-tree).
@@ -72,6 +77,7 @@ impl Default for NeighbourParams {
 }
 
 impl NeighbourParams {
+    /// The exact `k` nearest neighbours, default backend.
     pub fn knn(k: usize) -> Self {
         NeighbourParams {
             neighbourhood: Neighbourhood::Knn { k },
@@ -79,6 +85,7 @@ impl NeighbourParams {
         }
     }
 
+    /// Paper 3's topological neighbours of `k` per query, at most `max_iterations` reverse shifts.
     pub fn topological(k: usize, max_iterations: usize) -> Self {
         NeighbourParams {
             neighbourhood: Neighbourhood::Topological(TopoParams { k, max_iterations }),
@@ -86,6 +93,7 @@ impl NeighbourParams {
         }
     }
 
+    /// The `k` of either neighbourhood.
     pub fn k(&self) -> usize {
         match self.neighbourhood {
             Neighbourhood::Topological(p) => p.k,
@@ -103,7 +111,7 @@ impl NeighbourParams {
 
     /// Typical neighbours per point: k, or 2k for topological (paper 3:
     /// |T| in [k, 3k]).
-    pub fn expected_size(&self) -> u64 {
+    pub(crate) fn expected_size(&self) -> u64 {
         match self.neighbourhood {
             Neighbourhood::Topological(p) => 2 * p.k as u64,
             Neighbourhood::Knn { k } => k as u64,
@@ -112,7 +120,7 @@ impl NeighbourParams {
 
     /// Peak bytes per loaded point of the kernel (points, ids, index, the
     /// core lists in local and global ids), for the memory planner.
-    pub fn bytes_per_point(&self) -> u64 {
+    pub(crate) fn bytes_per_point(&self) -> u64 {
         120 + 12 * 3 * self.k() as u64
     }
 
@@ -131,7 +139,7 @@ impl NeighbourParams {
     }
 
     /// Bytes per point of an output window (decoded lists, scratch records).
-    pub fn window_bytes_per_point(&self) -> u64 {
+    pub(crate) fn window_bytes_per_point(&self) -> u64 {
         40 + 16 * self.expected_size()
     }
 
@@ -139,7 +147,7 @@ impl NeighbourParams {
     /// neighbour lies near `1.13 sqrt(k)` spacings on uniform samples (more
     /// on scans); the reverse shift's reach adds the shift, about one more
     /// radius. The kernel asks for more when it is short.
-    pub fn initial_margin(&self, spacing: f64) -> f64 {
+    pub(crate) fn initial_margin(&self, spacing: f64) -> f64 {
         let factor = match self.neighbourhood {
             Neighbourhood::Topological(_) => 6.0,
             Neighbourhood::Knn { .. } => 3.0,
@@ -147,7 +155,8 @@ impl NeighbourParams {
         factor * spacing * (self.k() as f64).sqrt()
     }
 
-    fn validate(&self) -> Result<(), NeighboursError> {
+    /// Refuses a `k` outside `1..=MAX_K`.
+    pub fn validate(&self) -> Result<(), NeighboursError> {
         let k = self.k();
         if !(1..=MAX_K).contains(&k) {
             return Err(NeighboursError::BadParams {
@@ -161,34 +170,52 @@ impl NeighbourParams {
 /// How the lists are written.
 #[derive(Clone, Copy, Debug)]
 pub struct OutputOptions {
+    /// The file format of the lists.
     pub format: OutputFormat,
     /// Points per output window (memory: see
-    /// [`NeighbourParams::window_bytes_per_point`]).
+    /// `NeighbourParams::window_bytes_per_point`).
     pub window_points: u64,
 }
 
+/// Errors of the neighbours pass.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NeighboursError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Writing the output failed.
     #[error(transparent)]
     Io(#[from] IoError),
+    /// The parameters are out of range.
     #[error("bad neighbourhood parameters: {reason}")]
-    BadParams { reason: String },
+    BadParams {
+        /// Which parameter and why.
+        reason: String,
+    },
+    /// The spilled per-tile lists do not add up (a damaged scratch file).
     #[error("neighbour scratch records are inconsistent: {reason}")]
-    Scratch { reason: String },
+    Scratch {
+        /// What does not add up.
+        reason: String,
+    },
 }
 
+/// What the neighbours pass did.
 #[derive(Clone, Debug, Default)]
 pub struct NeighboursReport {
+    /// Points given a list.
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
     /// Total neighbour entries written.
     pub neighbours: u64,
+    /// Size and iteration histograms over all points.
     pub stats: HoodStats,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 

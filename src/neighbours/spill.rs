@@ -165,10 +165,6 @@ impl WindowLists {
         self.offsets.len().saturating_sub(1)
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     pub fn list(&self, i: usize) -> &[u64] {
         &self.neighbours[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
@@ -187,10 +183,6 @@ pub struct SpillReader {
 }
 
 impl SpillReader {
-    pub fn windows(&self) -> Windows {
-        self.windows
-    }
-
     /// Fills `out` with the lists of window `w`; every id of the window must
     /// have exactly one record.
     pub fn read_window(&mut self, w: u64, out: &mut WindowLists) -> Result<(), NeighboursError> {

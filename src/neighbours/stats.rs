@@ -28,6 +28,7 @@ impl HoodStats {
         }
     }
 
+    /// Adds the counts of `other`.
     pub fn merge(&mut self, other: &HoodStats) {
         add_histogram(&mut self.sizes, &other.sizes);
         add_histogram(&mut self.iterations, &other.iterations);
@@ -48,22 +49,27 @@ impl HoodStats {
             .sum()
     }
 
+    /// `[s]`: points with `s` neighbours.
     pub fn size_histogram(&self) -> &[u64] {
         &self.sizes
     }
 
+    /// `[c]`: points whose reverse shift added points `c` times (empty for kNN).
     pub fn iteration_histogram(&self) -> &[u64] {
         &self.iterations
     }
 
+    /// Points whose iteration the cap stopped.
     pub fn hit_cap(&self) -> u64 {
         self.hit_cap
     }
 
+    /// Smallest neighbourhood size (`None` for no point).
     pub fn min_size(&self) -> Option<usize> {
         self.sizes.iter().position(|&n| n > 0)
     }
 
+    /// Largest neighbourhood size (`None` for no point).
     pub fn max_size(&self) -> Option<usize> {
         self.sizes.iter().rposition(|&n| n > 0)
     }
@@ -73,6 +79,7 @@ impl HoodStats {
         median(&self.sizes)
     }
 
+    /// Mean neighbourhood size (`None` for no point).
     pub fn mean_size(&self) -> Option<f64> {
         let n = self.points();
         (n > 0).then(|| self.total() as f64 / n as f64)
@@ -151,16 +158,23 @@ pub struct IterationSummary {
 pub struct Summary {
     /// `topological` or `knn`.
     pub mode: &'static str,
+    /// The `k` asked for.
     pub k: usize,
+    /// Points given a list.
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
     /// Tiles rerun with a wider margin.
     pub tiles_reloaded: usize,
+    /// Widest margin a tile was finally run with, in the store's coordinate units.
     pub largest_margin: f64,
     /// Total neighbour entries written.
     pub neighbours: u64,
+    /// Neighbourhood sizes (absent for no point).
     pub size: Option<SizeSummary>,
+    /// Iteration counts (topological only).
     pub iterations: Option<IterationSummary>,
+    /// Wall-clock seconds of the run.
     pub seconds: f64,
 }
 

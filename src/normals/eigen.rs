@@ -77,7 +77,7 @@ pub fn sym3_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
 
 /// Flips `v` so that its component of largest magnitude is positive (the
 /// first axis among equal magnitudes).
-pub fn canonical_sign(v: DVec3) -> DVec3 {
+pub(crate) fn canonical_sign(v: DVec3) -> DVec3 {
     let (x, y, z) = (v.x.abs(), v.y.abs(), v.z.abs());
     let largest = if y > x {
         if z > y {

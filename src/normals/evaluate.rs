@@ -4,12 +4,14 @@
 use crate::store::{PointStore, StoreError, NORMALS};
 use glam::DVec3;
 
+/// Accuracy of computed normals against true ones.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct NormalAccuracy {
     /// Points compared (both normals non-zero).
     pub compared: usize,
     /// Angle between the lines (sign ignored), degrees.
     pub median_angle_deg: f64,
+    /// Nearest-rank 95th percentile of the angle between the lines, degrees.
     pub p95_angle_deg: f64,
     /// Fraction whose sign agrees with the truth (positive dot product).
     pub oriented_fraction: f64,

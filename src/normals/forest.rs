@@ -26,11 +26,14 @@ use super::unionfind::UnionFind;
 /// global union-find keeps the two ends (their store indices), so Kruskal
 /// walks the union-find in the store's spatial order where input ids jump
 /// at random (10M points: the orientation passes 4.3 s -> 2.7 s). Slots
-/// never enter [`Edge::key`], so the tree does not depend on the tiling.
+/// never enter `Edge::key`, so the tree does not depend on the tiling.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Edge {
+    /// Edge cost, its sign bit set when the edge flips the orientation (`n_a . n_b < 0`).
     pub w: f64,
+    /// Store index of one end.
     pub a: u32,
+    /// Store index of the other end.
     pub b: u32,
     /// Union-find slots of `a` and `b`, in that order.
     pub slots: [u32; 2],
@@ -49,7 +52,7 @@ impl Edge {
     }
 
     /// As [`Edge::with_cost`], each end given as `[id, slot]`.
-    pub fn between(x: [u32; 2], y: [u32; 2], cost: f64, dot: f64) -> Self {
+    pub(crate) fn between(x: [u32; 2], y: [u32; 2], cost: f64, dot: f64) -> Self {
         let w = cost.max(0.0).copysign(dot);
         let (x, y) = if x[0] < y[0] { (x, y) } else { (y, x) };
         Edge {
@@ -61,17 +64,18 @@ impl Edge {
     }
 
     /// Total order used everywhere: cost, then the two ids.
-    pub fn key(&self) -> (u64, u32, u32) {
+    pub(crate) fn key(&self) -> (u64, u32, u32) {
         (self.w.abs().to_bits(), self.a, self.b)
     }
 
-    pub fn flips(&self) -> bool {
+    pub(crate) fn flips(&self) -> bool {
         self.w.is_sign_negative()
     }
 
+    /// Bytes of one edge on disk.
     pub const BYTES: usize = 24;
 
-    pub fn to_bytes(self) -> [u8; Self::BYTES] {
+    pub(crate) fn to_bytes(self) -> [u8; Self::BYTES] {
         let mut out = [0u8; Self::BYTES];
         out[..8].copy_from_slice(&self.w.to_le_bytes());
         let words = [self.a, self.b, self.slots[0], self.slots[1]];
@@ -81,7 +85,7 @@ impl Edge {
         out
     }
 
-    pub fn from_bytes(b: &[u8; Self::BYTES]) -> Self {
+    pub(crate) fn from_bytes(b: &[u8; Self::BYTES]) -> Self {
         let word = |k: usize| u32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
         let mut w = [0u8; 8];
         w.copy_from_slice(&b[..8]);
@@ -95,7 +99,7 @@ impl Edge {
 }
 
 /// Minimum spanning forest of `edges` over `n` local vertices, in
-/// [`Edge::key`] order. The same as sorting by key, dropping repeats of a
+/// `Edge::key` order. The same as sorting by key, dropping repeats of a
 /// pair and running Kruskal, but computed by filter-Kruskal (see the module
 /// doc); a pair given twice with one key and both signs keeps the sign that
 /// sorts first by the `w` bits (a tie the old sort left to chance).

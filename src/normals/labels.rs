@@ -41,9 +41,6 @@ const SUPERS_FILE: &str = ".orient.supers";
 const MERGE_BUFFER: usize = 16 << 20;
 /// Tiles contracted at once (in parallel) before their results are written.
 const TILES_AT_ONCE: usize = 8;
-/// Bytes per node of the global solve: the rank table (4), the union-find
-/// (5, then labels of 4 in place) and a parity bit, rounded up.
-pub const BYTES_PER_NODE: u64 = 10;
 
 /// Per-point component labels and parities of the forest, on disk.
 pub struct ForestLabels {
@@ -52,11 +49,6 @@ pub struct ForestLabels {
     points: u64,
     /// Node components: how many, for per-component tables.
     pub node_components: usize,
-    /// Nodes of the contracted graph (boundary vertices, branch points and
-    /// any extra nodes).
-    pub nodes: u64,
-    /// Super-edges over all tiles.
-    pub super_edges: u64,
     /// Label and parity of the virtual root, when extra nodes were given.
     root: Option<(u64, bool)>,
 }
@@ -82,7 +74,6 @@ impl ForestLabels {
         let branches = write_supers(tiles, runs, &boundary, &mut supers, progress)?;
         progress.end();
         let nodes = boundary.len() as u64 + branches.last().copied().unwrap_or(0) + 1;
-        let super_edges = supers.edges();
         let root = nodes as u32 - 1;
         let (comps, accepted) = kruskal(&mut supers, nodes, root, extra, &boundary, progress)?;
         let root = (!extra.is_empty()).then(|| {
@@ -94,8 +85,6 @@ impl ForestLabels {
             column: Column::create(&dir.join(LABELS_FILE), 8, store.len())?,
             points: store.len(),
             node_components: comps.count(),
-            nodes,
-            super_edges,
             root,
         };
         progress.begin("orient: resolve", tiles.len() as u64);

@@ -12,14 +12,14 @@ mod contract;
 pub mod eigen;
 pub mod evaluate;
 pub mod forest;
-pub mod hood;
-pub mod kernel;
-pub mod labels;
-pub mod orient;
+pub(crate) mod hood;
+pub(crate) mod kernel;
+pub(crate) mod labels;
+pub(crate) mod orient;
 pub mod pca;
-pub mod runs;
+pub(crate) mod runs;
 pub mod sources;
-pub mod unionfind;
+pub(crate) mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
@@ -32,7 +32,7 @@ use runs::EdgeRuns;
 
 /// Bytes per point of an input-order output window of positions, normals
 /// and flags (the record and its share of the reorder buffers).
-pub const EXPORT_BYTES_PER_POINT: u64 = 48;
+pub(crate) const EXPORT_BYTES_PER_POINT: u64 = 48;
 
 /// The neighbourhood was too small or degenerate (colinear, coincident) for
 /// a tangent plane: the normal is zero, never made up.
@@ -50,10 +50,18 @@ pub enum Orientation {
     Viewpoint(DVec3),
     /// Paper 5's six sources (extreme points along +-X, +-Y, +-Z), spread
     /// where `|n_i . n_j| >= tau` ([`sources`]).
-    SixSources { tau: f64 },
+    SixSources {
+        /// Least `|n_i . n_j|` across which the orientation spreads, in `[0, 1]`.
+        tau: f64,
+    },
     /// One source, the point farthest along `direction` (single-sheet
     /// models, e.g. terrain with +Z).
-    SingleSource { direction: DVec3, tau: f64 },
+    SingleSource {
+        /// The direction the source point is farthest along (not zero).
+        direction: DVec3,
+        /// Least `|n_i . n_j|` across which the orientation spreads, in `[0, 1]`.
+        tau: f64,
+    },
     /// Leave the canonical PCA sign (largest component positive).
     None,
 }
@@ -84,13 +92,16 @@ pub enum NormalHood {
     /// [`crate::spatial::topological`]): k per query, so `|T|` lies in
     /// `[k, ~3k]`. Near a density change the k nearest crowd to the dense
     /// side; T adds the sparse side, which balances the plane fit.
-    Topological { max_iterations: usize },
+    Topological {
+        /// Cap on the mean reverse shift's iterations per point.
+        max_iterations: usize,
+    },
 }
 
 impl NormalHood {
     /// The mean reverse shift's parameters for `k` neighbours per query
     /// (`None` for kNN).
-    pub fn topo_params(&self, k: usize) -> Option<TopoParams> {
+    pub(crate) fn topo_params(&self, k: usize) -> Option<TopoParams> {
         match *self {
             NormalHood::Knn => None,
             NormalHood::Topological { max_iterations } => Some(TopoParams { k, max_iterations }),
@@ -98,6 +109,7 @@ impl NormalHood {
     }
 }
 
+/// How normals are computed: the tangent-plane neighbourhood and how the normals get their sign.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NormalParams {
     /// Neighbours per point besides the point itself (paper: 8..15); per
@@ -105,8 +117,11 @@ pub struct NormalParams {
     pub k: usize,
     /// kNN structure (the topological neighbourhood uses paper 3's R*-tree).
     pub backend: KnnBackend,
+    /// Which neighbourhood a tangent plane uses.
     pub neighbourhood: NormalHood,
+    /// How the normals get their sign.
     pub orientation: Orientation,
+    /// Cost of a spanning-tree edge (with [`Orientation::SpanningTree`]).
     pub cost: EdgeCost,
 }
 
@@ -155,7 +170,7 @@ impl NormalParams {
     }
 
     /// The parameters as the manifest records them for the normals column.
-    pub fn provenance(&self) -> Provenance {
+    pub(crate) fn provenance(&self) -> Provenance {
         Provenance::of("normals", self)
     }
 
@@ -163,7 +178,7 @@ impl NormalParams {
     /// normals, edges), for the memory planner. Topological: the R*-tree's
     /// entries and nodes (~40 more bytes a point) and lists of about 2k
     /// (paper 3: `|T|` in `[k, 3k]`).
-    pub fn bytes_per_point(&self) -> u64 {
+    pub(crate) fn bytes_per_point(&self) -> u64 {
         let k = self.k as u64;
         match self.neighbourhood {
             NormalHood::Knn => 120 + 20 * k,
@@ -197,7 +212,7 @@ impl NormalParams {
     /// reach is about twice the k-th neighbour distance (the shift plus the
     /// shifted query's radius), so the topological margin is doubled, as
     /// in [`crate::neighbours::NeighbourParams::initial_margin`].
-    pub fn initial_margin(&self, spacing: f64) -> f64 {
+    pub(crate) fn initial_margin(&self, spacing: f64) -> f64 {
         let factor = match self.neighbourhood {
             NormalHood::Knn => 1.0,
             NormalHood::Topological { .. } => 2.0,
@@ -206,30 +221,45 @@ impl NormalParams {
     }
 }
 
+/// Errors of the normals pass.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NormalsError {
+    /// Reading or writing the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// The six-source (or single-source) orientation failed.
     #[error(transparent)]
     Sources(#[from] sources::SourcesError),
+    /// The parameters cannot give normals; the message says which and why.
     #[error("normal parameters: {0}")]
     BadParameter(String),
 }
 
+/// What the normals pass did.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NormalsReport {
+    /// Points given a normal (or flagged degenerate).
     pub points: u64,
+    /// Tiles processed.
     pub tiles: usize,
+    /// Points whose neighbourhood spans no plane: normal zero, flagged.
     pub degenerate: u64,
+    /// Points with a normal the orientation could not reach: sign left as PCA gave it, flagged.
     pub unoriented: u64,
+    /// Connected components the orientation found.
     pub components: usize,
+    /// Edges of the spanning forest over all tiles.
     pub forest_edges: u64,
+    /// Sampling density and noise measured on the way.
     pub sampling: SamplingStats,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 
@@ -237,7 +267,7 @@ pub struct NormalsReport {
 /// a surface sampled at `spacing`, where the k-th neighbour lies at about
 /// `1.13 sqrt(k)` spacings for uniform sampling (scans are not: 4 rather
 /// than 2.3 spacings per sqrt(k)). The kernel asks for more when it is short.
-pub fn initial_margin(spacing: f64, k: usize) -> f64 {
+pub(crate) fn initial_margin(spacing: f64, k: usize) -> f64 {
     4.0 * spacing * (k as f64).sqrt()
 }
 
@@ -269,7 +299,7 @@ pub fn has_normals_of(store: &PointStore, params: &NormalParams) -> bool {
 
 /// Computes normals with `params` unless the store holds them already;
 /// the report when it computed them.
-pub fn ensure_normals(
+pub(crate) fn ensure_normals(
     store: &mut PointStore,
     params: &NormalParams,
     opts: RunOptions,

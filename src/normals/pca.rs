@@ -24,7 +24,7 @@ use crate::spatial::Neighbour;
 /// `f64::EPSILON * l2 / (l1 - l0)` radians, so this keeps that error under
 /// ~1e-6 rad; it flags strips thinner than ~1e-5 of their length (variance
 /// ratio 1e-10), i.e. colinear points up to rounding.
-pub const COLINEAR_TOLERANCE: f64 = 1e-10;
+pub(crate) const COLINEAR_TOLERANCE: f64 = 1e-10;
 
 /// A fitted tangent plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,7 +61,7 @@ pub enum Degenerate {
     /// All points at one location.
     #[error("all points coincide")]
     Coincident,
-    /// The two smallest eigenvalues agree within [`COLINEAR_TOLERANCE`] of
+    /// The two smallest eigenvalues agree within `COLINEAR_TOLERANCE` of
     /// the largest: points on a line, or an isotropic blob. Either way the
     /// normal is undetermined.
     #[error("normal undetermined (colinear or isotropic points)")]

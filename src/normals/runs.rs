@@ -140,11 +140,6 @@ impl EdgeRuns {
         self.written
     }
 
-    /// Number of runs pushed (one per tile, in tile order).
-    pub fn run_count(&self) -> usize {
-        self.runs.len()
-    }
-
     /// Position in the file (in edges) of run `r`'s first edge: runs lie
     /// one after another, so `run_start(r) + i` numbers every edge.
     pub fn run_start(&self, r: usize) -> u64 {

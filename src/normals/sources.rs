@@ -60,17 +60,21 @@ pub const DEFAULT_TAU: f64 = 0.6;
 /// Default radius in mean nearest-neighbour distances.
 pub const RADIUS_SPACINGS: f64 = 3.0;
 
+/// Parameters of the six-source (or single-source) orientation, paper 5.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SourceParams {
+    /// Which extreme points seed the propagation.
     pub sources: Sources,
     /// Propagate only where `w >= tau`.
     pub tau: f64,
+    /// The neighbourhood across which signs propagate.
     pub hood: Neighbourhood,
     /// With a radius neighbourhood, the nearest-distance rule also reaches
     /// this many nearest points beyond `r` (0: none).
     pub bridge_k: usize,
     /// How `w` is measured (`pairs::PairRule`).
     pub weight: EdgeCost,
+    /// In which order the propagation visits points.
     pub order: Order,
 }
 
@@ -79,7 +83,7 @@ impl SourceParams {
     /// radius for a cloud whose mean nearest-neighbour distance is
     /// `nn`, bridges to the same k nearest as the tangent planes and the
     /// spanning tree's edge cost; `None` for other orientations.
-    pub fn for_normals(params: &NormalParams, nn: f64) -> Option<Self> {
+    pub(crate) fn for_normals(params: &NormalParams, nn: f64) -> Option<Self> {
         let (sources, tau) = match params.orientation {
             Orientation::SixSources { tau } => (Sources::Six, tau),
             Orientation::SingleSource { direction, tau } => (Sources::Single(direction), tau),
@@ -96,12 +100,12 @@ impl SourceParams {
     }
 
     /// The direction that roots parts no pair reaches (+X for six sources).
-    pub fn first_direction(&self) -> DVec3 {
+    pub(crate) fn first_direction(&self) -> DVec3 {
         let d = self.sources.directions();
         d.first().copied().unwrap_or(DVec3::X)
     }
 
-    pub fn validate(&self) -> Result<(), SourcesError> {
+    pub(crate) fn validate(&self) -> Result<(), SourcesError> {
         if !(0.0..=1.0).contains(&self.tau) {
             return Err(SourcesError::BadTau { tau: self.tau });
         }
@@ -116,21 +120,43 @@ impl SourceParams {
     }
 }
 
+/// Errors of the six-source orientation.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SourcesError {
+    /// `tau` lies outside `[0, 1]`.
     #[error("tau {tau} lies outside [0, 1]")]
-    BadTau { tau: f64 },
+    BadTau {
+        /// The value given.
+        tau: f64,
+    },
+    /// The source direction is zero or not finite.
     #[error("the source direction must be a finite non-zero vector")]
     BadDirection,
+    /// The neighbourhood is empty or of a non-finite radius.
     #[error("unusable neighbourhood {hood:?}")]
-    BadNeighbourhood { hood: Neighbourhood },
+    BadNeighbourhood {
+        /// The neighbourhood given.
+        hood: Neighbourhood,
+    },
+    /// The points, normals and ids given differ in number.
     #[error("{points} points but {other} normals or ids")]
-    Lengths { points: usize, other: usize },
+    Lengths {
+        /// Points given.
+        points: usize,
+        /// Normals or ids given.
+        other: usize,
+    },
+    /// An id does not fit the u32 ids the orientation uses.
     #[error("id {id}: orientation names points by u32 ids (and one more for the sources' root)")]
-    IdTooLarge { id: u64 },
+    IdTooLarge {
+        /// The id.
+        id: u64,
+    },
+    /// The stack order was asked of a tiled run (it runs in memory only).
     #[error("the paper's stack order runs in memory only; tiles need the best-first order")]
     StacksNotTiled,
+    /// The spatial index could not be built.
     #[error(transparent)]
     Index(#[from] IndexError),
 }
@@ -138,6 +164,7 @@ pub enum SourcesError {
 /// The orientation of one point: flip its (unoriented) normal or not.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PointSign {
+    /// Whether the normal is to be negated.
     pub flip: bool,
     /// False only for points without a normal (nothing to orient).
     pub oriented: bool,

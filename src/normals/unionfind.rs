@@ -151,14 +151,6 @@ impl UnionFind {
         }
     }
 
-    pub fn len(&self) -> usize {
-        self.parent.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.parent.is_empty()
-    }
-
     /// Root of `i`; every node on the way is pointed at its grandparent
     /// (path halving: one pass, no stack).
     pub fn find(&mut self, mut i: u32) -> u32 {

@@ -8,7 +8,9 @@ use serde::Serialize;
 
 /// Encoder and decoder of a kernel's `Output`.
 pub struct Codec<O> {
+    /// Serialises a tile result.
     pub encode: fn(&O) -> Result<Vec<u8>, postcard::Error>,
+    /// Reads a tile result back; an error means the saved bytes are damaged.
     pub decode: fn(&[u8]) -> Result<O, postcard::Error>,
 }
 

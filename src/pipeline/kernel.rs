@@ -13,7 +13,11 @@ pub enum KernelError {
     /// Some core point depends on points beyond the loaded region: the
     /// pipeline reloads the tile with at least `needed` margin and reruns it.
     #[error("margin too small: {needed} needed")]
-    MarginTooSmall { needed: f64 },
+    MarginTooSmall {
+        /// The margin the kernel needs, in the store's coordinate units.
+        needed: f64,
+    },
+    /// Reading the tile's points or columns from the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
     /// The tile cannot be processed; the message says why.
@@ -50,14 +54,16 @@ impl KernelError {
 
 /// A pure function from one tile's points to a tile result.
 pub trait TileKernel: Sync {
+    /// The result of one tile, handed to the seam policy in tile order.
     type Output: Send;
     /// Stage name shown in progress.
     fn name(&self) -> &str;
     /// Margin to load first; the kernel asks for more when it finds it short.
     fn margin(&self) -> f64;
+    /// Computes the tile's result from its core and margin points.
     fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
     /// The store columns the kernel reads: each tile carries their values
-    /// for every loaded point ([`TilePoints::column`]).
+    /// for every loaded point (`TilePoints::column`).
     fn reads(&self) -> &[ColumnSpec] {
         &[]
     }

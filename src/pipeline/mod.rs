@@ -16,25 +16,36 @@ pub use run::{run_tiles, RunStats};
 pub use crate::memory::{BudgetError, KernelCost, MemoryBudget, MemoryPlan};
 pub use crate::progress::{NoProgress, Progress};
 
+/// Errors of the tile pipeline.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum PipelineError {
+    /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] crate::store::StoreError),
+    /// Reading or writing a file failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// A kernel failed on a tile.
     #[error("tile {tile}: {source}")]
     Kernel {
+        /// 0-based index of the tile.
         tile: usize,
+        /// The kernel's error.
         #[source]
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// A kernel kept asking for more margin than a reload can give.
     #[error("tile {tile}: margin {margin} is short but the kernel asked for {needed}")]
     MarginStuck {
+        /// 0-based index of the tile.
         tile: usize,
+        /// The margin loaded, in the store's coordinate units.
         margin: f64,
+        /// The margin the kernel asked for.
         needed: f64,
     },
+    /// A worker thread ended without handing back its tile's result (it panicked).
     #[error("a worker thread stopped without a result")]
     WorkerLost,
     /// The seam policy failed (its stitcher's typed error, kept).
@@ -43,26 +54,41 @@ pub enum PipelineError {
     /// The job this process was started for is done (`--until`, a tile
     /// job): not a failure.
     #[error("stopped at stage `{stage}` as the job asked")]
-    Stopped { stage: String },
+    Stopped {
+        /// The stage the job stopped at.
+        stage: String,
+    },
+    /// A job needs a stage whose tile jobs have not all finished.
     #[error("stage `{stage}` has {done} of {total} tiles done: its tile jobs must finish before this job")]
     StageIncomplete {
+        /// The unfinished stage.
         stage: String,
+        /// Its tiles done.
         done: usize,
+        /// Its tiles in all.
         total: usize,
     },
+    /// A tile job was asked of a stage that keeps no tile results.
     #[error("stage `{stage}` keeps no tile results, so it cannot run as tile jobs")]
-    NotSplittable { stage: String },
+    NotSplittable {
+        /// The stage.
+        stage: String,
+    },
+    /// A saved tile result of a resumable run cannot be read back.
     #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({reason})")]
     Codec {
+        /// The stage.
         stage: String,
+        /// 0-based index of the tile.
         tile: usize,
+        /// The decoder's message.
         reason: String,
     },
 }
 
 impl PipelineError {
     /// A seam policy's own error, kept typed.
-    pub fn seam(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+    pub(crate) fn seam(e: impl std::error::Error + Send + Sync + 'static) -> Self {
         PipelineError::Seam(Box::new(e))
     }
 }

@@ -6,6 +6,7 @@ use crate::memory::{BudgetError, KernelCost, MemoryBudget, MemoryPlan};
 /// How many workers run tiles, and how many tiles may be in memory.
 #[derive(Clone, Copy, Debug)]
 pub struct RunOptions {
+    /// Worker threads running tiles (at least 1).
     pub threads: usize,
     /// Tiles loaded, running or waiting in the reorder buffer at once.
     pub in_flight: usize,

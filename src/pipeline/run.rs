@@ -13,11 +13,14 @@ use crossbeam::channel;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
+/// What a run of tiles did.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStats {
+    /// Tiles processed.
     pub tiles: usize,
     /// Tiles rerun with a wider margin.
     pub retries: usize,
+    /// The widest margin any tile was finally run with, in the store's coordinate units.
     pub largest_margin: f64,
     /// Tiles read back from a resumable run's saved results.
     pub reused: usize,

@@ -1,13 +1,13 @@
 //! A small software rasteriser for pictures of clouds, feature lines and
 //! meshes: an orthographic camera, a depth buffer, round point splats,
 //! depth-tested lines and Lambert-shaded triangles, written as PNG
-//! ([`png`]). No GPU, no window: the project draws its own figures.
+//! (`png`). No GPU, no window: the project draws its own figures.
 //!
 //! Depth is the distance along the viewing direction (smaller is nearer);
 //! every primitive is depth-tested per pixel, so drawing order only matters
 //! for exact ties (the first drawn wins).
 
-pub mod png;
+pub(crate) mod png;
 pub mod scene;
 
 use glam::DVec3;
@@ -31,7 +31,7 @@ impl Camera {
     /// that the box `[min, max]` fills `width x height` less a margin of
     /// `margin` (a fraction of the smaller side). `None` for a degenerate
     /// direction or an empty image.
-    pub fn framing(
+    pub(crate) fn framing(
         forward: DVec3,
         up: DVec3,
         min: DVec3,
@@ -73,7 +73,7 @@ impl Camera {
     }
 
     /// Pixel coordinates (x right, y down) and depth of `p`.
-    pub fn project(&self, p: DVec3) -> (f64, f64, f64) {
+    pub(crate) fn project(&self, p: DVec3) -> (f64, f64, f64) {
         let d = p - self.centre;
         (
             self.width as f64 * 0.5 + d.dot(self.right) * self.scale,
@@ -92,15 +92,18 @@ impl Camera {
 /// An RGB image with a depth buffer.
 #[derive(Clone, Debug)]
 pub struct Canvas {
+    /// Image width, pixels.
     pub width: usize,
+    /// Image height, pixels.
     pub height: usize,
+    /// Pixels row by row from the top left.
     pub rgb: Vec<[u8; 3]>,
     depth: Vec<f64>,
     camera: Camera,
 }
 
 impl Canvas {
-    pub fn new(camera: Camera, background: [u8; 3]) -> Canvas {
+    pub(crate) fn new(camera: Camera, background: [u8; 3]) -> Canvas {
         let n = camera.width * camera.height;
         Canvas {
             width: camera.width,
@@ -111,6 +114,7 @@ impl Canvas {
         }
     }
 
+    /// The camera the image was drawn with.
     pub fn camera(&self) -> &Camera {
         &self.camera
     }
@@ -128,7 +132,7 @@ impl Canvas {
     }
 
     /// A round splat of `radius` pixels at `p`.
-    pub fn point(&mut self, p: DVec3, radius: f64, color: [u8; 3]) {
+    pub(crate) fn point(&mut self, p: DVec3, radius: f64, color: [u8; 3]) {
         let (x, y, z) = self.camera.project(p);
         let r = radius.max(0.5);
         let (x0, x1) = ((x - r).floor() as i64, (x + r).ceil() as i64);
@@ -146,7 +150,7 @@ impl Canvas {
     /// A line `width` pixels wide from `a` to `b`, depth interpolated;
     /// `bias` is subtracted from its depth so lines lying on a surface
     /// win over it.
-    pub fn line(&mut self, a: DVec3, b: DVec3, width: f64, bias: f64, color: [u8; 3]) {
+    pub(crate) fn line(&mut self, a: DVec3, b: DVec3, width: f64, bias: f64, color: [u8; 3]) {
         let (ax, ay, az) = self.camera.project(a);
         let (bx, by, bz) = self.camera.project(b);
         let steps = (bx - ax).abs().max((by - ay).abs()).ceil().max(1.0) as usize;
@@ -170,7 +174,7 @@ impl Canvas {
 
     /// A filled triangle, Lambert-shaded by its normal (two-sided) from
     /// the camera's light, over an ambient term.
-    pub fn triangle(&mut self, a: DVec3, b: DVec3, c: DVec3, color: [u8; 3]) {
+    pub(crate) fn triangle(&mut self, a: DVec3, b: DVec3, c: DVec3, color: [u8; 3]) {
         let Some(n) = (b - a).cross(c - a).try_normalize() else {
             return;
         };

@@ -61,6 +61,7 @@ pub fn write_rgb(path: &Path, width: usize, height: usize, rgb: &[[u8; 3]]) -> R
 
 /// Decodes what [`encode_rgb`] writes (8-bit RGB, filters None and Sub):
 /// width, height and pixels; `None` for anything else.
+#[cfg(test)]
 pub fn decode_rgb(bytes: &[u8]) -> Option<(usize, usize, Vec<[u8; 3]>)> {
     use std::io::Read;
     if bytes.get(..8)? != SIGNATURE {

@@ -10,25 +10,33 @@ use glam::DVec3;
 /// What to draw.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
+    /// Points, drawn as discs.
     pub points: Vec<DVec3>,
+    /// Feature lines, coloured by kind.
     pub lines: Option<LineGraph>,
+    /// A mesh (vertices, triangles), shaded.
     pub mesh: Option<(Vec<DVec3>, Vec<[u32; 3]>)>,
 }
 
 /// How to draw it.
 #[derive(Clone, Copy, Debug)]
 pub struct Style {
+    /// Image width, pixels.
     pub width: usize,
+    /// Image height, pixels.
     pub height: usize,
     /// Viewing direction and up.
     pub forward: DVec3,
+    /// Which way is up in the image.
     pub up: DVec3,
+    /// Disc radius of a point, pixels.
     pub point_radius: f64,
+    /// Line width, pixels.
     pub line_width: f64,
 }
 
-pub const RIDGE: [u8; 3] = [214, 39, 40];
-pub const VALLEY: [u8; 3] = [31, 90, 200];
+pub(crate) const RIDGE: [u8; 3] = [214, 39, 40];
+pub(crate) const VALLEY: [u8; 3] = [31, 90, 200];
 const BACKGROUND: [u8; 3] = [255, 255, 255];
 
 impl Scene {

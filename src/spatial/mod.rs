@@ -10,8 +10,8 @@
 
 use glam::DVec3;
 
-pub mod brute;
-pub mod grid;
+pub(crate) mod brute;
+pub(crate) mod grid;
 mod kdtree;
 pub mod rtree;
 pub mod topological;
@@ -23,7 +23,9 @@ pub use kdtree::KdIndex;
 /// One neighbour: its position in the slice the index was built over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Neighbour {
+    /// Squared distance to the query.
     pub dist2: f64,
+    /// Index of the point in the slice the index was built over.
     pub index: u32,
 }
 
@@ -33,7 +35,9 @@ pub trait KnnIndex: Sync {
     /// (fewer if the index holds fewer), skipping the point at `exclude`,
     /// sorted by (dist2, tie key). Exact: never an approximation.
     fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>);
+    /// Points indexed.
     fn len(&self) -> usize;
+    /// Whether the index holds no point.
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -57,14 +61,29 @@ pub enum KnnBackend {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum IndexError {
+    /// The points and the tie keys differ in number.
     #[error("{points} points but {ties} tie keys: every point needs exactly one")]
-    TieLengthMismatch { points: usize, ties: usize },
+    TieLengthMismatch {
+        /// Points given.
+        points: usize,
+        /// Tie keys given.
+        ties: usize,
+    },
+    /// More points than u32 indices can name.
     #[error(
         "{points} points: a kNN index holds at most u32::MAX points (Neighbour::index is u32)"
     )]
-    TooManyPoints { points: usize },
+    TooManyPoints {
+        /// Points given.
+        points: usize,
+    },
+    /// The grid cell size is zero, negative or not finite.
     #[error("grid cell size {cell} is not a positive finite number")]
-    BadCellSize { cell: f64 },
+    BadCellSize {
+        /// The size given.
+        cell: f64,
+    },
+    /// kiddo could not build the kd-tree.
     #[error("kd-tree construction failed: {0}")]
     KdTree(#[from] kiddo::kd_tree::ConstructionError),
 }

@@ -34,12 +34,26 @@ const SPACING_SAMPLES: usize = 64;
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[non_exhaustive]
 pub enum RTreeError {
+    /// The points and the tie keys differ in number.
     #[error("{points} points but {ties} tie keys")]
-    LengthMismatch { points: usize, ties: usize },
+    LengthMismatch {
+        /// Points given.
+        points: usize,
+        /// Tie keys given.
+        ties: usize,
+    },
+    /// A point has a NaN or infinite coordinate.
     #[error("point {index} has a non-finite coordinate")]
-    NonFinite { index: usize },
+    NonFinite {
+        /// Its index.
+        index: usize,
+    },
+    /// More points than u32 indices can name.
     #[error("{len} points do not fit 32-bit point indices")]
-    TooManyPoints { len: usize },
+    TooManyPoints {
+        /// Points given.
+        len: usize,
+    },
 }
 
 /// One tree entry: a point and its position in the indexed slice.
@@ -138,10 +152,12 @@ impl<'a> RTreeIndex<'a> {
         })
     }
 
+    /// The points indexed.
     pub fn points(&self) -> &'a [DVec3] {
         self.points
     }
 
+    /// The tie key of each point (ties in distance go to the smaller key).
     pub fn ties(&self) -> &'a [u64] {
         self.tie
     }

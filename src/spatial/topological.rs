@@ -68,14 +68,24 @@ pub struct TopoResult {
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[non_exhaustive]
 pub enum TopoError {
+    /// The points or tie keys given are not those the index was built over.
     #[error("index holds {index} points but {points} points and {ties} tie keys were given")]
     IndexMismatch {
+        /// Points the index holds.
         index: usize,
+        /// Points given.
         points: usize,
+        /// Tie keys given.
         ties: usize,
     },
+    /// A query names a point the index does not hold.
     #[error("point {point} out of range ({len} points)")]
-    PointOutOfRange { point: u32, len: usize },
+    PointOutOfRange {
+        /// The point.
+        point: u32,
+        /// Points the index holds.
+        len: usize,
+    },
 }
 
 /// Reusable buffers, one per worker, so the per-point loop only allocates
@@ -87,6 +97,7 @@ pub struct TopoScratch {
 }
 
 impl TopoScratch {
+    /// Empty buffers.
     pub fn new() -> Self {
         Self::default()
     }

@@ -28,8 +28,10 @@ pub use super::replay::MAX_POINTS;
 
 const SPILL_FILE: &str = ".ingest.spill";
 
+/// How to lay out a new store: tile size and the memory of the ingest passes.
 #[derive(Clone, Debug)]
 pub struct BuildOptions {
+    /// How large tiles may be.
     pub tiles: TileTarget,
     /// Bytes of per-tile write buffers during the scatter pass, in total.
     pub scatter_buffer: usize,
@@ -45,7 +47,9 @@ pub enum TileTarget {
     Points(u64),
     /// As large as the memory plan for the kernel allows ([`MemoryPlan`]).
     Budget {
+        /// The memory the run may use.
         budget: MemoryBudget,
+        /// What the kernel that will run on the tiles declares it needs per point.
         cost: KernelCost,
     },
 }
@@ -53,7 +57,7 @@ pub enum TileTarget {
 impl TileTarget {
     /// Core points per tile for a store of `count` points, or why the
     /// budget fits no plan.
-    pub fn points(&self, count: u64) -> Result<u64, BudgetError> {
+    pub(crate) fn points(&self, count: u64) -> Result<u64, BudgetError> {
         match *self {
             TileTarget::Points(n) => Ok(n.max(1)),
             TileTarget::Budget { budget, cost } => {

@@ -29,22 +29,37 @@ pub enum Job {
     Until(String),
     /// Only `tiles` of the tile stage `stage`, then stop; earlier tile
     /// stages must be complete.
-    Tiles { stage: String, tiles: TileSet },
+    Tiles {
+        /// The tile stage.
+        stage: String,
+        /// The tiles of that stage to run.
+        tiles: TileSet,
+    },
 }
 
 /// Some tiles of a stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TileSet {
     /// Tiles `first..=last`.
-    Range { first: usize, last: usize },
+    Range {
+        /// First tile of the range.
+        first: usize,
+        /// Last tile of the range (inclusive).
+        last: usize,
+    },
     /// The `index`-th of `count` contiguous, nearly equal shares (a
     /// scheduler's array task does not know the tile count when submitted).
-    Share { index: usize, count: usize },
+    Share {
+        /// Which share, 0-based.
+        index: usize,
+        /// How many shares the stage is cut into.
+        count: usize,
+    },
 }
 
 impl TileSet {
     /// The tiles of `0..n` in this set.
-    pub fn tiles(&self, n: usize) -> std::ops::Range<usize> {
+    pub(crate) fn tiles(&self, n: usize) -> std::ops::Range<usize> {
         match *self {
             TileSet::Range { first, last } => first.min(n)..last.saturating_add(1).min(n),
             TileSet::Share { index, count } => {
@@ -69,6 +84,7 @@ impl std::fmt::Display for TileSet {
 #[derive(Clone, Debug)]
 pub struct Checkpoints {
     dir: PathBuf,
+    /// What this process is to do in the run directory.
     pub job: Job,
     /// The stage where the job stopped as asked, shared by the clones (the
     /// application learns it there rather than from an error chain).
@@ -86,7 +102,7 @@ impl Checkpoints {
     }
 
     /// Records that the job is done at `stage`.
-    pub fn stop_at(&self, stage: &str) {
+    pub(crate) fn stop_at(&self, stage: &str) {
         let _ = self.stopped.set(stage.to_string());
     }
 
@@ -130,12 +146,12 @@ impl Checkpoints {
     }
 
     /// Whether `tile` has a saved result (not checked: [`Self::load`] does).
-    pub fn has(&self, stage: &str, tile: usize) -> bool {
+    pub(crate) fn has(&self, stage: &str, tile: usize) -> bool {
         self.tile_path(stage, tile).is_file()
     }
 
     /// Saves `tile`'s payload: temporary name, fsync, rename.
-    pub fn save(&self, stage: &str, tile: usize, payload: &[u8]) -> Result<(), StoreError> {
+    pub(crate) fn save(&self, stage: &str, tile: usize, payload: &[u8]) -> Result<(), StoreError> {
         let dir = self.stage_dir(stage);
         std::fs::create_dir_all(&dir).map_err(|e| StoreError::os(&dir, e))?;
         let path = self.tile_path(stage, tile);
@@ -154,7 +170,7 @@ impl Checkpoints {
     }
 
     /// How many of `n` tiles of `stage` have a saved result.
-    pub fn count(&self, stage: &str, n: usize) -> usize {
+    pub(crate) fn count(&self, stage: &str, n: usize) -> usize {
         (0..n).filter(|&t| self.has(stage, t)).count()
     }
 
@@ -179,6 +195,7 @@ impl Checkpoints {
         Ok(removed)
     }
 
+    /// The run directory holding the tile results.
     pub fn dir(&self) -> &Path {
         &self.dir
     }
@@ -205,7 +222,7 @@ pub const FNV_SEED: u64 = 0xcbf2_9ce4_8422_2325;
 /// FNV-1a, 64 bits, continuing from `h` (start at [`FNV_SEED`]): a
 /// checksum against torn and damaged files, not an adversary (a run
 /// directory is the user's own).
-pub fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
     bytes
         .iter()
         .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))

@@ -19,6 +19,7 @@ pub struct Column {
 }
 
 impl Column {
+    /// Opens the existing column file `path` of `item_bytes`-byte items, for writing too when `writable`.
     pub fn open(path: &Path, item_bytes: usize, writable: bool) -> Result<Self, StoreError> {
         let file = File::options()
             .read(true)
@@ -51,6 +52,7 @@ impl Column {
         })
     }
 
+    /// The column's file.
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -120,6 +122,7 @@ impl Column {
             .map_err(|e| StoreError::os(&self.path, e))
     }
 
+    /// Reads `count` f32 items from item `first` into `out` (replacing its contents); one item is `item_bytes / 4` floats.
     pub fn read_f32(&self, first: u64, count: u64, out: &mut Vec<f32>) -> Result<(), StoreError> {
         out.clear();
         self.with_bytes(first, count, |b| {
@@ -130,6 +133,7 @@ impl Column {
         })
     }
 
+    /// Reads `count` u64 items from item `first` into `out` (replacing its contents).
     pub fn read_u64(&self, first: u64, count: u64, out: &mut Vec<u64>) -> Result<(), StoreError> {
         out.clear();
         self.with_bytes(first, count, |b| {
@@ -140,6 +144,7 @@ impl Column {
         })
     }
 
+    /// Reads `count` u8 items from item `first` into `out` (replacing its contents).
     pub fn read_u8(&self, first: u64, count: u64, out: &mut Vec<u8>) -> Result<(), StoreError> {
         out.clear();
         self.with_bytes(first, count, |b| out.extend_from_slice(b))
@@ -147,6 +152,7 @@ impl Column {
 
     // The byte buffers are sized up front: collecting a `flat_map` grows
     // them by doubling (its size hint is 0), copying each several times.
+    /// Writes `values` (f32, `item_bytes / 4` per item) from item `first` on.
     pub fn write_f32(&self, first: u64, values: &[f32]) -> Result<(), StoreError> {
         let mut bytes = Vec::with_capacity(values.len() * 4);
         values
@@ -155,6 +161,7 @@ impl Column {
         self.write_bytes(first, &bytes)
     }
 
+    /// Writes `values` (one u64 per item) from item `first` on.
     pub fn write_u64(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
         let mut bytes = Vec::with_capacity(values.len() * 8);
         values
@@ -163,6 +170,7 @@ impl Column {
         self.write_bytes(first, &bytes)
     }
 
+    /// Flushes the column's data to disk.
     pub fn sync(&self) -> Result<(), StoreError> {
         self.file
             .sync_data()

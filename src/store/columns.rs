@@ -31,11 +31,14 @@ impl Item {
 /// A column of the store: its file name and what each point's item holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ColumnSpec {
+    /// File name of the column in the store directory.
     pub name: &'static str,
+    /// What one point's item holds.
     pub item: Item,
 }
 
 impl ColumnSpec {
+    /// The column `name` of items `item`.
     pub const fn new(name: &'static str, item: Item) -> Self {
         ColumnSpec { name, item }
     }
@@ -56,8 +59,11 @@ pub const FLAGS: ColumnSpec = ColumnSpec::new("flags.u8", Item::U8);
 /// which names every field), and the scanmesh version that ran it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Provenance {
+    /// Name of the kernel that wrote the column.
     pub kernel: String,
+    /// Its parameters, in their `Debug` form.
     pub params: String,
+    /// The scanmesh version (`CARGO_PKG_VERSION`) that ran it.
     pub version: String,
 }
 

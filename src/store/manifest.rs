@@ -4,12 +4,15 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped whenever the on-disk layout changes incompatibly.
-pub const STORE_VERSION: u32 = 1;
+pub(crate) const STORE_VERSION: u32 = 1;
 
+/// File name of the manifest in a store directory.
 pub const MANIFEST_FILE: &str = "manifest.json";
 
+/// The store's description, kept as `manifest.json` in its directory.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {
+    /// On-disk layout version; a store of another version is refused.
     pub version: u32,
     /// Points kept (the store index and the point index run over 0..count).
     pub count: u64,
@@ -21,17 +24,22 @@ pub struct Manifest {
     pub origin: [f64; 3],
     /// Tight bounds of the input points (absolute, f64).
     pub bounds_min: [f64; 3],
+    /// Upper corner of the input points' tight bounds (absolute, f64).
     pub bounds_max: [f64; 3],
     /// Mean nearest-neighbour distance estimated on a sample, if computed.
     pub spacing: Option<f64>,
+    /// The histogram grid the tiles are cut from.
     pub grid: GridSpec,
+    /// The tiles, in store order.
     pub tiles: Vec<TileEntry>,
     /// Attribute columns present besides coordinates and indices.
     pub columns: Vec<String>,
     /// The input's own per-point attributes, kept in input order.
     #[serde(default)]
     pub attributes: Vec<crate::io::Attribute>,
+    /// The input file the store was built from.
     pub source: String,
+    /// Whether the input carried normals (kept in the normals column).
     pub source_has_normals: bool,
     /// Sampling density and noise, once a normals pass measured them.
     #[serde(default)]
@@ -51,21 +59,27 @@ pub struct Manifest {
 pub struct GridSpec {
     /// Absolute position of grid corner (0,0,0).
     pub min: [f64; 3],
+    /// Side of a grid cell (same units as the points).
     pub cell: f64,
+    /// Cells along x, y and z.
     pub dims: [u32; 3],
 }
 
+/// One tile of the store: its points' range, core box and bounds.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct TileEntry {
     /// First store index of the tile's points; they run to `start + count`.
     pub start: u64,
+    /// Points in the tile.
     pub count: u64,
     /// Core box in grid cells, half-open `[lo, hi)`.
     pub lo: [u32; 3],
+    /// Upper corner (exclusive) of the core box, in grid cells.
     pub hi: [u32; 3],
     /// Tight bounds of the tile's stored points (relative to the origin).
     pub points_min: [f32; 3],
+    /// Upper corner of the tile's stored points (relative to the origin).
     pub points_max: [f32; 3],
-    /// First block (of [`super::BLOCK`] points) of this tile in the block table.
+    /// First block (of `super::BLOCK` points) of this tile in the block table.
     pub first_block: u64,
 }

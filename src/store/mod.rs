@@ -3,7 +3,7 @@
 //!
 //! Columns: `xyz.f32` (f32 x,y,z relative to the f64 origin), `index.u64`
 //! (each point's position in input order), `blocks.f32` (bounds of every
-//! [`BLOCK`] consecutive points of a tile, to find margin points without
+//! `BLOCK` consecutive points of a tile, to find margin points without
 //! reading whole neighbour tiles), and attribute columns later passes add
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 //! The input's own attributes (intensity, colour, ...) are kept in input
@@ -14,13 +14,13 @@ pub mod build;
 mod cells;
 pub mod checkpoint;
 mod column;
-pub mod columns;
-pub mod export;
+pub(crate) mod columns;
+pub(crate) mod export;
 mod lock;
 pub mod manifest;
 mod reorder;
 mod replay;
-pub mod sampling;
+pub(crate) mod sampling;
 mod sort;
 mod source;
 pub mod spacing;
@@ -41,41 +41,74 @@ use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// Points per bounds block inside a tile.
-pub const BLOCK: u64 = 512;
+pub(crate) const BLOCK: u64 = 512;
 
-pub const XYZ_FILE: &str = "xyz.f32";
-pub const INDEX_FILE: &str = "index.u64";
-pub const BLOCKS_FILE: &str = "blocks.f32";
+pub(crate) const XYZ_FILE: &str = "xyz.f32";
+pub(crate) const INDEX_FILE: &str = "index.u64";
+pub(crate) const BLOCKS_FILE: &str = "blocks.f32";
 
+/// Errors of the point store; each names the store (or input) path concerned.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum StoreError {
+    /// The operating system refused a read or write of `path`.
     #[error("{path}: {source}")]
     Os {
+        /// The file read or written.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
+    /// The directory is not a point store this version can read.
     #[error("{path}: not a valid point store: {reason}")]
-    Corrupt { path: PathBuf, reason: String },
+    Corrupt {
+        /// The store directory or file.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The input could not be read.
     #[error(transparent)]
     Input(#[from] crate::io::IoError),
+    /// The input holds no point.
     #[error("{path}: no points to process")]
-    Empty { path: PathBuf },
+    Empty {
+        /// The input read.
+        path: PathBuf,
+    },
+    /// The input holds more points than a store can index.
     #[error("{path}: {count} points exceed the supported {max}")]
-    TooMany { path: PathBuf, count: u64, max: u64 },
+    TooMany {
+        /// The input read.
+        path: PathBuf,
+        /// Points found.
+        count: u64,
+        /// Most points a store holds.
+        max: u64,
+    },
+    /// The spatial index could not be built over the points.
     #[error(transparent)]
     Index(#[from] crate::spatial::IndexError),
+    /// A pass needs a column the store does not have.
     #[error("store has no `{column}` column (run the pass that computes it first)")]
-    MissingColumn { column: String },
+    MissingColumn {
+        /// The column's file name.
+        column: String,
+    },
+    /// The memory budget cannot hold what the plan needs.
     #[error(transparent)]
     Budget(#[from] crate::memory::BudgetError),
+    /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
-    Busy { path: PathBuf },
+    Busy {
+        /// The store directory.
+        path: PathBuf,
+    },
 }
 
 impl StoreError {
-    pub fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub(crate) fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         StoreError::Os {
             path: path.into(),
             source,
@@ -158,7 +191,7 @@ impl PointStore {
     }
 
     /// Checks the tile table against the counts: contiguous, complete.
-    pub fn validate(&self) -> Result<(), StoreError> {
+    pub(crate) fn validate(&self) -> Result<(), StoreError> {
         let mut next = 0;
         for (i, t) in self.manifest.tiles.iter().enumerate() {
             if t.start != next {
@@ -185,10 +218,11 @@ impl PointStore {
     }
 
     /// Marks the store as scratch: it is deleted at the end of the run.
-    pub fn mark_scratch(&mut self) {
+    pub(crate) fn mark_scratch(&mut self) {
         self.scratch = true;
     }
 
+    /// Whether the store is scratch (deleted at the end of the run).
     pub fn is_scratch(&self) -> bool {
         self.scratch
     }
@@ -199,28 +233,32 @@ impl PointStore {
     }
 
     /// Where tile results are kept, if this store's run is resumable.
-    pub fn checkpoints(&self) -> Option<&Checkpoints> {
+    pub(crate) fn checkpoints(&self) -> Option<&Checkpoints> {
         self.checkpoints.as_ref()
     }
 
+    /// Points in the store.
     pub fn len(&self) -> u64 {
         self.manifest.count
     }
 
+    /// Whether the store holds no point.
     pub fn is_empty(&self) -> bool {
         self.manifest.count == 0
     }
 
+    /// The tiles, in store order.
     pub fn tiles(&self) -> &[TileEntry] {
         &self.manifest.tiles
     }
 
+    /// The f64 origin the f32 stored coordinates are relative to.
     pub fn origin(&self) -> DVec3 {
         DVec3::from_array(self.manifest.origin)
     }
 
     /// Bounds of all stored points, relative to the origin.
-    pub fn relative_bounds(&self) -> Aabb {
+    pub(crate) fn relative_bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
         for t in &self.manifest.tiles {
             b.add(DVec3::from_array(t.points_min.map(f64::from)));
@@ -268,7 +306,7 @@ impl PointStore {
     }
 
     /// Bounds of blocks `[first, first+count)` (relative to the origin).
-    pub fn read_blocks(
+    pub(crate) fn read_blocks(
         &self,
         first: u64,
         count: u64,
@@ -287,7 +325,7 @@ impl PointStore {
     }
 
     /// The store's directory.
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.dir
     }
 
@@ -297,7 +335,10 @@ impl PointStore {
     }
 
     /// Keeps the sampling statistics a normals pass measured.
-    pub fn set_sampling(&mut self, stats: sampling::SamplingStats) -> Result<(), StoreError> {
+    pub(crate) fn set_sampling(
+        &mut self,
+        stats: sampling::SamplingStats,
+    ) -> Result<(), StoreError> {
         self.manifest.sampling = Some(stats);
         self.save_manifest()
     }
@@ -309,7 +350,7 @@ impl PointStore {
 
 /// Writes the manifest atomically (temp + rename): a store whose manifest
 /// exists is complete.
-pub fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
+pub(crate) fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
     let path = dir.join(manifest::MANIFEST_FILE);
     let text = serde_json::to_string_pretty(manifest).map_err(|e| StoreError::Corrupt {
         path: path.clone(),

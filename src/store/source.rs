@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 /// An open store, owning its directory when it is scratch.
 #[derive(Debug)]
 pub struct Workspace {
+    /// The open store.
     pub store: PointStore,
     scratch: Option<(PathBuf, crate::io::cleanup::Registered)>,
 }
@@ -23,6 +24,7 @@ impl Workspace {
         }
     }
 
+    /// Whether the store is scratch (deleted when the workspace is dropped).
     pub fn is_scratch(&self) -> bool {
         self.scratch.is_some()
     }

@@ -32,7 +32,7 @@ pub fn ensure_spacing(store: &mut PointStore) -> Result<f64, StoreError> {
 
 /// Mean nearest-neighbour distance over a sample; falls back to a
 /// bounding-box estimate when every sampled point is a duplicate.
-pub fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
+pub(crate) fn estimate_spacing(store: &PointStore) -> Result<f64, StoreError> {
     let tiles: Vec<_> = store.tiles().iter().filter(|t| t.count > 1).collect();
     let step = tiles.len().div_ceil(SAMPLE_TILES).max(1);
     let sampled: Vec<&TileEntry> = tiles.iter().step_by(step).copied().collect();

@@ -8,14 +8,18 @@ pub type CellCount = ([u32; 3], u64);
 /// A planned tile: half-open cell box `[lo, hi)` and its point count.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlannedTile {
+    /// Lower corner of the core box, in grid cells.
     pub lo: [u32; 3],
+    /// Upper corner (exclusive) of the core box, in grid cells.
     pub hi: [u32; 3],
+    /// Points in the tile.
     pub count: u64,
 }
 
 /// The kd-tree of splits, used to send a cell to its tile.
 #[derive(Clone, Debug)]
 pub struct TilePlan {
+    /// The tiles, in store order.
     pub tiles: Vec<PlannedTile>,
     nodes: Vec<Node>,
 }

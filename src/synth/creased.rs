@@ -24,8 +24,11 @@ pub enum LineKind {
 /// A straight piece of a true feature line.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrueSegment {
+    /// Ridge (convex) or valley (concave).
     pub kind: LineKind,
+    /// One end of the segment.
     pub a: DVec3,
+    /// The other end of the segment.
     pub b: DVec3,
 }
 
@@ -33,8 +36,11 @@ pub struct TrueSegment {
 /// along y over `[0, width]`: a closed prism.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepProfile {
+    /// Column edges along x, increasing; one more than `heights`.
     pub xs: Vec<f64>,
+    /// Height of each column (z of its top).
     pub heights: Vec<f64>,
+    /// Extent of the prism along y.
     pub width: f64,
 }
 
@@ -229,8 +235,11 @@ impl Sampler for StepSampler {
 /// normals up: crests are ridges, troughs valleys.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WavySheet {
+    /// Side of the square.
     pub side: f64,
+    /// Height of the crests above z = 0.
     pub amplitude: f64,
+    /// Distance between crests along x.
     pub wavelength: f64,
 }
 

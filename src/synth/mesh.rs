@@ -13,7 +13,9 @@ use glam::DVec3;
 /// added on top of it).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
+    /// Vertex positions.
     pub vertices: Vec<DVec3>,
+    /// Triangles as three indices into `vertices`.
     pub faces: Vec<[u32; 3]>,
 }
 

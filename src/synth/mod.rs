@@ -7,7 +7,7 @@
 //! Everything streams: [`stream`] yields one [`Sample`] at a time (or fills
 //! bounded chunks), so 10^7 points never need to be in memory at once;
 //! [`generate`] collects a small scan. Output is a pure function of
-//! `(shape, n, noise, seed)`, bit-identical across platforms (see [`rng`]).
+//! `(shape, n, noise, seed)`, bit-identical across platforms (see `rng`).
 //!
 //! Noise is isotropic Gaussian on positions (truth normals unchanged), drawn
 //! from a second generator so that the noise-free scan with the same seed
@@ -18,7 +18,7 @@ mod creased;
 mod error;
 pub mod fibonacci;
 mod mesh;
-pub mod rng;
+pub(crate) mod rng;
 mod sheets;
 mod stream;
 mod terrain;
@@ -37,13 +37,14 @@ use glam::DVec3;
 /// unit normal of the surface point it was drawn from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
+    /// The point (noisy if noise was asked for).
     pub p: DVec3,
     /// Outward where the surface is orientable.
     pub n: DVec3,
 }
 
 /// A noise-free point source on one surface.
-pub trait Sampler {
+pub(crate) trait Sampler {
     /// One point, distributed by the surface's sampling density.
     fn sample(&self, rng: &mut Rng) -> Sample;
     /// Total surface area.
@@ -60,37 +61,53 @@ pub trait Sampler {
 /// xy-plane.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
+    /// Sphere of `radius` around `centre`.
     Sphere {
+        /// Centre of the sphere.
         centre: DVec3,
+        /// Radius of the sphere.
         radius: f64,
     },
     /// Ring torus around the z axis, `minor < major`.
     Torus {
+        /// Radius of the centre circle.
         major: f64,
+        /// Radius of the tube.
         minor: f64,
     },
     /// Square plane `z = 0` with a centred circular hole.
     HolePlane {
+        /// Side of the square.
         side: f64,
+        /// Radius of the hole.
         hole_radius: f64,
     },
     /// Squares at `z = +-separation/2`, normals `+-z`.
     TwoSheets {
+        /// Side of each square.
         side: f64,
+        /// Distance between the sheets along z.
         separation: f64,
     },
+    /// Hilly ground with box buildings (see [`Terrain`]).
     Terrain(Terrain),
     /// Centre-line radius and strip width, `width < radius`.
     Moebius {
+        /// Radius of the centre line.
         radius: f64,
+        /// Width of the strip.
         width: f64,
     },
     /// `z = sag (2x/side)^2`; density on `x < 0` is `ratio` x that on `x >= 0`.
     DensityStep {
+        /// Side of the square.
         side: f64,
+        /// Density on `x < 0` over density on `x >= 0`.
         ratio: f64,
+        /// Height of the parabola at the square's edges.
         sag: f64,
     },
+    /// Area-uniform samples of a triangle mesh.
     Mesh(TriMesh),
     /// A step profile extruded into a closed prism (known creases).
     Steps(StepProfile),
@@ -99,18 +116,23 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// Sphere of `radius` around `centre`.
     pub fn sphere(centre: DVec3, radius: f64) -> Self {
         Shape::Sphere { centre, radius }
     }
+    /// Sphere of radius 1 around the origin.
     pub fn unit_sphere() -> Self {
         Shape::sphere(DVec3::ZERO, 1.0)
     }
+    /// Ring torus of centre-circle radius `major` and tube radius `minor`.
     pub fn torus(major: f64, minor: f64) -> Self {
         Shape::Torus { major, minor }
     }
+    /// Square plane of `side` with a centred hole of `hole_radius`.
     pub fn hole_plane(side: f64, hole_radius: f64) -> Self {
         Shape::HolePlane { side, hole_radius }
     }
+    /// Two parallel squares of `side`, `separation` apart along z.
     pub fn two_sheets(side: f64, separation: f64) -> Self {
         Shape::TwoSheets { side, separation }
     }
@@ -118,6 +140,7 @@ impl Shape {
     pub fn terrain() -> Self {
         Shape::Terrain(Terrain::city())
     }
+    /// Moebius strip of centre-line `radius` and strip `width`.
     pub fn moebius(radius: f64, width: f64) -> Self {
         Shape::Moebius { radius, width }
     }
@@ -129,6 +152,7 @@ impl Shape {
             sag: 0.05 * side,
         }
     }
+    /// Area-uniform samples of `mesh`.
     pub fn mesh(mesh: TriMesh) -> Self {
         Shape::Mesh(mesh)
     }
@@ -202,14 +226,18 @@ impl Shape {
 /// A collected scan: `points[i]` has true normal `normals[i]`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scan {
+    /// The sampled points.
     pub points: Vec<DVec3>,
+    /// The true unit normal at each point.
     pub normals: Vec<DVec3>,
 }
 
 impl Scan {
+    /// Points in the scan.
     pub fn len(&self) -> usize {
         self.points.len()
     }
+    /// Whether the scan has no point.
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
     }

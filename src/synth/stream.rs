@@ -19,15 +19,25 @@ const NOISE_SALT: u64 = 0x6E6F_6973_655F_7631; // "noise_v1"
 /// mesh is never copied).
 #[derive(Clone, Debug)]
 pub enum ShapeSampler<'a> {
+    /// Sampler of a [`Shape::Sphere`].
     Sphere(SphereSampler),
+    /// Sampler of a [`Shape::Torus`].
     Torus(TorusSampler),
+    /// Sampler of a [`Shape::HolePlane`].
     HolePlane(HolePlaneSampler),
+    /// Sampler of a [`Shape::TwoSheets`].
     TwoSheets(TwoSheetsSampler),
+    /// Sampler of a [`Shape::Terrain`].
     Terrain(TerrainSampler<'a>),
+    /// Sampler of a [`Shape::Moebius`].
     Moebius(MoebiusSampler),
+    /// Sampler of a [`Shape::DensityStep`].
     DensityStep(DensityStepSampler),
+    /// Sampler of a [`Shape::Mesh`].
     Mesh(MeshSampler<'a>),
+    /// Sampler of a [`Shape::Steps`].
     Steps(StepSampler),
+    /// Sampler of a [`Shape::WavySheet`].
     Wavy(WavySampler),
 }
 

@@ -22,14 +22,18 @@ use glam::{DVec2, DVec3};
 /// from the ground to the flat roof at absolute height `roof`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Building {
+    /// Footprint corner of smallest x and y.
     pub min: DVec2,
+    /// Footprint corner of largest x and y.
     pub max: DVec2,
+    /// Absolute height of the flat roof.
     pub roof: f64,
 }
 
 /// Parameters of the terrain scene; the square is `[-side/2, side/2]^2`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Terrain {
+    /// Side of the square.
     pub side: f64,
     /// Vertical scale of the hills: ground height lies in
     /// `[-0.3 relief, 1.05 relief]`.
@@ -37,6 +41,7 @@ pub struct Terrain {
     /// Density per unit area at `x = +side/2` over that at `x = -side/2`;
     /// linear in between.
     pub density_ratio: f64,
+    /// The buildings standing on the ground.
     pub buildings: Vec<Building>,
 }
 

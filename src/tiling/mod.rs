@@ -2,6 +2,6 @@
 //! points of its neighbours. (The tiles themselves are planned when the
 //! store is laid out: `store::tile_plan`.)
 
-pub mod load;
+pub(crate) mod load;
 
-pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};
+pub use load::{load_tile, MissingColumns, TilePoints, Values};

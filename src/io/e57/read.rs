@@ -63,6 +63,7 @@ struct Planned {
     transform: Transform,
 }
 
+/// A reader of an E57 file: the selected scans in file order, each point moved into the world frame by its scan's pose.
 pub struct E57Reader {
     info: SourceInfo,
     scans: Vec<ScanInfo>,
@@ -125,7 +126,7 @@ fn selected(
         return Err(IoError::E57 {
             path: path.to_path_buf(),
             reason: format!(
-                "--scans asks for scan {bad}, but the file has {} (0..{})",
+                "the scan selection names scan {bad}, but the file has {} (0..{})",
                 scans.len(),
                 scans.len().saturating_sub(1)
             ),

@@ -18,12 +18,17 @@ use std::path::Path;
 pub struct ScanInfo {
     /// Position among the file's scans (what `--scans` selects).
     pub index: usize,
+    /// The scan's name, when the file gives one.
     pub name: Option<String>,
+    /// The scan's GUID, when the file gives one.
     pub guid: Option<String>,
     /// Records the file declares, valid or not.
     pub records: u64,
+    /// Where the scan sits in the world frame: its points are moved by this pose when read.
     pub pose: Pose,
+    /// Whether the records carry Cartesian coordinates.
     pub cartesian: bool,
+    /// Whether the records carry spherical coordinates (range, azimuth, elevation).
     pub spherical: bool,
     /// Point attributes present besides the coordinates, by their E57
     /// names (`intensity`, `color`, `rowIndex`, `returnIndex`, `timeStamp`,
@@ -36,15 +41,18 @@ pub struct ScanInfo {
 pub struct Pose {
     /// `[w, x, y, z]`, normalised.
     pub rotation: [f64; 4],
+    /// Translation `[x, y, z]`, applied after the rotation.
     pub translation: [f64; 3],
 }
 
 impl Pose {
+    /// No rotation, no translation.
     pub const IDENTITY: Pose = Pose {
         rotation: [1.0, 0.0, 0.0, 0.0],
         translation: [0.0; 3],
     };
 
+    /// Whether the pose leaves every point where it is.
     pub fn is_identity(&self) -> bool {
         *self == Pose::IDENTITY
     }

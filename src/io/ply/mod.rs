@@ -2,7 +2,7 @@
 //! binary little- and big-endian bodies, and a whole-mesh reader for ground
 //! truth meshes.
 
-pub mod header;
+pub(crate) mod header;
 
 mod attrs;
 mod binary;

@@ -66,7 +66,6 @@ pub fn orient_external(
     progress.end();
     Ok(OrientStats {
         components: census.components,
-        oriented_components: cut.oriented,
         unoriented: counts.iter().sum(),
     })
 }
@@ -173,7 +172,6 @@ impl Census {
             return Ok(Cut::none());
         };
         let mut left = self.total - u64::from(f.size);
-        let mut oriented = 1;
         for (&size, &count) in self.sizes.iter().rev() {
             // Members of this class taken while left * 1000 >= total.
             let room = (left * 1000).saturating_sub(self.total) / 1000;
@@ -182,7 +180,6 @@ impl Census {
             } else {
                 0
             };
-            oriented += taken;
             left -= taken * u64::from(size);
             if taken < count {
                 let last_id = match taken {
@@ -193,7 +190,6 @@ impl Census {
                     first,
                     size,
                     last_id,
-                    oriented: oriented as usize,
                 });
             }
         }
@@ -201,7 +197,6 @@ impl Census {
             first,
             size: 0,
             last_id: None,
-            oriented: oriented as usize,
         })
     }
 
@@ -285,7 +280,6 @@ struct Cut {
     first: u64,
     size: u32,
     last_id: Option<u32>,
-    oriented: usize,
 }
 
 impl Cut {
@@ -294,7 +288,6 @@ impl Cut {
             first: u64::MAX,
             size: u32::MAX,
             last_id: None,
-            oriented: 0,
         }
     }
 

@@ -43,7 +43,6 @@ pub const BYTES_PER_POINT: u64 = 6;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct OrientStats {
     pub components: usize,
-    pub oriented_components: usize,
     pub unoriented: u64,
 }
 
@@ -88,7 +87,6 @@ pub fn orient_by_forest(
     let unoriented = apply(store, &comps, &oriented, normals, flags, progress)?;
     Ok(OrientStats {
         components: facts.iter().filter(|c| c.size > 0).count(),
-        oriented_components: oriented.iter().filter(|o| o.is_some()).count(),
         unoriented,
     })
 }

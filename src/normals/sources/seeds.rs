@@ -40,8 +40,11 @@ impl Sources {
 /// slice or stream) and the direction its normal must face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Extreme {
+    /// Input-order id of the extreme point.
     pub id: u64,
+    /// Its index in the caller's slice or stream.
     pub index: u64,
+    /// The direction its normal must face.
     pub direction: DVec3,
 }
 
@@ -55,6 +58,7 @@ pub struct Extremes {
 }
 
 impl Extremes {
+    /// An empty selection of the extremes along each direction of `sources`.
     pub fn new(sources: &Sources) -> Self {
         let dirs = sources.directions();
         let best = vec![None; dirs.len()];

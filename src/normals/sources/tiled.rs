@@ -37,6 +37,7 @@ use std::collections::HashMap;
 /// Scratch file of the tiles' forests (removed when done).
 const FOREST_FILE: &str = ".sources.edges";
 
+/// What the tiled six-source orientation did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SourceStats {
     /// Sources of the whole cloud (up to six, coincident ones once).
@@ -46,6 +47,7 @@ pub struct SourceStats {
     /// Components the sources reach (1, or 0 without normals) plus those
     /// rooted on their own.
     pub components: usize,
+    /// Points with a normal the propagation did not reach.
     pub unoriented: u64,
 }
 

@@ -61,12 +61,11 @@ impl TileKernel for DelaunayKernel {
         let region = Region {
             loaded: tile.loaded,
         };
-        let sel = select(&tile.points, &tile.ids, self.hole, region)
-            .map_err(|e| KernelError::Failed(e.to_string()))?;
+        let sel =
+            select(&tile.points, &tile.ids, self.hole, region).map_err(KernelError::failed)?;
         if sel.doubtful[..tile.n_core].iter().any(|&d| d) {
-            return Err(KernelError::MarginTooSmall {
-                needed: tile.margin * 2.0,
-            });
+            // A doubtful fan says the margin is short, not by how much.
+            KernelError::unless_short(f64::INFINITY, tile.margin)?;
         }
         let owner_is_core = |t: &[u32; 3]| {
             let first = t.iter().min_by_key(|&&v| tile.ids[v as usize]);

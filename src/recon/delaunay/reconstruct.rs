@@ -1,5 +1,5 @@
 //! `reconstruct --method delaunay` end to end over a store: the tile kernel
-//! ([`super::kernel`]), then the seam side: every tile's core points become
+//! (`super::kernel`), then the seam side: every tile's core points become
 //! the output vertices (store order), its owned triangles go to a spool
 //! with a global component number, and seam edges met from both sides join
 //! components in a parity union-find (the two triangles must run the edge
@@ -27,7 +27,7 @@ const MARGIN_SPACINGS: f64 = 40.0;
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
 /// edge index, the tile's own columns.
-pub const BYTES_PER_POINT: u64 = 900;
+pub(crate) const BYTES_PER_POINT: u64 = 900;
 
 /// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
 /// per loaded point and nothing per stored point beyond the seam side's
@@ -46,47 +46,82 @@ pub fn cost() -> KernelCost {
     }
 }
 
+/// Parameters of the Delaunay-based (paper 4) reconstruction.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct DelaunayParams {
-    /// Absolute hole radius; default: [`Hole::Local`] with [`LOCAL_HOLE`].
+    /// Absolute hole radius; default: `Hole::Local` with `LOCAL_HOLE`.
     pub hole: Option<f64>,
 }
 
+impl DelaunayParams {
+    /// Refuses a hole radius that is not positive and finite.
+    pub fn validate(&self) -> Result<(), DelaunayReconError> {
+        match self.hole {
+            Some(h) if !(h.is_finite() && h > 0.0) => Err(DelaunayReconError::BadHole(h)),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// What the Delaunay-based reconstruction did.
 #[derive(Clone, Debug, Default)]
 pub struct DelaunayReport {
+    /// Vertices of the mesh written.
     pub vertices: u64,
+    /// Triangles of the mesh written.
     pub triangles: u64,
+    /// Connected components of the mesh.
     pub components: u64,
+    /// Components that could not be wound consistently (non-orientable).
     pub non_orientable: u64,
+    /// Input points that repeat another point's coordinates, left out of the triangulations.
     pub duplicates: u64,
+    /// Incompatible triangles deleted as type 1 (paper 4 section 2.3).
     pub type1: u64,
+    /// Incompatible triangles deleted as type 2.
     pub type2: u64,
+    /// Triangles deleted by the forced choice at incompatible edges.
     pub forced: u64,
+    /// Triangles added to close small holes.
     pub patches: u64,
+    /// Incompatible edges left after the last cleanup round.
     pub incompatible_left: u64,
     /// Largest triangulation of a tile, bytes per loaded point.
     pub triangulation_bytes_per_point: f64,
+    /// The hole-closing rule used, for the report.
     pub hole: String,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 
+/// Errors of the Delaunay-based reconstruction.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DelaunayReconError {
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Writing the mesh failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
-    #[error("--hole {0} must be a positive finite number")]
+    /// The hole radius given is zero, negative or not finite.
+    #[error("hole radius {0} must be a positive finite number")]
     BadHole(f64),
+    /// The store holds more points than a PLY index can name.
     #[error("{points} points: more than the 2^31 vertices a PLY index holds")]
-    TooManyPoints { points: u64 },
+    TooManyPoints {
+        /// Points of the store.
+        points: u64,
+    },
+    /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] crate::store::StoreError),
+    /// The scratch file of the seam triangles could not be written or read.
     #[error("triangle spool: {0}")]
     Spool(#[from] std::io::Error),
 }
 
+/// Reconstructs a mesh from the points of `store` with paper 4's Delaunay-based method, tile by tile, writing it to `output` in `format`; tiled output equals untiled.
 pub fn reconstruct_delaunay(
     store: &mut PointStore,
     params: &DelaunayParams,
@@ -95,9 +130,9 @@ pub fn reconstruct_delaunay(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<DelaunayReport, DelaunayReconError> {
+    params.validate()?;
     let hole = match params.hole {
-        Some(h) if h.is_finite() && h > 0.0 => Hole::Absolute(h),
-        Some(h) => return Err(DelaunayReconError::BadHole(h)),
+        Some(h) => Hole::Absolute(h),
         None => Hole::Local(LOCAL_HOLE),
     };
     if store.len() > i32::MAX as u64 {

@@ -62,15 +62,19 @@ const MAX_CELLS: usize = 1 << 30;
 /// where `face` is this face's index in the neighbour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cell {
+    /// Vertices, as indices into the triangulated points, or [`INFINITE`].
     pub v: [u32; 4],
+    /// Neighbour across the face opposite each vertex, as `cell << 2 | face`.
     pub n: [u32; 4],
 }
 
 impl Cell {
+    /// Whether the slot is on the free list (no live cell).
     pub fn is_free(&self) -> bool {
         self.v[0] == FREE
     }
 
+    /// Which vertex is the infinite one, if any.
     pub fn infinite_slot(&self) -> Option<usize> {
         self.v.iter().position(|&v| v == INFINITE)
     }
@@ -80,17 +84,35 @@ impl Cell {
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[non_exhaustive]
 pub enum DelaunayError {
+    /// A point has a NaN or infinite coordinate.
     #[error("point {index} has a non-finite coordinate")]
-    NonFinite { index: usize },
+    NonFinite {
+        /// Its index.
+        index: usize,
+    },
+    /// The points and their ranks differ in number.
     #[error("{points} points and {ranks} ranks")]
-    RankCount { points: usize, ranks: usize },
+    RankCount {
+        /// Points given.
+        points: usize,
+        /// Ranks given.
+        ranks: usize,
+    },
+    /// The points span no volume.
     #[error("the {distinct} distinct points are all {shape}: no 3-D triangulation exists (a flat or linear cloud needs a 2-D method)")]
     Degenerate {
+        /// Distinct points.
         distinct: usize,
+        /// What they all lie on (a point, a line, a plane).
         shape: &'static str,
     },
+    /// The triangulation would need more points or cells than it can address.
     #[error("more than {limit} points or cells for one triangulation")]
-    TooLarge { limit: usize },
+    TooLarge {
+        /// The limit.
+        limit: usize,
+    },
+    /// A point location walk did not end: the triangulation is inconsistent.
     #[error("the point location walk did not end (inconsistent triangulation)")]
     WalkStuck,
 }
@@ -155,7 +177,7 @@ impl EdgeTable {
 }
 
 /// The Delaunay triangulation of a point set; ranks (input ids) break ties,
-/// see [`super::predicates`]. Vertices are numbered in insertion order (so
+/// see `super::predicates`. Vertices are numbered in insertion order (so
 /// the cells of one region address nearby memory) and keep their position,
 /// rank and index in the input.
 pub struct Delaunay {
@@ -236,6 +258,7 @@ impl Delaunay {
         &self.cells
     }
 
+    /// Cell `c` (live or free).
     pub fn cell(&self, c: u32) -> &Cell {
         &self.cells[c as usize]
     }

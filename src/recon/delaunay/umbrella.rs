@@ -97,6 +97,7 @@ pub struct Region {
 const SLACK: f64 = 1e-7;
 
 impl Region {
+    #[cfg(test)]
     pub fn everything() -> Self {
         Region {
             loaded: Aabb::new(DVec3::splat(f64::NEG_INFINITY), DVec3::splat(f64::INFINITY)),

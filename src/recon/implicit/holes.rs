@@ -21,7 +21,7 @@
 //! the neighbouring tile brings its twin, so the map is about the seam's
 //! size; an edge with a vertex private to the tile is settled within it.
 //! The mesh edges a patch must not repeat are kept only while one of their
-//! vertices is incomplete (a later tile may name it, [`super::owners`]) or
+//! vertices is incomplete (a later tile may name it, `super::owners`) or
 //! both are on the boundary.
 
 use super::hole_guard::{placed, NearHoles, MAX_TRIES};
@@ -33,11 +33,11 @@ use std::collections::{HashMap, HashSet};
 pub const MAX_FILLED_LOOP: usize = 400;
 
 /// A mesh vertex: output index and position.
-pub type LoopVertex = (u32, DVec3);
+pub(crate) type LoopVertex = (u32, DVec3);
 
 /// A triangle's vertices as the stitcher numbered them, with whether each
 /// may be shared with another tile.
-pub struct StitchedTriangle {
+pub(crate) struct StitchedTriangle {
     pub vertices: [LoopVertex; 3],
     pub on_seam: [bool; 3],
     /// The last tile that may name each vertex.
@@ -45,7 +45,7 @@ pub struct StitchedTriangle {
 }
 
 #[derive(Default)]
-pub struct BoundaryEdges {
+pub(crate) struct BoundaryEdges {
     /// Directed edges (a, b) between seam vertices whose twin (b, a) has not
     /// come yet, with their end points.
     waiting: HashMap<(u32, u32), [DVec3; 2]>,
@@ -61,9 +61,10 @@ pub struct BoundaryEdges {
     near: NearHoles,
 }
 
-/// What [`BoundaryEdges::fill`] did.
+/// What `BoundaryEdges::fill` did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HoleReport {
+    /// Boundary loops closed with a patch.
     pub filled: u64,
     /// Loops longer than [`MAX_FILLED_LOOP`], passing a vertex twice, or
     /// whose every patch would repeat a mesh edge or cross the mesh.
@@ -73,7 +74,7 @@ pub struct HoleReport {
 impl BoundaryEdges {
     /// Counts one tile's triangles (consistently wound, so an interior edge
     /// comes once in each direction).
-    pub fn add_tile(&mut self, triangles: &[StitchedTriangle]) {
+    pub(crate) fn add_tile(&mut self, triangles: &[StitchedTriangle]) {
         let mut local: HashMap<(u32, u32), [DVec3; 2]> = HashMap::new();
         let mut now_waiting = Vec::new();
         for t in triangles {
@@ -123,7 +124,7 @@ impl BoundaryEdges {
     /// Forgets the edges no patch can use once tile `tile` is stitched: a
     /// patch joins boundary vertices only, and a vertex no later tile can
     /// name is on the boundary now or never.
-    pub fn retire(&mut self, tile: u32) {
+    pub(crate) fn retire(&mut self, tile: u32) {
         let waiting: HashSet<u32> = self.waiting.keys().flat_map(|&(a, b)| [a, b]).collect();
         let settled = &self.settled_vertices;
         let final_inside =
@@ -135,7 +136,7 @@ impl BoundaryEdges {
     }
 
     /// Edges kept that no patch can use (0 when every tile retired its own).
-    pub fn unneeded(&self) -> u64 {
+    pub(crate) fn unneeded(&self) -> u64 {
         let waiting: HashSet<u32> = self.waiting.keys().flat_map(|&(a, b)| [a, b]).collect();
         let boundary = |v: u32| self.settled_vertices.contains(&v) || waiting.contains(&v);
         let unneeded = self
@@ -148,7 +149,7 @@ impl BoundaryEdges {
 
     /// Chains the boundary edges into loops and triangulates each loop that
     /// can be; returns the new triangles (wound like the mesh) and counts.
-    pub fn fill(self) -> (Vec<[u32; 3]>, HoleReport) {
+    pub(crate) fn fill(self) -> (Vec<[u32; 3]>, HoleReport) {
         let mut edges = self.settled;
         edges.extend(
             self.waiting

@@ -13,19 +13,19 @@
 use glam::DVec3;
 
 /// Bits of the x and y corner index in an edge key.
-pub const XY_BITS: u32 = 21;
+pub(crate) const XY_BITS: u32 = 21;
 /// Bits of the z corner index in an edge key. One less than x and y because
 /// the axis needs 2 bits and 3 x 21 + 2 = 65 does not fit; scans are wider
 /// than they are tall, so z gives up the bit.
-pub const Z_BITS: u32 = 20;
+pub(crate) const Z_BITS: u32 = 20;
 /// Smallest and largest x or y corner index an edge key can hold:
 /// `[-2^20, 2^20 - 1]`.
-pub const XY_MIN: i64 = -(1 << (XY_BITS - 1));
-pub const XY_MAX: i64 = (1 << (XY_BITS - 1)) - 1;
+pub(crate) const XY_MIN: i64 = -(1 << (XY_BITS - 1));
+pub(crate) const XY_MAX: i64 = (1 << (XY_BITS - 1)) - 1;
 /// Smallest and largest z corner index an edge key can hold:
 /// `[-2^19, 2^19 - 1]`.
-pub const Z_MIN: i64 = -(1 << (Z_BITS - 1));
-pub const Z_MAX: i64 = (1 << (Z_BITS - 1)) - 1;
+pub(crate) const Z_MIN: i64 = -(1 << (Z_BITS - 1));
+pub(crate) const Z_MAX: i64 = (1 << (Z_BITS - 1)) - 1;
 
 const AXIS_BITS: u32 = 2;
 const Z_SHIFT: u32 = AXIS_BITS;
@@ -39,35 +39,68 @@ const AXIS_MASK: u64 = (1 << AXIS_BITS) - 1;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum LatticeError {
+    /// The cell size is zero, negative or not finite.
     #[error("lattice cell size must be finite and > 0, got {cell}")]
-    BadCellSize { cell: f64 },
+    BadCellSize {
+        /// The size given.
+        cell: f64,
+    },
+    /// The origin has a NaN or infinite coordinate.
     #[error("lattice origin must be finite, got {origin:?}")]
-    BadOrigin { origin: [f64; 3] },
+    BadOrigin {
+        /// The origin given.
+        origin: [f64; 3],
+    },
+    /// An edge axis other than x (0), y (1) or z (2).
     #[error("edge axis must be 0, 1 or 2, got {axis}")]
-    BadAxis { axis: u8 },
+    BadAxis {
+        /// The axis given.
+        axis: u8,
+    },
+    /// A lattice corner lies outside what an edge key can encode.
     #[error(
         "lattice corner {cell:?} is outside the edge-key range \
          (x, y in [{XY_MIN}, {XY_MAX}], z in [{Z_MIN}, {Z_MAX}])"
     )]
-    OutOfRange { cell: [i64; 3] },
+    OutOfRange {
+        /// The corner, in lattice cells.
+        cell: [i64; 3],
+    },
+    /// An edge key whose axis bits name no axis.
     #[error("edge key {key:#x} has axis bits 3")]
-    BadKey { key: u64 },
+    BadKey {
+        /// The key given.
+        key: u64,
+    },
+    /// The field is NaN or infinite at a cube corner.
     #[error("field value {value} at corner {corner} of cube {cell:?} is not finite")]
     NonFiniteValue {
+        /// The cube, by its lowest corner in lattice cells.
         cell: [i64; 3],
+        /// The corner (numbering of `mc_table`).
         corner: usize,
+        /// The value there.
         value: f64,
     },
+    /// The mesh would need more vertices than u32 indices name.
     #[error("mesh has more than u32::MAX vertices")]
     TooManyVertices,
+    /// The marching-cubes table could not be built (a bug, not bad input).
     #[error("marching-cubes table construction failed for case {case:#04x}: {reason}")]
-    Table { case: usize, reason: &'static str },
+    Table {
+        /// The cube case (corner sign bits).
+        case: usize,
+        /// What failed.
+        reason: &'static str,
+    },
 }
 
 /// The global lattice: corner `[i, j, k]` sits at `origin + [i, j, k] * cell`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lattice {
+    /// Position of corner `[0, 0, 0]`.
     pub origin: DVec3,
+    /// Side of a cube, in the points' units.
     pub cell: f64,
 }
 
@@ -104,7 +137,7 @@ impl Lattice {
 }
 
 /// Whether corner `c` can be packed into an edge key.
-pub fn in_key_range(c: [i64; 3]) -> bool {
+pub(crate) fn in_key_range(c: [i64; 3]) -> bool {
     (XY_MIN..=XY_MAX).contains(&c[0])
         && (XY_MIN..=XY_MAX).contains(&c[1])
         && (Z_MIN..=Z_MAX).contains(&c[2])

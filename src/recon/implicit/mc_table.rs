@@ -51,7 +51,7 @@ use super::lattice::LatticeError;
 
 /// Most triangles of any case. The construction yields at most 5 (as the
 /// classic table); a case needing more fails the build with an error.
-pub const MAX_TRIANGLES: usize = 5;
+pub(crate) const MAX_TRIANGLES: usize = 5;
 
 /// Offset of each corner from the cube's min corner.
 pub const CORNER_OFFSETS: [[i64; 3]; 8] = corner_offsets();
@@ -109,18 +109,19 @@ impl McCase {
     }
 
     /// Bit `e` set when edge `e` changes sign in this case.
-    pub fn cut_edges(&self) -> u16 {
+    pub(crate) fn cut_edges(&self) -> u16 {
         self.cut_edges
     }
 }
 
-/// All 256 cases, indexed by [`case_index`].
+/// All 256 cases, indexed by `case_index`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct McTable {
     cases: [McCase; 256],
 }
 
 impl McTable {
+    /// The triangles of the cube case `index` (bit `c` set when corner `c` is positive).
     pub fn case(&self, index: u8) -> &McCase {
         &self.cases[usize::from(index)]
     }
@@ -128,7 +129,7 @@ impl McTable {
 
 /// The case of a cube: bit `c` set when `values[c] > 0` (NaN counts as not
 /// positive; callers reject non-finite values first).
-pub fn case_index(values: &[f64; 8]) -> u8 {
+pub(crate) fn case_index(values: &[f64; 8]) -> u8 {
     let mut index = 0u8;
     for (c, &v) in values.iter().enumerate() {
         if v > 0.0 {
@@ -148,7 +149,7 @@ pub fn table() -> Result<&'static McTable, LatticeError> {
 }
 
 /// Builds the table by the face-walking construction (see the module docs).
-pub fn build_table() -> Result<McTable, LatticeError> {
+pub(crate) fn build_table() -> Result<McTable, LatticeError> {
     let mut cases = [McCase::EMPTY; 256];
     for (index, case) in cases.iter_mut().enumerate() {
         *case = build_case(index)?;

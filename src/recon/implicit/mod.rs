@@ -6,20 +6,21 @@
 //! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
 //! (one cube, and a reference driver over a set of cubes).
 
-pub mod dilate;
-pub mod hole_guard;
+pub(crate) mod dilate;
+pub(crate) mod hole_guard;
 pub mod holes;
-pub mod kernel;
+pub(crate) mod kernel;
 pub mod lattice;
 pub mod mc_table;
-pub mod mls;
-pub mod owners;
-pub mod pinch;
+pub(crate) mod mls;
+pub(crate) mod owners;
+pub(crate) mod pinch;
 pub mod polygonize;
 pub mod reconstruct;
-pub mod refine;
+pub(crate) mod refine;
 pub mod sdf;
-pub mod stitch;
+pub(crate) mod stitch;
+mod validate;
 
 pub use lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 pub use polygonize::{polygonize_cube, polygonize_field, CubeVertex, IndexedMesh, MeshWelder};

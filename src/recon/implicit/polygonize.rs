@@ -13,7 +13,9 @@ use super::mc_table::{self, CORNER_OFFSETS, EDGE_AXIS, EDGE_CORNERS};
 /// A surface vertex on a lattice edge: the edge's key and the crossing point.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CubeVertex {
+    /// The lattice edge the vertex lies on ([`edge_key`]).
     pub key: u64,
+    /// Where the field crosses zero on that edge.
     pub pos: DVec3,
 }
 
@@ -21,8 +23,11 @@ pub struct CubeVertex {
 /// are in order of first appearance; triangle normals point to f > 0.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct IndexedMesh {
+    /// Vertex positions, in order of first appearance.
     pub vertices: Vec<DVec3>,
+    /// The lattice edge of each vertex.
     pub keys: Vec<u64>,
+    /// Triangles as indices into `vertices`, wound so their normals point to f > 0.
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -105,11 +110,11 @@ pub struct MeshWelder {
 }
 
 impl MeshWelder {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
-    pub fn push(&mut self, tri: &[CubeVertex; 3]) -> Result<(), LatticeError> {
+    pub(crate) fn push(&mut self, tri: &[CubeVertex; 3]) -> Result<(), LatticeError> {
         let mut ids = [0u32; 3];
         for (id, v) in ids.iter_mut().zip(tri) {
             *id = self.vertex_id(v)?;
@@ -130,7 +135,7 @@ impl MeshWelder {
         Ok(id)
     }
 
-    pub fn finish(self) -> IndexedMesh {
+    pub(crate) fn finish(self) -> IndexedMesh {
         self.mesh
     }
 }

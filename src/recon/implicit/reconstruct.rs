@@ -17,8 +17,11 @@ use crate::tiling::load::core_box;
 use glam::DVec3;
 use std::path::Path;
 
+/// Parameters of the implicit (paper 1) reconstruction; lengths in the
+/// points' units.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ImplicitParams {
+    /// The normals to compute first when the store has none (or other ones).
     pub normals: NormalParams,
     /// Cube edge; default rho + delta (paper 1 section 2.6).
     pub cell: Option<f64>,
@@ -27,7 +30,7 @@ pub struct ImplicitParams {
     /// The surface is closed: every corner is defined (paper 1 section 4.1).
     pub closed: bool,
     /// Drop connected pieces with fewer triangles than this share of the
-    /// largest piece's; default [`CLOSED_MIN_PIECE`] with `closed`, else 0.
+    /// largest piece's; default `CLOSED_MIN_PIECE` with `closed`, else 0.
     pub min_piece: Option<f64>,
     /// The signed distance (default: moving least squares).
     pub field: Field,
@@ -89,47 +92,73 @@ impl ImplicitParams {
 /// a closed scan is of objects, and a piece with a hundredth of the main
 /// one's triangles is a stray cluster closed on itself (the 10M dragon's
 /// ten are 4 to 258 triangles beside 2.8 million).
-pub const CLOSED_MIN_PIECE: f64 = 0.01;
+pub(crate) const CLOSED_MIN_PIECE: f64 = 0.01;
 
+/// What the implicit reconstruction did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ImplicitReport {
     /// Present when this run computed the normals.
     pub normals: Option<NormalsReport>,
+    /// Paper 1's sampling density `rho` (section 2.6).
     pub rho: f64,
+    /// Points whose nearest neighbour lies beyond what `rho` admits.
     pub rho_outliers: u64,
+    /// Paper 1's noise bound `delta`.
     pub delta: f64,
+    /// Side of the lattice cubes used.
     pub cell: f64,
+    /// Vertices of the mesh written.
     pub vertices: u64,
+    /// Triangles of the mesh written.
     pub triangles: u64,
+    /// Cubes polygonised over all tiles.
     pub cubes: u64,
     /// Holes closed at the end, and holes left (`--closed` only).
     pub holes: HoleReport,
+    /// Small pieces dropped.
     pub pieces: PieceReport,
     /// Seam entries left at the end that no hole needs (0: the seam maps
     /// forgot every vertex once complete).
     pub seam_left: u64,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 
+/// Errors of the implicit reconstruction.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ReconError {
+    /// Computing the normals failed, or their parameters are unusable.
     #[error(transparent)]
     Normals(#[from] NormalsError),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// Writing the mesh failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// The lattice could not be laid or polygonised.
     #[error(transparent)]
     Lattice(#[from] LatticeError),
-    #[error("--{what} {value} must be a positive finite number")]
-    BadParameter { what: &'static str, value: f64 },
-    #[error("--min-piece {0} must be a share between 0 and 1")]
+    /// A length is out of range (the cell not positive, the noise bound negative, or either not finite).
+    #[error("{what} {value} is out of range: a cell must be positive, a noise bound at least 0, both finite")]
+    BadParameter {
+        /// Which length: `cell` or `noise`.
+        what: &'static str,
+        /// The value given or estimated.
+        value: f64,
+    },
+    /// The small-piece share lies outside `[0, 1]`.
+    #[error("small-piece share {0} must lie between 0 and 1")]
     BadShare(f64),
 }
 
+/// Reconstructs a mesh from the points of `store` with paper 1's implicit
+/// method (normals first when the store has none), tile by tile, writing it
+/// to `output` in `format`; tiled output equals untiled.
 pub fn reconstruct_implicit(
     store: &mut PointStore,
     params: &ImplicitParams,
@@ -138,6 +167,7 @@ pub fn reconstruct_implicit(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<ImplicitReport, ReconError> {
+    params.validate()?;
     let min_piece = params.min_piece_share()?;
     let mut report = ImplicitReport {
         normals: ensure_normals(store, &params.normals, opts, progress)?,
@@ -207,14 +237,14 @@ pub fn reconstruct_implicit(
 /// 1M noisy dragon, mean distance to the true surface both ways at cells of
 /// 3 / 2.2 / 1.8 spacings: 0.0572 / 0.0541 / 0.0535 (Open3D Poisson depth
 /// 9: 0.0723), the time about inversely proportional to the cell squared.
-pub const MLS_CELL_SPACINGS: f64 = 2.2;
+pub(crate) const MLS_CELL_SPACINGS: f64 = 2.2;
 
 /// The MLS cell with `closed`, in spacings: coarser than the open one
 /// because a finer lattice meets more places where the surface leaves the
 /// band (next to parts thinner than a cell), and some of those holes are
 /// too twisted for a least-area patch clear of the mesh: the 1M dragon at
 /// 3 / 2.2 spacings leaves 0 / 4 holes open.
-pub const CLOSED_MLS_CELL_SPACINGS: f64 = 3.0;
+pub(crate) const CLOSED_MLS_CELL_SPACINGS: f64 = 3.0;
 
 /// The default cell: paper 1's `rho + delta` (section 2.6) for its own
 /// field; [`MLS_CELL_SPACINGS`] (open) or [`CLOSED_MLS_CELL_SPACINGS`] for

@@ -17,7 +17,7 @@ use crate::tiling::TilePoints;
 use glam::DVec3;
 
 /// Samples with usable oriented normals, and their kNN index.
-pub struct Samples<'a> {
+pub(crate) struct Samples<'a> {
     pub points: &'a [DVec3],
     pub normals: &'a [DVec3],
     pub index: &'a GridIndex<'a>,
@@ -25,7 +25,7 @@ pub struct Samples<'a> {
 
 /// The value at a corner, or how far the loaded region falls short.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Corner {
+pub(crate) enum Corner {
     Value(Option<f64>),
     Short(f64),
 }
@@ -41,11 +41,11 @@ pub enum Corner {
 /// A sample of the other face (the roof) projects it onto data. Beyond an
 /// open boundary every nearby plane projects the corner beyond the boundary,
 /// so open boundaries still appear.
-pub const PLANES_TRIED: usize = 8;
+pub(crate) const PLANES_TRIED: usize = 8;
 
 /// Planes averaged at each corner of a closed surface (see
 /// `averaged_planes`).
-pub const CLOSED_PLANES: usize = 64;
+pub(crate) const CLOSED_PLANES: usize = 64;
 
 /// Width of the averaging weight, as a share of the distance to the
 /// farthest of the [`CLOSED_PLANES`] samples.
@@ -54,18 +54,18 @@ const CLOSED_WIDTH: f64 = 0.8;
 /// Which signed distance the corners and vertices take.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Field {
-    /// The moving-least-squares average of nearby planes ([`super::mls`]),
+    /// The moving-least-squares average of nearby planes (`super::mls`),
     /// vertices moved onto its zero set along their lattice edges.
     #[default]
     Mls,
     /// Paper 1 section 2.5: the nearest sample's plane (with `--closed`,
-    /// [`CLOSED_PLANES`] averaged), vertices linearly interpolated.
+    /// `CLOSED_PLANES` averaged), vertices linearly interpolated.
     Paper1,
 }
 
 impl Field {
     /// The field's value at lattice corner `p` (see [`signed_distance`]).
-    pub fn corner(
+    pub(crate) fn corner(
         self,
         s: &Samples,
         tile: &TilePoints,
@@ -87,7 +87,7 @@ impl Field {
 /// per cent of the corners) are the [`PLANES_TRIED`] nearest fetched. The
 /// nearest is the first of those in the same (distance, id) order, so the
 /// value is the same as trying them all from one query.
-pub fn signed_distance(
+pub(crate) fn signed_distance(
     s: &Samples,
     tile: &TilePoints,
     p: DVec3,

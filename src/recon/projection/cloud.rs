@@ -45,18 +45,6 @@ pub struct Cloud<'a, H: Neighbourhoods> {
     /// Whether a point may be a corner of a new triangle (a lattice job
     /// adds triangles only inside its window, `lattice.rs`).
     pub joinable: &'a [bool],
-    /// Input ids: the growth order and every tie.
-    pub ids: &'a [u64],
     /// Exact kNN over `points`, for checks beyond a neighbour list.
     pub index: &'a dyn KnnIndex,
-}
-
-impl<H: Neighbourhoods> Cloud<'_, H> {
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
 }

@@ -92,6 +92,7 @@ pub fn strictly_inside(p: DVec2, a: DVec2, b: DVec2, c: DVec2) -> bool {
 /// Whether `d` lies strictly inside the circumcircle of the
 /// counter-clockwise triangle `abc` (the determinant of Guibas-Stolfi,
 /// relative to `d`).
+#[cfg(test)]
 pub fn in_circle(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     let (a, b, c) = (a - d, b - d, c - d);
     let det = a.length_squared() * b.perp_dot(c) - b.length_squared() * a.perp_dot(c)

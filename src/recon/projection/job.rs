@@ -31,7 +31,6 @@ use std::sync::OnceLock;
 /// What a job made.
 #[derive(Debug, Default)]
 pub struct JobOutput {
-    pub key: Option<JobKey>,
     /// Triangles (tile-local indices), wound in their piece's frame.
     pub tris: Vec<[u32; 3]>,
     /// Index into `names` of each triangle's piece.
@@ -334,7 +333,6 @@ fn grow_job<'a, H: Neighbourhoods>(
         hoods: &hoods,
         centre: &jp.centre,
         joinable: &jp.joinable,
-        ids: &jp.ids,
         index: &index,
     };
     let mut grower = Grower::new(params, n_all);
@@ -370,7 +368,6 @@ fn grow_job<'a, H: Neighbourhoods>(
         }
     };
     let mut out = JobOutput {
-        key: Some(key),
         processed: grower.processed,
         ..JobOutput::default()
     };

@@ -94,9 +94,7 @@ impl TileKernel for ProjectionKernel {
                 short = short.max(info[i as usize].short_by);
             }
         }
-        if short > 0.0 {
-            return Err(more_margin(tile, short));
-        }
+        KernelError::unless_short(short, tile.margin)?;
         let mut done: BTreeMap<JobKey, JobOutput> = BTreeMap::new();
         for level in 0..LEVELS {
             let keys: Vec<JobKey> = required
@@ -112,7 +110,7 @@ impl TileKernel for ProjectionKernel {
                     |local, &k| run_job(k, lat, &view, &lower, &self.params, local),
                 )
                 .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| KernelError::Failed(e.to_string()))?;
+                .map_err(KernelError::failed)?;
             for (k, out) in keys.into_iter().zip(outputs) {
                 done.insert(k, out);
             }
@@ -152,22 +150,9 @@ impl ProjectionKernel {
             let hi = (v.max - tile.loaded.max).max_element();
             short = short.max(lo).max(hi);
         }
-        if short > 0.0 {
-            return Err(more_margin(tile, short));
-        }
+        KernelError::unless_short(short, tile.margin)?;
         all.retain(|k| present.contains(k));
         Ok(all)
-    }
-}
-
-fn more_margin(tile: &TilePoints, short: f64) -> KernelError {
-    let extra = if short.is_finite() {
-        short
-    } else {
-        tile.margin
-    };
-    KernelError::MarginTooSmall {
-        needed: (tile.margin + extra) * 1.0001 + 1e-12,
     }
 }
 

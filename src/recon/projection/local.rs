@@ -62,15 +62,11 @@ pub(crate) fn local_data<'a>(
     let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
     let n_core = tile.n_core;
     let (core, mut info) = index.hoods(tile, n_core, |i| i, visit)?;
-    if core.short_by > 0.0 {
-        return Err(KernelError::MarginTooSmall {
-            needed: (tile.margin + core.short_by) * 1.0001 + 1e-12,
-        });
-    }
+    KernelError::unless_short(core.short_by, tile.margin)?;
     let margin_count = tile.points.len() - n_core;
     let (margin, margin_info) = index.hoods(tile, margin_count, |i| n_core + i, visit)?;
     info.extend(margin_info);
-    let n_core = u32::try_from(n_core).map_err(|e| KernelError::Failed(e.to_string()))?;
+    let n_core = u32::try_from(n_core).map_err(KernelError::failed)?;
     Ok((
         index,
         TileHoods {

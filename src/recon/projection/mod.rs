@@ -3,14 +3,14 @@
 //! the surface. Each vertex's neighbours are projected on its tangent plane,
 //! the ones it can see are joined to it as a Delaunay fan in that plane.
 //!
-//! Layers, each over plain data: [`surface`] (the mesh under construction,
-//! vertex states, the directed-edge rule, orientation pieces), [`frame`]
-//! (section 2.7), [`star`] (sections 2.6, 2.8: the oriented plane, the
-//! visible region, the candidates), [`fan`] (section 2.9), [`grow`] (the
-//! front), [`thin`] and [`local`] (sections 2.4-2.5: lists, planes, local
-//! spacing), [`triangulate`] (one tile, or points in memory), and the
-//! pipeline glue: [`lattice`] and [`job`] (where the growth runs, so
-//! that tiles do not change it), [`kernel`], [`stitch`], [`reconstruct`].
+//! Layers, each over plain data: `surface` (the mesh under construction,
+//! vertex states, the directed-edge rule, orientation pieces), `frame`
+//! (section 2.7), `star` (sections 2.6, 2.8: the oriented plane, the
+//! visible region, the candidates), `fan` (section 2.9), `grow` (the
+//! front), `thin` and `local` (sections 2.4-2.5: lists, planes, local
+//! spacing), `triangulate` (one tile, or points in memory), and the
+//! pipeline glue: `lattice` and `job` (where the growth runs, so
+//! that tiles do not change it), `kernel`, `stitch`, `reconstruct`.
 //!
 //! Output: every input point is a vertex, in store order (a vertex's index
 //! is its store index; unused points, e.g. thinned ones, are unreferenced
@@ -34,24 +34,24 @@
 //! once fronts from different seeds or tiles meet (`surface.rs`,
 //! `orient.rs`).
 
-pub mod cloud;
-pub mod fan;
-pub mod frame;
-pub mod grow;
-pub mod holes;
-pub mod job;
-pub mod kernel;
-pub mod lattice;
-pub mod local;
-pub mod orient;
-pub mod params;
-pub mod reconstruct;
-pub mod star;
-pub mod stitch;
-pub mod surface;
-pub mod thin;
-pub mod triangulate;
+pub(crate) mod cloud;
+pub(crate) mod fan;
+pub(crate) mod frame;
+pub(crate) mod grow;
+pub(crate) mod holes;
+pub(crate) mod job;
+pub(crate) mod kernel;
+pub(crate) mod lattice;
+pub(crate) mod local;
+pub(crate) mod orient;
+pub(crate) mod params;
+pub(crate) mod reconstruct;
+pub(crate) mod star;
+pub(crate) mod stitch;
+pub(crate) mod surface;
+pub(crate) mod thin;
+pub(crate) mod triangulate;
 
-pub use params::ProjectionParams;
+pub use params::{BadParameter, ProjectionParams};
 pub use reconstruct::{reconstruct_projection, ProjectionError, ProjectionReport};
 pub use triangulate::{triangulate_points, triangulate_tile};

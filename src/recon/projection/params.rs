@@ -6,11 +6,13 @@
 use crate::memory::plan::KernelCost;
 use crate::normals::{NormalHood, NormalParams};
 
+/// Parameters of the local-projection triangulation (paper 2); lengths in local spacings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionParams {
     /// Neighbourhood of each vertex: the k nearest (paper 2 section 2.4,
     /// k in 6..15) or paper 3's topological neighbours.
     pub k: usize,
+    /// Which neighbourhood `k` counts (the k nearest, or paper 3's topological neighbours).
     pub neighbourhood: NormalHood,
     /// A point closer than this many local spacings to a point of smaller
     /// input id is left out (0 keeps every point); see `thin.rs`.
@@ -51,10 +53,13 @@ impl Default for ProjectionParams {
 
 /// A parameter outside its range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("--{name} {value}: {why}")]
+#[error("{name} = {value}: {why}")]
 pub struct BadParameter {
+    /// The field of [`ProjectionParams`] that is out of range.
     pub name: &'static str,
+    /// The value it was given.
     pub value: f64,
+    /// The range it must lie in.
     pub why: &'static str,
 }
 
@@ -70,21 +75,21 @@ impl ProjectionParams {
         }
         if !(self.max_edge.is_finite() && self.max_edge >= 1.0) {
             return bad(
-                "max-edge",
+                "max_edge",
                 self.max_edge,
                 "must be at least 1 local spacing",
             );
         }
         if !(0.0 < self.max_elevation_deg && self.max_elevation_deg < 90.0) {
             return bad(
-                "max-elevation",
+                "max_elevation_deg",
                 self.max_elevation_deg,
                 "must be in (0, 90) degrees",
             );
         }
         if !(60.0 < self.max_angle_deg && self.max_angle_deg < 180.0) {
             return bad(
-                "max-angle",
+                "max_angle_deg",
                 self.max_angle_deg,
                 "must be in (60, 180) degrees",
             );
@@ -102,7 +107,7 @@ impl ProjectionParams {
     }
 
     /// What a run costs, for the memory plan (measured, see
-    /// [`BYTES_PER_POINT_BASE`]): the kernel's bytes per loaded point.
+    /// `BYTES_PER_POINT_BASE`): the kernel's bytes per loaded point.
     /// The lattice's margin (~108 units) loads more than the plan's 1.5
     /// points per core point on small tiles, but the kernel no longer
     /// holds a whole tile's growth, only its jobs' outputs and a few jobs

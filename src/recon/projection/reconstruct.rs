@@ -57,33 +57,44 @@ pub fn lattice(unit: f64, reach: f64) -> Lattice {
     }
 }
 
+/// What the local-projection reconstruction did.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProjectionReport {
     /// The store's spacing estimate, which sets the band and the margins
     /// (never a result within a tile).
     pub spacing: f64,
+    /// The job lattice the tiles were cut into.
     pub lattice: Lattice,
     /// Points processed by the tiles' growth (margins included).
     pub processed: u64,
     /// Lattice jobs with points (each owned by one tile), and jobs run in
     /// all (a tile also runs the lower jobs its own read).
     pub jobs: u64,
+    /// Lattice jobs run in all, repeats included.
     pub jobs_run: u64,
+    /// What joining the jobs' triangles did.
     pub stitch: StitchReport,
+    /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
 
+/// Errors of the local-projection reconstruction.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ProjectionError {
+    /// A parameter is out of range.
     #[error(transparent)]
     Parameter(#[from] BadParameter),
+    /// The tile pipeline failed.
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
+    /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// Writing the mesh failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// Joining the jobs' triangles failed.
     #[error(transparent)]
     Stitch(#[from] StitchError),
 }
@@ -94,6 +105,7 @@ fn kth_distance(spacing: f64, k: usize) -> f64 {
     2.0 * spacing * (k as f64 / std::f64::consts::PI).sqrt()
 }
 
+/// Reconstructs a mesh from the points of `store` by local projection (paper 2), tile by tile, writing it to `output` in `format`; tiled output equals untiled.
 pub fn reconstruct_projection(
     store: &mut PointStore,
     params: &ProjectionParams,

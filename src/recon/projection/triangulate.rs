@@ -20,6 +20,7 @@ pub struct TileSurface {
     pub processed: u64,
 }
 
+/// Grows the local-projection surface over the points of one tile, margins included.
 pub fn triangulate_tile(
     tile: &TilePoints,
     params: &ProjectionParams,
@@ -36,7 +37,6 @@ pub fn triangulate_tile(
         hoods: &hoods,
         centre: &centre,
         joinable: &joinable,
-        ids: &tile.ids,
         index: index.as_knn(),
     };
     let mut surface = Surface::new(tile.points.len());
