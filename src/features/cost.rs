@@ -2,12 +2,13 @@
 //! (`pipeline::plan`): the largest of the passes they chain (normals when
 //! the store has none, the curvature kernel, the feature kernel), the
 //! normals' orientation state, the input-order export and the lines kept
-//! until the seams are joined. Checked on the 10M-point noisy dragon:
-//! `features --mem 256MiB` peaks at 231 MiB (peak-rss; 258 MiB before the
-//! margin and the join were declared, 276 MiB with 32 d growth cells).
-//! Measured again on 2026-11-24 (scratch in /dev/shm, 256 tiles, maximum
-//! RSS from `/usr/bin/time -v`): 263 MiB with `--crest 0` and 277 MiB with
-//! the crest placement, both over the promise: not yet explained.
+//! until the seams are joined. Checked on the 10M-point noisy dragon
+//! (peak-rss, scratch on disk, 256 tiles): `features --mem 256MiB` peaks
+//! at 236 MiB, `--mem 240MiB` (the smallest it takes) at 224 MiB.
+//! The join is the run's peak: it starts where the tiles left the heap
+//! (their freed memory stays with the allocator's worker arenas, ~55 MiB
+//! at 10M), so it must not copy the lines; holding each line twice over
+//! took the same run to 277 MiB (2026-11-24).
 
 use super::export::RECORD;
 use super::params::FeatureParams;

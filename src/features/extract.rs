@@ -105,10 +105,7 @@ pub fn extract_lines(
             })
         })
         .collect();
-    let kept = drop_copies(&grown, 0.5 * resolved.gamma_max);
-    // The join's peak holds every line several times over: free the
-    // grown copies before the repair builds its graph.
-    drop(grown);
+    let kept = drop_copies(grown, 0.5 * resolved.gamma_max);
     let polylines: Vec<(LineKind, Vec<DVec3>)> =
         kept.into_iter().map(|l| (l.kind, l.points)).collect();
     let corner_points: Vec<(LineKind, DVec3)> = corners.iter().map(|c| (c.1, c.2)).collect();
@@ -116,7 +113,7 @@ pub fn extract_lines(
         length: resolved.cone_length,
         half_angle: resolved.cone_angle,
     };
-    let mut graph = repair(&polylines, &corner_points, cone, resolved.gamma_max);
+    let mut graph = repair(polylines, &corner_points, cone, resolved.gamma_max);
     graph.relax(resolved.relax_passes);
     let report = FeaturesReport {
         points: store.len(),

@@ -21,10 +21,11 @@ use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-/// A fixed-radius index over `points` (tie keys `ids`).
+/// A fixed-radius index over `points` (tie keys `ids`, or the points'
+/// indices for [`BallGrid::indexed`]).
 pub struct BallGrid<'a> {
     points: &'a [DVec3],
-    ids: &'a [u64],
+    ids: Option<&'a [u64]>,
     inv: f64,
     /// Point indices sorted by cell; `cells` maps a cell to its range.
     order: Vec<u32>,
@@ -35,7 +36,21 @@ impl<'a> BallGrid<'a> {
     /// `None` when `cell` is not a positive finite size or the set is too
     /// large for u32 indices.
     pub fn new(points: &'a [DVec3], ids: &'a [u64], cell: f64) -> Option<Self> {
-        if !(cell.is_finite() && cell > 0.0) || points.len() != ids.len() {
+        if points.len() != ids.len() {
+            return None;
+        }
+        Self::build(points, Some(ids), cell)
+    }
+
+    /// A grid whose tie key is each point's index in `points` (the seam
+    /// join's line vertices, already in canonical order): no id array,
+    /// 8 bytes per vertex less where all of a run's lines are held.
+    pub fn indexed(points: &'a [DVec3], cell: f64) -> Option<Self> {
+        Self::build(points, None, cell)
+    }
+
+    fn build(points: &'a [DVec3], ids: Option<&'a [u64]>, cell: f64) -> Option<Self> {
+        if !(cell.is_finite() && cell > 0.0) {
             return None;
         }
         if points.len() >= u32::MAX as usize {
@@ -46,7 +61,13 @@ impl<'a> BallGrid<'a> {
         let mut keyed: Vec<(u64, u64, u32)> = points
             .iter()
             .enumerate()
-            .map(|(i, p)| (pack(cell_of(*p, inv)), ids[i], i as u32))
+            .map(|(i, p)| {
+                (
+                    pack(cell_of(*p, inv)),
+                    ids.map_or(i as u64, |ids| ids[i]),
+                    i as u32,
+                )
+            })
             .collect();
         keyed.sort_unstable();
         let mut cells = HashMap::with_capacity_and_hasher(keyed.len() / 4, Default::default());
@@ -71,6 +92,10 @@ impl<'a> BallGrid<'a> {
 
     pub fn points(&self) -> &'a [DVec3] {
         self.points
+    }
+
+    fn id(&self, index: u32) -> u64 {
+        self.ids.map_or(u64::from(index), |ids| ids[index as usize])
     }
 
     /// Every point within `radius` (at most 8 cells) of `q`, except
@@ -144,7 +169,7 @@ impl<'a> BallGrid<'a> {
         out.sort_unstable_by(|a, b| {
             a.dist2
                 .total_cmp(&b.dist2)
-                .then(self.ids[a.index as usize].cmp(&self.ids[b.index as usize]))
+                .then(self.id(a.index).cmp(&self.id(b.index)))
         });
     }
 }

@@ -57,39 +57,36 @@ impl LineGraph {
     /// corners), and cycles, as vertex sequences.
     pub(crate) fn chains(&self) -> Vec<Vec<u32>> {
         let n = self.vertices.len();
-        let mut adj: Vec<Vec<(u32, usize)>> = vec![Vec::new(); n];
-        for (e, &(a, b, _)) in self.edges.iter().enumerate() {
-            adj[a as usize].push((b, e));
-            adj[b as usize].push((a, e));
-        }
-        let fixed = |v: usize| adj[v].len() != 2 || self.corners.get(v).copied().unwrap_or(false);
+        let adj = Adjacency::new(n, &self.edges);
+        let fixed =
+            |v: usize| adj.at(v).len() != 2 || self.corners.get(v).copied().unwrap_or(false);
         let mut used = vec![false; self.edges.len()];
         let mut chains = Vec::new();
-        let walk = |start: usize, first: (u32, usize), used: &mut Vec<bool>| {
+        let walk = |start: usize, first: (u32, u32), used: &mut Vec<bool>| {
             let mut chain = vec![start as u32];
             let (mut v, mut e) = first;
             loop {
-                used[e] = true;
+                used[e as usize] = true;
                 chain.push(v);
                 if fixed(v as usize) || v as usize == start {
                     return chain;
                 }
-                match adj[v as usize].iter().find(|(_, f)| !used[*f]) {
+                match adj.at(v as usize).iter().find(|(_, f)| !used[*f as usize]) {
                     Some(&next) => (v, e) = next,
                     None => return chain,
                 }
             }
         };
         for s in (0..n).filter(|&v| fixed(v)) {
-            for &first in &adj[s] {
-                if !used[first.1] {
+            for &first in adj.at(s) {
+                if !used[first.1 as usize] {
                     chains.push(walk(s, first, &mut used));
                 }
             }
         }
         // What is left are cycles of degree-2 vertices.
-        for (s, around) in adj.iter().enumerate() {
-            if let Some(&first) = around.iter().find(|(_, e)| !used[*e]) {
+        for s in 0..n {
+            if let Some(&first) = adj.at(s).iter().find(|(_, e)| !used[*e as usize]) {
                 chains.push(walk(s, first, &mut used));
             }
         }
@@ -337,6 +334,39 @@ impl LineGraph {
 
 /// `m` moved onto the perpendicular bisector of `a b` in the plane of the
 /// three, at the same distance from the line `a b` (same triangle area).
+/// Each vertex's `(neighbour, edge)` pairs in edge order, in one array
+/// (a `Vec` per vertex cost ~70 bytes a vertex, at the join's peak).
+struct Adjacency {
+    start: Vec<u32>,
+    pairs: Vec<(u32, u32)>,
+}
+
+impl Adjacency {
+    fn new(n: usize, edges: &[(u32, u32, LineKind)]) -> Self {
+        let mut start = vec![0u32; n + 1];
+        for &(a, b, _) in edges {
+            start[a as usize + 1] += 1;
+            start[b as usize + 1] += 1;
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut next = start.clone();
+        let mut pairs = vec![(0, 0); start[n] as usize];
+        for (e, &(a, b, _)) in edges.iter().enumerate() {
+            for (v, w) in [(a, b), (b, a)] {
+                pairs[next[v as usize] as usize] = (w, e as u32);
+                next[v as usize] += 1;
+            }
+        }
+        Adjacency { start, pairs }
+    }
+
+    fn at(&self, v: usize) -> &[(u32, u32)] {
+        &self.pairs[self.start[v] as usize..self.start[v + 1] as usize]
+    }
+}
+
 fn bisected(a: DVec3, m: DVec3, b: DVec3) -> DVec3 {
     let ab = b - a;
     let len2 = ab.length_squared();

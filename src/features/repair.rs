@@ -41,56 +41,66 @@ enum Owner {
 }
 
 /// Joins `polylines` (each `(kind, vertices)`, in canonical order) and the
-/// `corners` into one graph by the cone rule.
+/// `corners` into one graph by the cone rule. Takes the polylines by
+/// value: their vertices move into the graph one line at a time, so the
+/// join holds each vertex once (it is the peak of a large `features` run).
 pub fn repair(
-    polylines: &[(LineKind, Vec<DVec3>)],
+    polylines: Vec<(LineKind, Vec<DVec3>)>,
     corners: &[(LineKind, DVec3)],
     cone: Cone,
     reach: f64,
 ) -> LineGraph {
     let mut g = LineGraph::default();
-    let mut owner = Vec::new();
-    let mut kinds = Vec::new();
-    // (vertex, outward end direction, polyline).
+    let total: usize = polylines.iter().map(|(_, p)| p.len()).sum::<usize>() + corners.len();
+    g.vertices.reserve_exact(total);
+    let mut owner = Vec::with_capacity(total);
+    let mut kinds = Vec::with_capacity(total);
+    // (vertex, unit outward end direction, polyline).
     let mut ends = Vec::new();
-    for (k, (kind, pts)) in polylines.iter().enumerate() {
+    for (k, (kind, pts)) in polylines.into_iter().enumerate() {
         let first = g.vertices.len() as u32;
-        for (i, p) in pts.iter().enumerate() {
-            g.vertices.push(*p);
-            owner.push(Owner::Line(k as u32));
-            kinds.push(*kind);
-            if i > 0 {
-                g.edges
-                    .push((first + i as u32 - 1, first + i as u32, *kind));
-            }
-        }
         if pts.len() >= 2 {
             let last = first + pts.len() as u32 - 1;
-            ends.push((first, pts[0] - pts[1], k as u32));
-            ends.push((last, pts[pts.len() - 1] - pts[pts.len() - 2], k as u32));
+            let n = pts.len();
+            ends.push((first, (pts[0] - pts[1]).normalize_or_zero(), k as u32));
+            ends.push((
+                last,
+                (pts[n - 1] - pts[n - 2]).normalize_or_zero(),
+                k as u32,
+            ));
         }
+        for i in 0..pts.len() as u32 {
+            owner.push(Owner::Line(k as u32));
+            kinds.push(kind);
+            if i > 0 {
+                g.edges.push((first + i - 1, first + i, kind));
+            }
+        }
+        g.vertices.extend(pts);
     }
     for (kind, c) in corners {
         g.vertices.push(*c);
         owner.push(Owner::Corner);
         kinds.push(*kind);
     }
-    let mut tangent = vec![DVec3::ZERO; g.vertices.len()];
-    let mut is_end = vec![false; g.vertices.len()];
-    for &(v, t, _) in &ends {
-        tangent[v as usize] = t.normalize_or_zero();
-        is_end[v as usize] = true;
+    // Per vertex: its index in `ends`, or NOT_END.
+    let mut end_at = vec![NOT_END; g.vertices.len()];
+    for (e, &(v, _, _)) in ends.iter().enumerate() {
+        end_at[v as usize] = e as u32;
     }
+    let tangent = |end_at: &[u32], v: usize| match end_at[v] {
+        NOT_END => DVec3::ZERO,
+        e => ends[e as usize].1,
+    };
     let mut joined = vec![false; g.vertices.len()];
     let mut corner = vec![false; g.vertices.len()];
-    let meets = corner_meetings(&g.vertices, &ends, &tangent, &kinds, cone, reach);
+    let meets = corner_meetings(&g.vertices, &ends, &kinds, cone, reach);
     for (a, b, m) in meets {
         let v = g.vertices.len() as u32;
         g.vertices.push(m);
         owner.push(Owner::Corner);
         kinds.push(kinds[a as usize]);
-        tangent.push(DVec3::ZERO);
-        is_end.push(false);
+        end_at.push(NOT_END);
         joined.push(false);
         corner.push(true);
         joined[a as usize] = true;
@@ -99,15 +109,14 @@ pub fn repair(
         g.edges.push((a, v, k));
         g.edges.push((b, v, k));
     }
-    let ids: Vec<u64> = (0..g.vertices.len() as u64).collect();
-    let Some(grid) = BallGrid::new(&g.vertices, &ids, cone.length) else {
+    let Some(grid) = BallGrid::indexed(&g.vertices, cone.length) else {
         return g;
     };
     let cos = cone.half_angle.cos();
     let mut found = Vec::new();
     let mut added = Vec::new();
     for &(a, _, line) in &ends {
-        let (a, t) = (a as usize, tangent[a as usize]);
+        let (a, t) = (a as usize, tangent(&end_at, a as usize));
         if joined[a] || t == DVec3::ZERO {
             continue;
         }
@@ -123,7 +132,9 @@ pub fn repair(
             }
             let target = match owner[q] {
                 Owner::Corner => true,
-                Owner::Line(_) if is_end[q] => !joined[q] && tangent[q].dot(t) < 0.0,
+                Owner::Line(_) if end_at[q] != NOT_END => {
+                    !joined[q] && tangent(&end_at, q).dot(t) < 0.0
+                }
                 Owner::Line(_) => {
                     corner[q] = true;
                     true
@@ -132,7 +143,7 @@ pub fn repair(
             if target {
                 added.push((a as u32, q as u32, kinds[a]));
                 joined[a] = true;
-                if is_end[q] {
+                if end_at[q] != NOT_END {
                     joined[q] = true;
                 }
                 if owner[q] == Owner::Corner {
@@ -163,23 +174,21 @@ pub fn repair(
 fn corner_meetings(
     vertices: &[DVec3],
     ends: &[(u32, DVec3, u32)],
-    tangent: &[DVec3],
     kinds: &[LineKind],
     cone: Cone,
     reach: f64,
 ) -> Vec<(u32, u32, DVec3)> {
     let end_pos: Vec<DVec3> = ends.iter().map(|e| vertices[e.0 as usize]).collect();
-    let ids: Vec<u64> = (0..ends.len() as u64).collect();
     let span = 2.0 * cone.length + reach;
-    let Some(grid) = BallGrid::new(&end_pos, &ids, span) else {
+    let Some(grid) = BallGrid::indexed(&end_pos, span) else {
         return Vec::new();
     };
     let parallel = MEET_ANGLE.cos();
     let mut taken = vec![false; ends.len()];
     let mut found = Vec::new();
     let mut out = Vec::new();
-    for (ea, &(a, _, la)) in ends.iter().enumerate() {
-        let (pa, ta) = (vertices[a as usize], tangent[a as usize]);
+    for (ea, &(a, ta, la)) in ends.iter().enumerate() {
+        let pa = vertices[a as usize];
         if taken[ea] || ta == DVec3::ZERO {
             continue;
         }
@@ -187,8 +196,8 @@ fn corner_meetings(
         let mut best: Option<(f64, usize, DVec3)> = None;
         for n in &found {
             let eb = n.index as usize;
-            let (b, _, lb) = ends[eb];
-            let (pb, tb) = (vertices[b as usize], tangent[b as usize]);
+            let (b, tb, lb) = ends[eb];
+            let pb = vertices[b as usize];
             if taken[eb] || lb == la || kinds[b as usize] != kinds[a as usize] {
                 continue;
             }
@@ -220,6 +229,9 @@ fn corner_meetings(
     out
 }
 
+/// `end_at` of a vertex that ends no polyline.
+const NOT_END: u32 = u32::MAX;
+
 /// Smallest angle between two end tangents that `corner_meetings` takes
 /// for a corner (below it, the lines continue each other: the cone rule).
 pub const MEET_ANGLE: f64 = 20.0 * std::f64::consts::PI / 180.0;
@@ -245,14 +257,14 @@ mod tests {
             length: 3.0,
             half_angle: std::f64::consts::PI / 6.0,
         };
-        let g = repair(&corner_lines(1.5), &[], cone, 1.0);
+        let g = repair(corner_lines(1.5), &[], cone, 1.0);
         assert_eq!(g.components(), 1, "{g:?}");
         // The three lines end at one corner vertex at the origin.
         let at: Vec<usize> = (0..g.vertices.len()).filter(|&v| g.corners[v]).collect();
         assert_eq!(at.len(), 1, "{at:?}");
         assert!(g.vertices[at[0]].length() < 1e-9, "{}", g.vertices[at[0]]);
         // Nothing is joined beyond the cone.
-        let far = repair(&corner_lines(3.5), &[], cone, 1.0);
+        let far = repair(corner_lines(3.5), &[], cone, 1.0);
         assert_eq!(far.components(), 3);
     }
 
@@ -265,7 +277,7 @@ mod tests {
         let a: Vec<DVec3> = (0..5).map(|i| DVec3::X * f64::from(i)).collect();
         let b: Vec<DVec3> = (0..5).map(|i| DVec3::X * (6.0 + f64::from(i))).collect();
         let g = repair(
-            &[(LineKind::Ridge, a), (LineKind::Ridge, b)],
+            vec![(LineKind::Ridge, a), (LineKind::Ridge, b)],
             &[],
             cone,
             1.0,

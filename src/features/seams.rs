@@ -24,73 +24,98 @@ pub struct CellPolyline {
 }
 
 /// Drops the copies described in the module doc from `lines` (in
-/// canonical order); returns the pieces left, in order.
-pub fn drop_copies(lines: &[CellPolyline], rho: f64) -> Vec<CellPolyline> {
-    let mut pos = Vec::new();
-    let mut owner = Vec::new();
-    let mut at = Vec::new();
-    for (l, line) in lines.iter().enumerate() {
-        for (k, p) in line.points.iter().enumerate() {
-            pos.push(*p);
-            owner.push(l as u32);
-            at.push(k as u32);
-        }
-    }
-    let ids: Vec<u64> = (0..pos.len() as u64).collect();
-    // Segments within rho of a vertex have an end within rho + their
-    // length of it; lines' segments are at most a few gamma long.
+/// canonical order); returns the pieces left, in order. Takes the lines
+/// by value: their vertices are moved into one array as they are read,
+/// so every line of a run is held once, not twice (this join is the
+/// peak of a `features` run on a large scan).
+pub fn drop_copies(lines: Vec<CellPolyline>, rho: f64) -> Vec<CellPolyline> {
+    // Longest segment first: segments within rho of a vertex have an end
+    // within rho + their length of it; lines' segments are a few gamma.
     let longest = lines
         .iter()
         .flat_map(|l| l.points.windows(2).map(|w| w[0].distance(w[1])))
         .fold(0.0f64, f64::max);
     let reach = rho + longest;
-    let Some(grid) = BallGrid::new(&pos, &ids, reach) else {
-        return lines.to_vec();
+    let total = lines.iter().map(|l| l.points.len()).sum();
+    let mut pos = Vec::with_capacity(total);
+    let mut heads = Vec::with_capacity(lines.len());
+    for line in lines {
+        heads.push(LineHead {
+            cell: line.cell,
+            kind: line.kind,
+            first: pos.len(),
+        });
+        pos.extend(line.points);
+    }
+    let span = |l: usize| heads[l].first..heads.get(l + 1).map_or(pos.len(), |h| h.first);
+    let Some(grid) = BallGrid::indexed(&pos, reach) else {
+        return (0..heads.len())
+            .map(|l| heads[l].polyline(pos[span(l)].to_vec()))
+            .collect();
     };
+    let owner = |v: usize| heads.partition_point(|h| h.first <= v) - 1;
     let mut kept = vec![true; pos.len()];
     let mut found = Vec::new();
-    let mut first = 0usize;
-    for (l, line) in lines.iter().enumerate() {
-        for (k, p) in line.points.iter().enumerate() {
-            grid.within(*p, reach, None, &mut found);
+    for l in 0..heads.len() {
+        let line = &heads[l];
+        for v in span(l) {
+            grid.within(pos[v], reach, None, &mut found);
             let copy = found.iter().any(|n| {
-                let v = n.index as usize;
-                let other = owner[v] as usize;
+                let u = n.index as usize;
+                let other = owner(u);
                 other < l
-                    && lines[other].cell != line.cell
-                    && lines[other].kind == line.kind
-                    && near_kept_segment(&lines[other].points, at[v] as usize, v, &kept, *p, rho)
+                    && heads[other].cell != line.cell
+                    && heads[other].kind == line.kind
+                    && near_kept_segment(
+                        &pos[span(other)],
+                        u - heads[other].first,
+                        u,
+                        &kept,
+                        pos[v],
+                        rho,
+                    )
             });
             if copy {
-                kept[first + k] = false;
+                kept[v] = false;
             }
         }
-        first += line.points.len();
     }
+    drop(grid);
     let mut out = Vec::new();
-    let mut first = 0usize;
-    for line in lines {
+    for (l, head) in heads.iter().enumerate() {
         let mut piece: Vec<DVec3> = Vec::new();
-        for (k, p) in line.points.iter().enumerate() {
-            if kept[first + k] {
-                piece.push(*p);
+        for v in span(l) {
+            if kept[v] {
+                piece.push(pos[v]);
             } else if !piece.is_empty() {
-                push_piece(&mut out, line, std::mem::take(&mut piece));
+                push_piece(&mut out, head, std::mem::take(&mut piece));
             }
         }
-        push_piece(&mut out, line, piece);
-        first += line.points.len();
+        push_piece(&mut out, head, piece);
     }
     out
 }
 
-fn push_piece(out: &mut Vec<CellPolyline>, line: &CellPolyline, piece: Vec<DVec3>) {
+/// A line's cell, kind and first vertex in the join's vertex array.
+struct LineHead {
+    cell: [i64; 3],
+    kind: LineKind,
+    first: usize,
+}
+
+impl LineHead {
+    fn polyline(&self, points: Vec<DVec3>) -> CellPolyline {
+        CellPolyline {
+            cell: self.cell,
+            kind: self.kind,
+            points,
+        }
+    }
+}
+
+fn push_piece(out: &mut Vec<CellPolyline>, line: &LineHead, piece: Vec<DVec3>) {
     if piece.len() >= 2 {
-        out.push(CellPolyline {
-            cell: line.cell,
-            kind: line.kind,
-            points: piece,
-        });
+        out.push(line.polyline(piece));
     }
 }
 
@@ -145,15 +170,15 @@ mod tests {
         let a = line(0, 0.0, 0.0, 1.0);
         // A copy 0.02 off over [0.5, 1.5]: the part over [0.5, 1] goes.
         let b = line(1, 0.02, 0.5, 1.5);
-        let out = drop_copies(&[a.clone(), b], 0.05);
+        let out = drop_copies(vec![a.clone(), b], 0.05);
         assert_eq!(out.len(), 2);
         assert_eq!(out[0], a);
         let xs: Vec<f64> = out[1].points.iter().map(|p| p.x).collect();
         assert!(xs[0] > 1.0 && xs.len() == 5, "{xs:?}");
         // Same cell, or far enough: nothing goes.
         let c = line(0, 0.02, 0.5, 1.5);
-        assert_eq!(drop_copies(&[a.clone(), c.clone()], 0.05).len(), 2);
+        assert_eq!(drop_copies(vec![a.clone(), c.clone()], 0.05).len(), 2);
         let d = line(1, 0.2, 0.0, 1.0);
-        assert_eq!(drop_copies(&[a.clone(), d.clone()], 0.05), vec![a, d]);
+        assert_eq!(drop_copies(vec![a.clone(), d.clone()], 0.05), vec![a, d]);
     }
 }
