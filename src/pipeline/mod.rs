@@ -11,6 +11,9 @@ pub use codec::Codec;
 pub use kernel::{KernelError, TileKernel};
 pub use options::RunOptions;
 pub use run::{run_tiles, RunStats};
+// What a kernel is handed: a tile's points and declared columns. Public so
+// that a kernel can live outside the crate (`examples/outliers.rs`).
+pub use crate::tiling::{MissingColumns, TileColumn, TilePoints, Values};
 // The run's memory and progress live below every layer that uses them; a
 // kernel finds them here beside the pipeline that takes them.
 pub use crate::memory::{BudgetError, KernelCost, MemoryBudget, MemoryPlan};

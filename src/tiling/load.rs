@@ -12,7 +12,9 @@ use glam::DVec3;
 /// values for a point).
 #[derive(Clone, Debug)]
 pub struct TilePoints {
+    /// 0-based index of the tile in the store.
     pub tile: usize,
+    /// Core points, then margin points, relative to the store origin.
     pub points: Vec<DVec3>,
     /// Input-order index of each point: the global tie-break key.
     pub ids: Vec<u64>,
@@ -22,12 +24,14 @@ pub struct TilePoints {
     /// `margin_store[m]`): global passes key per-point state by store index,
     /// which follows space where input ids do not.
     pub margin_store: Vec<u64>,
+    /// How many of `points` are the core (the tile's own results).
     pub n_core: usize,
     /// Core box; faces on the outside of the store grid lie at infinity, so
     /// the cores partition all of space.
     pub core: Aabb,
     /// The region whose points are all loaded: `core` grown by `margin`.
     pub loaded: Aabb,
+    /// How far the loaded region reaches beyond the core.
     pub margin: f64,
     /// The store columns the kernel declared it reads, for every loaded
     /// point (a kernel declares them: `TileKernel::reads`).
@@ -44,16 +48,20 @@ pub struct MissingColumns;
 /// One store column's values for a tile's loaded points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TileColumn {
+    /// Which column.
     pub spec: ColumnSpec,
+    /// Its values, one item per loaded point.
     pub values: Values,
 }
 
 /// Loaded values, typed by the column's item.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Values {
+    /// One vector per point (normals).
     Vec3(Vec<DVec3>),
     /// `n` values per point, flat.
     F32(Vec<f32>),
+    /// One byte per point (flags).
     U8(Vec<u8>),
 }
 
@@ -112,6 +120,7 @@ impl TilePoints {
         }
     }
 
+    /// The core points: those whose results this tile gives.
     pub fn core_points(&self) -> &[DVec3] {
         &self.points[..self.n_core]
     }

@@ -4,4 +4,4 @@
 
 pub(crate) mod load;
 
-pub use load::{load_tile, MissingColumns, TilePoints, Values};
+pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};
