@@ -127,6 +127,8 @@ pub struct Star {
     pub closing_hole: bool,
     /// Triangles already tested (`fan.rs`).
     pub seen: Vec<u32>,
+    /// Scratch: the vertices whose triangles `fan::meets_nearby` checks.
+    pub around: Vec<u32>,
     /// kNN answers (`fan.rs`).
     pub found: Vec<crate::spatial::Neighbour>,
 }
