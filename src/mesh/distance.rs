@@ -61,6 +61,9 @@ pub struct DistanceStats {
     pub rms: f64,
     /// Nearest-rank 95th percentile.
     pub p95: f64,
+    /// Nearest-rank 99.9th percentile: the tail without its last thousandth,
+    /// which one feature the sampling missed (a filament, a fin) sets alone.
+    pub p999: f64,
     /// Largest distance.
     pub max: f64,
 }
@@ -74,6 +77,9 @@ pub struct DirectionReport {
     pub absolute: Option<DistanceStats>,
     /// `absolute` divided by the reference spacing, when that is positive.
     pub in_spacing: Option<DistanceStats>,
+    /// The query point farthest from the other side (the first in query
+    /// order when several are): where to look when the maximum is large.
+    pub max_at: Option<[f64; 3]>,
 }
 
 /// A two-sided comparison of a mesh with a reference: distances each way and the Hausdorff distance.
@@ -138,8 +144,8 @@ pub fn compare_with(mesh: &Mesh, reference: Reference, options: &CompareOptions)
         |p| mesh_index.distance(p),
         !mesh_index.is_empty(),
     );
-    let m2r = direction(mesh_points.len(), to_reference, spacing);
-    let r2m = direction(reference_points.len(), from_reference, spacing);
+    let m2r = direction(&mesh_points, to_reference, spacing);
+    let r2m = direction(&reference_points, from_reference, spacing);
     let hausdorff = match (m2r.absolute, r2m.absolute) {
         (Some(a), Some(b)) => Some(a.max.max(b.max)),
         _ => None,
@@ -206,22 +212,28 @@ pub fn mean_spacing(points: &[DVec3]) -> Option<f64> {
     (mean > 0.0).then_some(mean)
 }
 
-fn direction(points: usize, d: Option<Vec<f64>>, spacing: Option<f64>) -> DirectionReport {
+fn direction(points: &[DVec3], d: Option<Vec<f64>>, spacing: Option<f64>) -> DirectionReport {
+    let max_at = d.as_ref().and_then(|d| {
+        let at = (0..d.len()).reduce(|a, b| if d[b] > d[a] { b } else { a })?;
+        points.get(at).map(|p| p.to_array())
+    });
     let absolute = d.and_then(stats);
     DirectionReport {
-        points: points as u64,
+        points: points.len() as u64,
         absolute,
         in_spacing: absolute.zip(spacing).map(|(s, h)| DistanceStats {
             mean: s.mean / h,
             rms: s.rms / h,
             p95: s.p95 / h,
+            p999: s.p999 / h,
             max: s.max / h,
         }),
+        max_at,
     }
 }
 
-/// Mean, RMS, nearest-rank 95th percentile and max, summed in input order
-/// so the result is reproducible.
+/// Mean, RMS, nearest-rank 95th and 99.9th percentiles and max, summed in
+/// input order so the result is reproducible.
 pub fn stats(mut d: Vec<f64>) -> Option<DistanceStats> {
     if d.is_empty() {
         return None;
@@ -230,12 +242,17 @@ pub fn stats(mut d: Vec<f64>) -> Option<DistanceStats> {
     let mean = d.iter().sum::<f64>() / n;
     let rms = (d.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
     let max = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let rank = ((0.95 * n).ceil() as usize).clamp(1, d.len()) - 1;
-    let (_, p95, _) = d.select_nth_unstable_by(rank, f64::total_cmp);
+    let mut nearest_rank = |q: f64| {
+        let rank = ((q * n).ceil() as usize).clamp(1, d.len()) - 1;
+        *d.select_nth_unstable_by(rank, f64::total_cmp).1
+    };
+    let p999 = nearest_rank(0.999);
+    let p95 = nearest_rank(0.95);
     Some(DistanceStats {
         mean,
         rms,
-        p95: *p95,
+        p95,
+        p999,
         max,
     })
 }
@@ -265,15 +282,18 @@ fn write_direction(f: &mut fmt::Formatter<'_>, name: &str, d: &DirectionReport) 
     };
     write!(
         f,
-        "{name}  {} points: mean {:.6}, rms {:.6}, p95 {:.6}, max {:.6}",
-        d.points, s.mean, s.rms, s.p95, s.max
+        "{name}  {} points: mean {:.6}, rms {:.6}, p95 {:.6}, p99.9 {:.6}, max {:.6}",
+        d.points, s.mean, s.rms, s.p95, s.p999, s.max
     )?;
-    match d.in_spacing {
-        Some(r) => writeln!(
+    if let Some(r) = d.in_spacing {
+        write!(
             f,
-            " (x spacing: mean {:.3}, p95 {:.3}, max {:.3})",
-            r.mean, r.p95, r.max
-        ),
+            " (x spacing: mean {:.3}, p95 {:.3}, p99.9 {:.3}, max {:.3})",
+            r.mean, r.p95, r.p999, r.max
+        )?;
+    }
+    match d.max_at {
+        Some([x, y, z]) => writeln!(f, "; max at ({x:.6e}, {y:.6e}, {z:.6e})"),
         None => writeln!(f),
     }
 }

@@ -153,6 +153,13 @@ fn plane_versus_offset_points_is_exact() {
         (got.p95 - sorted[4750 - 1]).abs() < 1e-15,
         "nearest rank 4750 of 5000"
     );
+    assert!(
+        (got.p999 - sorted[4995 - 1]).abs() < 1e-15,
+        "nearest rank 4995 of 5000"
+    );
+    // The maximum is reported where it is: the point of largest |height|.
+    let far = (0..abs.len()).fold(0, |a, b| if abs[b] > abs[a] { b } else { a });
+    assert_eq!(r.max_at, Some(pts[far].to_array()));
 }
 
 #[test]
