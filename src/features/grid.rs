@@ -216,6 +216,32 @@ mod tests {
     use crate::synth::Rng;
 
     #[test]
+    fn indexed_answers_as_ids_equal_to_the_indices() {
+        let mut rng = Rng::new(9);
+        // Duplicates, so the tie key decides an order.
+        let points: Vec<DVec3> = (0..400)
+            .map(|i| match i % 7 {
+                0 => DVec3::splat(0.5),
+                _ => DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()),
+            })
+            .collect();
+        let ids: Vec<u64> = (0..points.len() as u64).collect();
+        let (a, b) = (
+            BallGrid::new(&points, &ids, 0.1).unwrap(),
+            BallGrid::indexed(&points, 0.1).unwrap(),
+        );
+        let (mut fa, mut fb) = (Vec::new(), Vec::new());
+        for q in points.iter().step_by(3) {
+            a.nearest_first(*q, 0.15, None, &mut fa);
+            b.nearest_first(*q, 0.15, None, &mut fb);
+            assert_eq!(fa, fb);
+            a.within(*q, 0.1, Some(0), &mut fa);
+            b.within(*q, 0.1, Some(0), &mut fb);
+            assert_eq!(fa, fb);
+        }
+    }
+
+    #[test]
     fn matches_brute_force_with_ties() {
         let seed = 5;
         let mut rng = Rng::new(seed);

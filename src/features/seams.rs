@@ -29,8 +29,8 @@ pub struct CellPolyline {
 /// so every line of a run is held once, not twice (this join is the
 /// peak of a `features` run on a large scan).
 pub fn drop_copies(lines: Vec<CellPolyline>, rho: f64) -> Vec<CellPolyline> {
-    // Longest segment first: segments within rho of a vertex have an end
-    // within rho + their length of it; lines' segments are a few gamma.
+    // Segments within rho of a vertex have an end within rho + their
+    // length of it; lines' segments are at most a few gamma long.
     let longest = lines
         .iter()
         .flat_map(|l| l.points.windows(2).map(|w| w[0].distance(w[1])))
