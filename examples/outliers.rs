@@ -19,7 +19,7 @@ use glam::DVec3;
 use scanmesh::pipeline::{run_tiles, KernelError, PipelineError, TileKernel, TilePoints};
 use scanmesh::spatial::{build_index, KnnBackend};
 use scanmesh::store::TileTarget;
-use scanmesh::synth::Scan;
+use scanmesh::synth::{Rng, Scan};
 use scanmesh::{build_store, open_reader, open_stream_reader, BuildOptions, PointReader};
 use scanmesh::{NoProgress, PointStore, ReadOptions, RunOptions};
 use std::path::Path;
@@ -162,14 +162,8 @@ fn scattered_dragon(n: usize, every: usize) -> Result<Vec<[f64; 3]>, Error> {
 /// the sample's order follows it) moved off the surface along its normal
 /// by 10 to 25 `spacing`s (stray returns in front of it).
 fn scattered(scan: &Scan, spacing: f64, every: usize) -> Vec<[f64; 3]> {
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut unit = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut thrown = |i: usize, p: DVec3| p + scan.normals[i] * spacing * (10.0 + 15.0 * unit());
+    let mut rng = Rng::new(7);
+    let mut thrown = |i: usize, p: DVec3| p + scan.normals[i] * spacing * rng.range(10.0, 25.0);
     (0..scan.len())
         .map(|i| match i % every == every - 1 {
             true => thrown(i, scan.points[i]).to_array(),
