@@ -162,13 +162,15 @@ impl Selector<'_> {
         Some(x)
     }
 
-    /// Whether some fan could select `t` (its circumradius is below its
-    /// hole radius, or that radius is not known for sure here).
+    /// Whether some fan could select `t`: its circumradius is below its
+    /// hole radius here. That radius bounds the whole cloud's from above
+    /// even where it is not proven (the cloud has only more points, so
+    /// nearest neighbours only nearer), so a triangle too large here is
+    /// too large there.
     pub fn selectable(&self, t: [u32; 3]) -> bool {
-        let mut known = true;
-        let delta = self.delta(t, &mut known);
+        let delta = self.delta(t, &mut true);
         let [a, b, c] = t.map(|v| self.p(v));
-        !known || circumradius(a, b, c) < delta
+        circumradius(a, b, c) < delta
     }
 
     /// The hole radius for triangle `t`.

@@ -25,17 +25,13 @@
 //! boundary edge becomes an edge of two triangles and no edge gets a third.
 //! Loops are taken shortest first, then by their sorted corners, and a loop
 //! that shares an edge with one already closed is left: the result depends
-//! on nothing but the triangle set within [`MAX_LOOP`]` / 2 + 1` rings.
+//! on nothing but the boundary edges near the loop ([`patch_doubt`]).
 
 use glam::DVec3;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 /// Longest loop closed, in edges.
 pub const MAX_LOOP: usize = 10;
-
-/// Rings of triangles around a vertex that decide the patches through it
-/// (see the module doc), for the tiles' doubt.
-pub const PATCH_RINGS: usize = MAX_LOOP / 2 + 1;
 
 type Edge = (u32, u32);
 
@@ -95,6 +91,44 @@ pub fn small_hole_patches(
         out.extend(patch);
     }
     out
+}
+
+/// Marks doubtful what [`small_hole_patches`] of `tris` may decide
+/// differently from the whole cloud, given `doubt` closed (a triangle the
+/// cloud has and this tile lacks, or the reverse, has all corners
+/// doubtful): loops are found and judged over boundary edges alone, and a
+/// boundary edge differs only between doubtful corners, so doubt travels
+/// along boundary edges, as far as a loop search reaches and as far again
+/// for the loops a closed loop blocks; then every patch with a doubtful
+/// corner is doubtful in all its corners.
+pub fn patch_doubt(tris: &[[u32; 3]], patches: &[[u32; 3]], doubt: &mut [bool]) {
+    let mut order: BTreeMap<Edge, u32> = BTreeMap::new();
+    for t in tris {
+        for e in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
+            *order.entry(e).or_default() += 1;
+        }
+    }
+    let boundary: Vec<Edge> = order
+        .into_iter()
+        .filter(|&(_, k)| k == 1)
+        .map(|(e, _)| e)
+        .collect();
+    for _ in 0..2 * MAX_LOOP {
+        let seeds = doubt.to_vec();
+        for &(a, b) in &boundary {
+            if seeds[a as usize] || seeds[b as usize] {
+                doubt[a as usize] = true;
+                doubt[b as usize] = true;
+            }
+        }
+    }
+    for t in patches {
+        if t.iter().any(|&v| doubt[v as usize]) {
+            for &v in t {
+                doubt[v as usize] = true;
+            }
+        }
+    }
 }
 
 /// The shortest cycle of at most [`MAX_LOOP`] boundary edges through edge

@@ -64,8 +64,11 @@ impl TileKernel for DelaunayKernel {
         let sel =
             select(&tile.points, &tile.ids, self.hole, region).map_err(KernelError::failed)?;
         if sel.doubtful[..tile.n_core].iter().any(|&d| d) {
-            // A doubtful fan says the margin is short, not by how much.
-            KernelError::unless_short(f64::INFINITY, tile.margin)?;
+            // Doubt starts at the loaded region's faces and reaches `depth`
+            // in: a margin beyond that depth (with room to spare, as the
+            // reach varies along the faces) leaves the core clear.
+            let depth = doubt_depth(tile, &sel.doubtful);
+            KernelError::unless_short(DEPTH_SPARE * depth - tile.margin, tile.margin)?;
         }
         let owner_is_core = |t: &[u32; 3]| {
             let first = t.iter().min_by_key(|&&v| tile.ids[v as usize]);
@@ -87,6 +90,19 @@ impl TileKernel for DelaunayKernel {
             report: sel.report,
         })
     }
+}
+
+/// Margin asked for per depth of doubt seen (see `run`).
+const DEPTH_SPARE: f64 = 1.25;
+
+/// How far inside the loaded region the deepest doubtful point lies.
+fn doubt_depth(tile: &TilePoints, doubtful: &[bool]) -> f64 {
+    tile.points
+        .iter()
+        .zip(doubtful)
+        .filter(|(_, &d)| d)
+        .map(|(p, _)| tile.room(*p))
+        .fold(0.0, f64::max)
 }
 
 /// Edges of owned triangles that a triangle of another tile shares.

@@ -25,6 +25,8 @@ pub(crate) mod umbrella;
 pub(crate) mod wind;
 
 #[cfg(test)]
+mod exact_tests;
+#[cfg(test)]
 mod surface_tests;
 #[cfg(test)]
 mod tests;

@@ -10,17 +10,14 @@
 //! spacings: 16 pieces of 1 to 23 triangles beside the dragon). A piece
 //! of a dozen points is no surface a scan can show.
 //!
-//! Depends on the triangles within [`PIECE_RINGS`] rings of a vertex.
-//! Also here: dropping the extra fans of a non-manifold vertex
+//! In tiles, [`piece_doubt`] says which triangles' fate a tile cannot
+//! know. Also here: dropping the extra fans of a non-manifold vertex
 //! ([`drop_extra_fans`]).
 
 use std::collections::BTreeMap;
 
 /// Largest piece dropped, in triangles.
 pub const MAX_PIECE: usize = 24;
-
-/// Rings of triangles that decide whether a triangle is dropped.
-pub const PIECE_RINGS: usize = MAX_PIECE + 2;
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
@@ -121,6 +118,69 @@ pub fn drop_small_pieces(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
         .filter(|(_, r)| size[r] > MAX_PIECE)
         .map(|(t, _)| *t)
         .collect()
+}
+
+/// Marks doubtful the corners of every triangle of `tris` whose fate in
+/// [`drop_small_pieces`] may differ from the whole cloud's, given `doubt`
+/// closed (a triangle the cloud has and this tile lacks, or the reverse,
+/// has all corners doubtful). A triangle with no doubtful corner is
+/// *clean*; a walk from a clean triangle over clean triangles sees what
+/// the cloud's walk sees until it meets a triangle with a doubtful corner.
+/// So a clean triangle's fate is certain when its clean piece is larger
+/// than [`MAX_PIECE`] (kept either way) or is a whole piece touching no
+/// other triangle (the same piece either way). This replaces
+/// `MAX_PIECE + 2` rings of doubt (about 60 spacings on a noisy scan) by
+/// the few a surface needs to hold `MAX_PIECE` triangles.
+pub fn piece_doubt(tris: &[[u32; 3]], doubt: &mut [bool]) {
+    let clean: Vec<bool> = tris
+        .iter()
+        .map(|c| c.iter().all(|&v| !doubt[v as usize]))
+        .collect();
+    let mut parent: Vec<u32> = (0..tris.len() as u32).collect();
+    let mut on_edge: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+    for (t, c) in tris.iter().enumerate() {
+        for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[0], c[2])] {
+            on_edge
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push(t as u32);
+        }
+    }
+    let mut touches = vec![false; tris.len()];
+    for ts in on_edge.values() {
+        let (ok, bad): (Vec<u32>, Vec<u32>) = ts.iter().partition(|&&t| clean[t as usize]);
+        for w in ok.windows(2) {
+            let (ra, rb) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+        if !bad.is_empty() {
+            for &t in &ok {
+                touches[t as usize] = true;
+            }
+        }
+    }
+    let mut size: BTreeMap<u32, (usize, bool)> = BTreeMap::new();
+    for t in 0..tris.len() as u32 {
+        if clean[t as usize] {
+            let e = size.entry(find(&mut parent, t)).or_default();
+            e.0 += 1;
+            e.1 |= touches[t as usize];
+        }
+    }
+    let seeds = doubt.to_vec();
+    for (t, c) in tris.iter().enumerate() {
+        let uncertain = if clean[t] {
+            let (n, touching) = size[&find(&mut parent, t as u32)];
+            n <= MAX_PIECE && touching
+        } else {
+            c.iter().any(|&v| seeds[v as usize])
+        };
+        if uncertain {
+            for &v in c {
+                doubt[v as usize] = true;
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@ use std::path::Path;
 
 /// Margin first loaded, in store spacings: the fans reach a few hole radii,
 /// the proofs an empty sphere, the deletions two rings a round.
-const MARGIN_SPACINGS: f64 = 40.0;
+const MARGIN_SPACINGS: f64 = 90.0;
 
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
