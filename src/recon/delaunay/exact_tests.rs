@@ -29,9 +29,9 @@ fn by_id(sel: &Selection, ids: &[u64]) -> Vec<[u64; 3]> {
 #[test]
 fn a_part_is_sure_only_of_the_whole_clouds_triangles() {
     let inf = f64::INFINITY;
-    // A face across the ring on three sides, at three noise levels. (The
-    // doubt reaches about 70 spacings in, a third of
-    // this torus: a part of it must be wide to be sure of anything.)
+    // A face across the ring on three sides, at three noise levels. The
+    // doubt reaches about 70 spacings in, a third of this torus, so a part
+    // must be wide to be sure of anything.
     let cases = [
         (0.3, 11, DVec3::new(-inf, -0.4, -inf), DVec3::splat(inf)),
         (0.5, 12, DVec3::splat(-inf), DVec3::new(0.5, inf, inf)),
