@@ -47,10 +47,16 @@ fn triangle_set(m: &Mesh) -> Vec<[[u64; 3]; 3]> {
     tris
 }
 
-fn moebius(n: usize) -> Vec<DVec3> {
-    let shape = Shape::moebius(1.0, 0.5);
+/// `n` points of `shape`, noise as a share of the spacing.
+fn scan(shape: Shape, n: usize, noise: f64, seed: u64) -> Vec<DVec3> {
     let sp = mean_spacing_hint(&shape, n).expect("spacing");
-    generate(&shape, n, 0.05 * sp, 5).expect("generate").points
+    generate(&shape, n, noise * sp, seed)
+        .expect("generate")
+        .points
+}
+
+fn moebius(n: usize) -> Vec<DVec3> {
+    scan(Shape::moebius(1.0, 0.5), n, 0.05, 5)
 }
 
 #[test]
@@ -79,9 +85,7 @@ fn tiled_moebius_equals_untiled() {
 /// choices and ties common, which is where a tile's own vertex numbering
 /// once leaked into the result (each tile renumbers its points).
 fn noisy_torus(n: usize) -> Vec<DVec3> {
-    let shape = Shape::torus(1.0, 0.35);
-    let sp = mean_spacing_hint(&shape, n).expect("spacing");
-    generate(&shape, n, 0.3 * sp, 11).expect("generate").points
+    scan(Shape::torus(1.0, 0.35), n, 0.3, 11)
 }
 
 #[test]

@@ -185,7 +185,7 @@ impl MemoryPlan {
         largest: u64,
     ) -> Result<usize, BudgetError> {
         let reserved = self.reserved;
-        let per_tile = (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64;
+        let per_tile = self.tile_bytes(cost, largest);
         let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
         let fit = (free / per_tile.max(1)) as usize;
         if fit == 0 {
@@ -197,6 +197,12 @@ impl MemoryPlan {
             });
         }
         Ok((self.budget.threads + 1).min(fit))
+    }
+
+    /// Bytes one tile in flight may use: the largest tile's core points
+    /// with the margin allowed for, at the kernel's bytes per point.
+    pub(crate) fn tile_bytes(&self, cost: &KernelCost, largest: u64) -> u64 {
+        (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64
     }
 
     /// Estimated peak of each stage beside the fixed costs, for `info --plan`.

@@ -62,6 +62,14 @@ pub trait TileKernel: Sync {
     fn margin(&self) -> f64;
     /// Computes the tile's result from its core and margin points.
     fn run(&self, tile: &TilePoints) -> Result<Self::Output, KernelError>;
+    /// Peak bytes per loaded point, for a kernel whose margin may grow on
+    /// reload past the plan's allowance (`memory::plan::MARGIN_FACTOR`
+    /// loaded points per core point): such a tile then waits until the
+    /// memory of as many planned tiles is free. `None`: the plan's tile
+    /// sizes hold.
+    fn bytes_per_loaded_point(&self) -> Option<u64> {
+        None
+    }
     /// The store columns the kernel reads: each tile carries their values
     /// for every loaded point (`TilePoints::column`).
     fn reads(&self) -> &[ColumnSpec] {

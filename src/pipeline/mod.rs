@@ -6,6 +6,7 @@ mod codec;
 mod kernel;
 mod options;
 mod run;
+mod shares;
 
 pub use codec::Codec;
 pub use kernel::{KernelError, TileKernel};
@@ -47,6 +48,18 @@ pub enum PipelineError {
         margin: f64,
         /// The margin the kernel asked for.
         needed: f64,
+    },
+    /// A tile's margin grew past what the memory promise can hold.
+    #[error("tile {tile}: its margin {margin:.3e} loads {points} points, {times} times the memory the plan gives a tile and more than all tiles in flight together; a larger --mem makes tiles larger and their margins a smaller share")]
+    OverBudget {
+        /// 0-based index of the tile.
+        tile: usize,
+        /// The margin loaded, in the store's coordinate units.
+        margin: f64,
+        /// Points loaded.
+        points: usize,
+        /// Tile shares of memory they need.
+        times: usize,
     },
     /// A worker thread ended without handing back its tile's result (it panicked).
     #[error("a worker thread stopped without a result")]

@@ -13,6 +13,9 @@ pub struct RunOptions {
     /// The memory promise global passes plan by (`None`: unbounded, every
     /// pass keeps its state in memory).
     pub budget: Option<MemoryBudget>,
+    /// Bytes the plan gives each tile in flight (`None`: no plan), for
+    /// kernels whose margins outgrow it (`TileKernel::bytes_per_loaded_point`).
+    pub tile_bytes: Option<u64>,
 }
 
 impl RunOptions {
@@ -23,6 +26,7 @@ impl RunOptions {
             threads,
             in_flight: threads + 1,
             budget: None,
+            tile_bytes: None,
         }
     }
 
@@ -36,6 +40,7 @@ impl RunOptions {
         let opts = RunOptions::new(plan.budget.threads).within(plan.budget);
         Ok(RunOptions {
             in_flight: plan.tiles_in_flight(cost, largest)?,
+            tile_bytes: Some(plan.tile_bytes(cost, largest)),
             ..opts
         })
     }

@@ -5,6 +5,7 @@
 //! a kernel with a [`Codec`] has each result saved as it finishes and read
 //! back instead of recomputed, and a tile job computes some tiles only.
 
+use super::shares::Shares;
 use super::{Codec, KernelError, PipelineError, RunOptions, TileKernel};
 use crate::progress::Progress;
 use crate::store::{Checkpoints, Job, PointStore};
@@ -65,6 +66,8 @@ pub fn run_tiles<K: TileKernel>(
     let (res_tx, res_rx) = channel::unbounded::<TileOutcome<K::Output>>();
     let cancel = AtomicBool::new(false);
     let retries = AtomicUsize::new(0);
+    let shares = opts.tile_bytes.map(|b| Shares::new(b, opts.in_flight));
+    let shares = shares.as_ref();
     progress.begin(&stage, tiles.len() as u64);
     let mut stats = RunStats {
         tiles: n,
@@ -82,7 +85,7 @@ pub fn run_tiles<K: TileKernel>(
                     if cancel.load(Ordering::Relaxed) {
                         break;
                     }
-                    let out = fetch(store, kernel, keep, tiles[i]);
+                    let out = fetch(store, kernel, keep, shares, tiles[i]);
                     if let Ok((_, _, r)) = &out {
                         retries.fetch_add(*r, Ordering::Relaxed);
                     }
@@ -199,10 +202,11 @@ fn fetch<K: TileKernel>(
     store: &PointStore,
     kernel: &K,
     keep: Option<(&Checkpoints, &Codec<K::Output>)>,
+    shares: Option<&Shares>,
     t: usize,
 ) -> Result<(K::Output, f64, usize), PipelineError> {
     let Some((c, codec)) = keep else {
-        return run_one(store, kernel, t);
+        return run_one(store, kernel, shares, t);
     };
     if let Some(bytes) = c.load(kernel.name(), t)? {
         // One that does not decode (checksum right, encoding not) is
@@ -211,7 +215,7 @@ fn fetch<K: TileKernel>(
             return Ok((out, kernel.margin(), 0));
         }
     }
-    let (out, margin, retries) = run_one(store, kernel, t)?;
+    let (out, margin, retries) = run_one(store, kernel, shares, t)?;
     let bytes = (codec.encode)(&out).map_err(|e| PipelineError::Codec {
         stage: kernel.name().to_string(),
         tile: t,
@@ -251,12 +255,26 @@ fn deliver<O>(
 fn run_one<K: TileKernel>(
     store: &PointStore,
     kernel: &K,
+    shares: Option<&Shares>,
     t: usize,
 ) -> Result<(K::Output, f64, usize), PipelineError> {
     let mut margin = kernel.margin();
     let mut retries = 0;
     loop {
         let tile = load_tile(store, t, margin, kernel.reads())?;
+        let _memory = match (shares, kernel.bytes_per_loaded_point()) {
+            (Some(s), Some(b)) => {
+                let times = s.needed(b.saturating_mul(tile.points.len() as u64));
+                let taken = s.take(times).ok_or(PipelineError::OverBudget {
+                    tile: t,
+                    margin,
+                    points: tile.points.len(),
+                    times,
+                })?;
+                Some(taken)
+            }
+            _ => None,
+        };
         match kernel.run(&tile) {
             Ok(out) => return Ok((out, margin, retries)),
             Err(KernelError::MarginTooSmall { needed })

@@ -57,6 +57,12 @@ impl TileKernel for DelaunayKernel {
         self.initial_margin
     }
 
+    /// The doubt's depth varies by tile (a reload may load four times the
+    /// core), so reloads wait for memory (`pipeline::shares`).
+    fn bytes_per_loaded_point(&self) -> Option<u64> {
+        Some(super::reconstruct::BYTES_PER_POINT)
+    }
+
     fn run(&self, tile: &TilePoints) -> Result<DelaunayTile, KernelError> {
         let region = Region {
             loaded: tile.loaded,

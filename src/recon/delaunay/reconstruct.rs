@@ -12,6 +12,7 @@
 
 use super::fan::{Hole, LOCAL_HOLE};
 use super::kernel::{DelaunayKernel, DelaunayTile};
+use crate::memory::plan::MARGIN_FACTOR;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
@@ -28,15 +29,24 @@ const MARGIN_SPACINGS: f64 = 90.0;
 
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
-/// edge index, the tile's own columns.
-pub(crate) const BYTES_PER_POINT: u64 = 900;
+/// edge index, the tile's own columns. At 900 the 3M noisy dragon peaked
+/// at 779 MiB under `--mem 768MiB` (tiles waiting for memory hold their
+/// points, the seam side its spool buffer).
+pub(crate) const BYTES_PER_POINT: u64 = 1000;
+
+/// Loaded points per core point a tile's first load holds (measured on
+/// the 3M noisy dragon with 94k-point cores: 1.6 to 2.6); the plan sizes
+/// tiles for it, and a reload that loads more waits for the memory of
+/// more tiles (`pipeline::shares`).
+const LOADED_PER_CORE: f64 = 2.6;
 
 /// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
 /// per loaded point and nothing per stored point beyond the seam side's
 /// map (seam-sized) and one union-find entry per tile component.
 pub fn cost() -> KernelCost {
     KernelCost {
-        bytes_per_point: BYTES_PER_POINT,
+        // The plan allows for MARGIN_FACTOR loaded points per core point.
+        bytes_per_point: (BYTES_PER_POINT as f64 * LOADED_PER_CORE / MARGIN_FACTOR).ceil() as u64,
         global_per_point: 0,
         contracts_boundaries: false,
         resident_per_point: 0.0,
