@@ -57,7 +57,7 @@ impl TileKernel for DelaunayKernel {
         self.initial_margin
     }
 
-    /// The doubt's depth varies by tile (a reload may load four times the
+    /// The doubt's depth varies by tile (a reload may load six times the
     /// core), so reloads wait for memory (`pipeline::shares`).
     fn bytes_per_loaded_point(&self) -> Option<u64> {
         Some(super::reconstruct::BYTES_PER_POINT)

@@ -29,9 +29,11 @@ const MARGIN_SPACINGS: f64 = 90.0;
 
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
-/// edge index, the tile's own columns. At 900 the 3M noisy dragon peaked
-/// at 779 MiB under `--mem 768MiB` (tiles waiting for memory hold their
-/// points, the seam side its spool buffer).
+/// edge index, the tile's own columns; rounded up from the 800 B the 1M
+/// untiled run shows, for the points a tile waiting for memory holds and
+/// the seam side. The 3M noisy dragon under `--mem 768MiB` still peaks at
+/// 867 MiB: freed tile memory stays in the workers' allocator arenas
+/// (ARCHITECTURE.md, memory model).
 pub(crate) const BYTES_PER_POINT: u64 = 1000;
 
 /// Loaded points per core point a tile's first load holds (measured on
