@@ -59,18 +59,28 @@ fn moebius(n: usize) -> Vec<DVec3> {
     scan(Shape::moebius(1.0, 0.5), n, 0.05, 5)
 }
 
-#[test]
-fn tiled_moebius_equals_untiled() {
-    let points = moebius(2_000);
-    let (whole, wr) = reconstruct(&points, u64::MAX, 2);
-    let (tiled, tr) = reconstruct(&points, 30, 2);
-    assert!(tr.run.tiles >= 64, "{} tiles", tr.run.tiles);
+/// The untiled and the tiled run (tiles of at most `tile_points`, at
+/// least `tiles` of them), their triangle sets asserted equal.
+fn whole_and_tiled(
+    points: &[DVec3],
+    tile_points: u64,
+    tiles: usize,
+) -> ((Mesh, DelaunayReport), (Mesh, DelaunayReport)) {
+    let (whole, wr) = reconstruct(points, u64::MAX, 2);
+    let (tiled, tr) = reconstruct(points, tile_points, 2);
+    assert!(tr.run.tiles >= tiles, "{} tiles", tr.run.tiles);
     assert_eq!(wr.run.tiles, 1);
-    assert!(whole.triangles.len() > 3_500, "{}", whole.triangles.len());
     assert!(
         triangle_set(&whole) == triangle_set(&tiled),
         "tiled triangles differ"
     );
+    ((whole, wr), (tiled, tr))
+}
+
+#[test]
+fn tiled_moebius_equals_untiled() {
+    let ((whole, wr), (tiled, tr)) = whole_and_tiled(&moebius(2_000), 30, 64);
+    assert!(whole.triangles.len() > 3_500, "{}", whole.triangles.len());
     let (qw, qt) = (quality(&whole), quality(&tiled));
     assert!(
         !qw.orientable && !qt.orientable,
@@ -90,18 +100,11 @@ fn noisy_torus(n: usize) -> Vec<DVec3> {
 
 #[test]
 fn tiled_noisy_torus_equals_untiled_with_margins_short_of_the_whole() {
-    let points = noisy_torus(60_000);
-    let (whole, wr) = reconstruct(&points, u64::MAX, 2);
-    let (tiled, tr) = reconstruct(&points, 4_000, 2);
-    assert!(tr.run.tiles >= 16, "{} tiles", tr.run.tiles);
+    let ((_, wr), (_, tr)) = whole_and_tiled(&noisy_torus(60_000), 4_000, 16);
     // The torus spans 2.7 units: a margin of at most half that leaves
     // some of the cloud out of every tile.
     assert!(tr.run.largest_margin < 1.35, "{}", tr.run.largest_margin);
     assert!(wr.forced > 0, "no forced choice: the test lost its point");
-    assert!(
-        triangle_set(&whole) == triangle_set(&tiled),
-        "tiled triangles differ"
-    );
 }
 
 #[test]
