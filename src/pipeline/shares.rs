@@ -11,7 +11,7 @@ use std::sync::{Condvar, Mutex};
 /// The shares of one run.
 pub(crate) struct Shares {
     /// Bytes of one share.
-    pub bytes: u64,
+    bytes: u64,
     total: usize,
     state: Mutex<State>,
     freed: Condvar,

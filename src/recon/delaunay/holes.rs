@@ -39,6 +39,18 @@ fn edge(a: u32, b: u32) -> Edge {
     (a.min(b), a.max(b))
 }
 
+/// Triangles on each edge of `tris` (corners sorted, so each edge comes
+/// as `(low, high)`).
+fn edge_orders(tris: &[[u32; 3]]) -> BTreeMap<Edge, u32> {
+    let mut order: BTreeMap<Edge, u32> = BTreeMap::new();
+    for t in tris {
+        for e in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
+            *order.entry(e).or_default() += 1;
+        }
+    }
+    order
+}
+
 /// Triangles that close the small holes of `tris` (corners sorted);
 /// `delta` is the absolute hole radius that judges a loop (None: the local
 /// one, see the module doc).
@@ -47,12 +59,7 @@ pub fn small_hole_patches(
     tris: &[[u32; 3]],
     delta: Option<f64>,
 ) -> Vec<[u32; 3]> {
-    let mut order: BTreeMap<Edge, u32> = BTreeMap::new();
-    for t in tris {
-        for e in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
-            *order.entry(e).or_default() += 1;
-        }
-    }
+    let mut order = edge_orders(tris);
     let mut around: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for (&(a, b), &k) in &order {
         if k == 1 {
@@ -102,13 +109,7 @@ pub fn small_hole_patches(
 /// for the loops a closed loop blocks; then every patch with a doubtful
 /// corner is doubtful in all its corners.
 pub fn patch_doubt(tris: &[[u32; 3]], patches: &[[u32; 3]], doubt: &mut [bool]) {
-    let mut order: BTreeMap<Edge, u32> = BTreeMap::new();
-    for t in tris {
-        for e in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
-            *order.entry(e).or_default() += 1;
-        }
-    }
-    let boundary: Vec<Edge> = order
+    let boundary: Vec<Edge> = edge_orders(tris)
         .into_iter()
         .filter(|&(_, k)| k == 1)
         .map(|(e, _)| e)

@@ -136,41 +136,44 @@ pub fn piece_doubt(tris: &[[u32; 3]], doubt: &mut [bool]) {
         .iter()
         .map(|c| c.iter().all(|&v| !doubt[v as usize]))
         .collect();
-    let mut parent: Vec<u32> = (0..tris.len() as u32).collect();
-    let mut on_edge: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(3 * tris.len());
     for (t, c) in tris.iter().enumerate() {
         for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[0], c[2])] {
-            on_edge
-                .entry((a.min(b), a.max(b)))
-                .or_default()
-                .push(t as u32);
+            keyed.push(((a.min(b) as u64) << 32 | a.max(b) as u64, t as u32));
         }
     }
+    keyed.sort_unstable();
+    let mut parent: Vec<u32> = (0..tris.len() as u32).collect();
     let mut touches = vec![false; tris.len()];
-    for ts in on_edge.values() {
-        let (ok, bad): (Vec<u32>, Vec<u32>) = ts.iter().partition(|&&t| clean[t as usize]);
-        for w in ok.windows(2) {
-            let (ra, rb) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
-            parent[ra.max(rb) as usize] = ra.min(rb);
+    for edge in keyed.chunk_by(|x, y| x.0 == y.0) {
+        let mut ok = edge.iter().map(|e| e.1).filter(|&t| clean[t as usize]);
+        let first = ok.next();
+        if let Some(f) = first {
+            for t in ok.clone() {
+                let (ra, rb) = (find(&mut parent, f), find(&mut parent, t));
+                parent[ra.max(rb) as usize] = ra.min(rb);
+            }
         }
-        if !bad.is_empty() {
-            for &t in &ok {
+        if edge.iter().any(|e| !clean[e.1 as usize]) {
+            for t in first.into_iter().chain(ok) {
                 touches[t as usize] = true;
             }
         }
     }
-    let mut size: BTreeMap<u32, (usize, bool)> = BTreeMap::new();
+    // Per clean piece (by root): its triangles, and whether it touches one
+    // with a doubtful corner.
+    let mut piece = vec![(0usize, false); tris.len()];
     for t in 0..tris.len() as u32 {
         if clean[t as usize] {
-            let e = size.entry(find(&mut parent, t)).or_default();
-            e.0 += 1;
-            e.1 |= touches[t as usize];
+            let p = &mut piece[find(&mut parent, t) as usize];
+            p.0 += 1;
+            p.1 |= touches[t as usize];
         }
     }
     let seeds = doubt.to_vec();
     for (t, c) in tris.iter().enumerate() {
         let uncertain = if clean[t] {
-            let (n, touching) = size[&find(&mut parent, t as u32)];
+            let (n, touching) = piece[find(&mut parent, t as u32) as usize];
             n <= MAX_PIECE && touching
         } else {
             c.iter().any(|&v| seeds[v as usize])
