@@ -36,8 +36,8 @@
 //! profile without a clear maximum (`k` not concave, the maximum beyond half
 //! the slab) leaves the vertex where it was.
 
-use super::grid::BallGrid;
 use crate::normals::eigen::sym3_eigen;
+use crate::spatial::BallGrid;
 use crate::spatial::Neighbour;
 use glam::DVec3;
 

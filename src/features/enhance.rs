@@ -180,7 +180,7 @@ impl Grower<'_> {
     }
 
     /// The heaviest of `set` above `kappa` (the first on ties: local sets
-    /// come in a canonical order, `grid.rs`).
+    /// come in a canonical order, `spatial::ball`).
     fn heaviest(&self, set: &[usize]) -> Option<usize> {
         self.heaviest_of(set.iter().copied())
     }

@@ -7,11 +7,11 @@
 //! reaches, so the kernel can check the answer lies inside the loaded
 //! region.
 
-use super::grid::BallGrid;
 use super::CurvatureHood;
 use crate::pipeline::KernelError;
 use crate::spatial::rtree::RTreeIndex;
 use crate::spatial::topological::{topological_neighbours, TopoParams, TopoScratch};
+use crate::spatial::BallGrid;
 use crate::spatial::{build_index, KnnBackend, KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 

@@ -33,7 +33,6 @@
 
 use super::crest::{place_on_crests, Slab};
 use super::curvature::VALUES;
-use super::grid::BallGrid;
 use super::hood::HoodIndex;
 use super::params::Resolved;
 use super::polyline::grow_polylines;
@@ -44,6 +43,7 @@ use super::stages::{
 use super::{CURVATURE, CURVATURE_FLAGS};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
+use crate::spatial::BallGrid;
 use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::synth::LineKind;
 use crate::tiling::{TilePoints, Values};

@@ -18,7 +18,6 @@ pub(crate) mod curve;
 pub(crate) mod enhance;
 pub mod export;
 pub mod extract;
-pub(crate) mod grid;
 pub(crate) mod hood;
 pub(crate) mod kernel;
 pub(crate) mod lift;

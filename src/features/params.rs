@@ -260,7 +260,7 @@ fn bad(reason: String) -> FeaturesError {
 impl Resolved {
     /// Cells of the smoothing's grid: the first radius, where most points
     /// settle, but wide enough that `delta_max` spans at most the 8 cells
-    /// a grid query reaches (`grid.rs`).
+    /// a grid query reaches (`spatial::ball`).
     pub(crate) fn smooth_cell(&self) -> f64 {
         self.delta.max(self.delta_max / 8.0)
     }

@@ -13,9 +13,9 @@
 //! only on its surroundings (ties: input id); beyond the cap the order no
 //! longer keeps growth away from corners, which is its purpose.
 
-use super::grid::BallGrid;
 use super::refine::refine_lines;
 use super::smooth::elongation;
+use crate::spatial::BallGrid;
 use crate::spatial::Neighbour;
 use glam::DVec3;
 

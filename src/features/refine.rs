@@ -12,8 +12,8 @@
 //! The points are those the cell's growth used, so the result depends on
 //! the cell alone and no tiling changes it.
 
-use super::grid::BallGrid;
 use super::smooth::elongation;
+use crate::spatial::BallGrid;
 use glam::DVec3;
 
 /// Elongation the refinement's points must reach (section 4's 0.6).

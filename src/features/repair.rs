@@ -21,8 +21,8 @@
 //! growth order), never in tile order, so the result does not depend on
 //! the tiling.
 
-use super::grid::BallGrid;
 use super::lines::LineGraph;
+use crate::spatial::BallGrid;
 use crate::synth::LineKind;
 use glam::DVec3;
 

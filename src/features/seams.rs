@@ -11,7 +11,7 @@
 //! never runs a line twice, so only lines from different cells are
 //! compared. The result does not depend on the tiling (cells do not).
 
-use super::grid::BallGrid;
+use crate::spatial::BallGrid;
 use crate::synth::LineKind;
 use glam::DVec3;
 

@@ -76,7 +76,7 @@ pub enum Smoothed {
 
 /// The smoothed position of the edge point `s`. `around` holds the
 /// enhanced points of its kind within `within` of `s` (itself included)
-/// in a canonical order (`grid.rs`), `positions` their positions; `corners` the
+/// in a canonical order (`spatial::ball`), `positions` their positions; `corners` the
 /// kept corners of its kind within `within`. Most points settle at the
 /// first radius, so callers gather that first and ask again with
 /// `delta_max` on [`Smoothed::Wider`].

@@ -6,12 +6,12 @@
 
 use super::curvature::{oriented_normal, point_quadric};
 use super::enhance::{enhance, EnhanceParams};
-use super::grid::BallGrid;
 use super::hood::{HoodIndex, HoodScratch};
 use super::lift::two_sided_lift;
 use super::params::Resolved;
 use super::smooth::{smooth_point, SmoothParams, Smoothed};
 use crate::pipeline::KernelError;
+use crate::spatial::BallGrid;
 use crate::synth::LineKind;
 use crate::tiling::TilePoints;
 use glam::{DVec2, DVec3};

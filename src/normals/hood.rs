@@ -102,15 +102,6 @@ impl<'a> HoodIndex<'a> {
         })
     }
 
-    /// The index itself, for plain kNN queries (the R*-tree answers them
-    /// too).
-    pub fn as_knn(&self) -> &dyn KnnIndex {
-        match self {
-            HoodIndex::Knn { index, .. } => index.as_ref(),
-            HoodIndex::Topological { index, .. } => index,
-        }
-    }
-
     /// The usual list length: k for kNN; about 2k for the reverse shift
     /// (paper 3: `|T|` in `[k, 3k]`).
     fn typical_len(&self) -> usize {

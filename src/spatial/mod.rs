@@ -1,6 +1,6 @@
 //! Spatial queries over one tile's points: exact k-nearest neighbours by a
-//! uniform grid (paper 1 section 2.1) or a kd-tree (kiddo), and a brute-force
-//! oracle for tests.
+//! uniform grid (paper 1 section 2.1) or a kd-tree (kiddo), every point
+//! within a radius (`ball`), and a brute-force oracle for tests.
 //!
 //! Every backend returns the same answer bit for bit: neighbours sorted by
 //! (squared distance, tie key), where the squared distance is always computed
@@ -10,12 +10,14 @@
 
 use glam::DVec3;
 
+pub(crate) mod ball;
 pub(crate) mod brute;
 pub(crate) mod grid;
 mod kdtree;
 pub mod rtree;
 pub mod topological;
 
+pub(crate) use ball::BallGrid;
 pub use brute::{brute_knn, neighbour_order};
 pub use grid::GridIndex;
 pub use kdtree::KdIndex;

@@ -2,8 +2,8 @@
 //! PCA normals, local spacings, neighbour lists, and which points may be
 //! processed as centres.
 
+use super::probe::Probe;
 use crate::normals::hood::Hoods;
-use crate::spatial::KnnIndex;
 use glam::DVec3;
 
 /// Neighbour lists by point (local indices, nearest first).
@@ -45,6 +45,6 @@ pub struct Cloud<'a, H: Neighbourhoods> {
     /// Whether a point may be a corner of a new triangle (a lattice job
     /// adds triangles only inside its window, `lattice.rs`).
     pub joinable: &'a [bool],
-    /// Exact kNN over `points`, for checks beyond a neighbour list.
-    pub index: &'a dyn KnnIndex,
+    /// Every point within a ball, for checks beyond a neighbour list.
+    pub probe: &'a Probe<'a>,
 }

@@ -35,9 +35,6 @@ use glam::DVec2;
 /// tested in space against the triangles around its corners.
 const RISKY_EDGE: f64 = 5.0;
 
-/// Points looked up around a big triangle's centre.
-const CIRCLE_PROBE: usize = 16;
-
 /// A walk's current edge end.
 #[derive(Clone, Copy, Debug)]
 struct End {
@@ -238,10 +235,9 @@ fn acceptable<H: Neighbourhoods>(
 }
 
 /// For a triangle too big for `v`'s neighbour list to vouch for (a corner
-/// beyond the list's reach): whether a point
-/// (other than its corners, and not left out) lies inside it, as seen along
-/// its normal within the ball, found with the tile's kNN index around the
-/// ball's centre. A long triangle across a gap otherwise lays itself over
+/// beyond the list's reach): whether a point (other than its corners, and
+/// not left out) inside its smallest enclosing ball lies over it, as seen
+/// along its normal (`probe.rs` finds the ball's points). A long triangle across a gap otherwise lays itself over
 /// triangles of points `v` does not see.
 fn big_and_not_empty<H: Neighbourhoods>(
     star: &mut Star,
@@ -263,7 +259,7 @@ fn big_and_not_empty<H: Neighbourhoods>(
         return true;
     }
     let mut found = std::mem::take(&mut star.found);
-    cloud.index.knn(centre, CIRCLE_PROBE, None, &mut found);
+    cloud.probe.within(centre, r2.sqrt(), &mut found);
     let hit = found.iter().any(|q| {
         q.dist2 < r2
             && !t.contains(&q.index)

@@ -21,12 +21,11 @@ use super::lattice::{JobKey, Lattice};
 use super::local::PointInfo;
 use super::orient::flipped;
 use super::params::ProjectionParams;
+use super::probe::Probe;
 use super::surface::{State, Surface, NONE};
 use crate::geom::Aabb;
-use crate::spatial::{GridIndex, IndexError, KnnIndex, Neighbour};
 use glam::DVec3;
 use std::collections::HashMap;
-use std::sync::OnceLock;
 
 /// What a job made.
 #[derive(Debug, Default)]
@@ -220,7 +219,7 @@ pub fn run_job<'a, H: Neighbourhoods>(
     lower: &dyn Fn(JobKey) -> Option<&'a JobOutput>,
     params: &ProjectionParams,
     local: &mut ToLocal,
-) -> Result<JobOutput, IndexError> {
+) -> JobOutput {
     let view = lat.view_box(key);
     let grow = lat.grow_box(key);
     let mut members = Vec::new();
@@ -267,7 +266,7 @@ fn grow_job<'a, H: Neighbourhoods>(
     local: &ToLocal,
     members: &[u32],
     mut jp: JobPoints,
-) -> Result<JobOutput, IndexError> {
+) -> JobOutput {
     let view = lat.view_box(key);
     let n_view = members.len();
     let hoods = remap_lists(members, tile.hoods, local);
@@ -325,7 +324,7 @@ fn grow_job<'a, H: Neighbourhoods>(
         s.push(t, piece);
     }
     let fixed = s.tris.len();
-    let index = LazyGrid::new(&jp.points, &jp.ids);
+    let probe = Probe::new(&jp.points, &jp.ids, &jp.spacing);
     let cloud = Cloud {
         points: &jp.points,
         normals: &jp.normals,
@@ -333,7 +332,7 @@ fn grow_job<'a, H: Neighbourhoods>(
         hoods: &hoods,
         centre: &jp.centre,
         joinable: &jp.joinable,
-        index: &index,
+        probe: &probe,
     };
     let mut grower = Grower::new(params, n_all);
     for i in 0..n_all {
@@ -358,7 +357,6 @@ fn grow_job<'a, H: Neighbourhoods>(
         .filter(|&i| jp.centre[i as usize] && jp.keep[i as usize])
         .collect();
     grower.grow(&cloud, &mut s, &seeds);
-    index.finish()?;
     // Hand back the new triangles, each in its root's frame.
     let name_of = |root: u32| -> u64 {
         if root < pieces {
@@ -401,51 +399,7 @@ fn grow_job<'a, H: Neighbourhoods>(
                 .push((names.names[p as usize], name_of(root), flip));
         }
     }
-    Ok(out)
-}
-
-/// A job's kNN index, built on its first query: only triangles larger
-/// than a vertex's list query it (`fan.rs`), and many jobs have none, so
-/// building it up front cost a twentieth of the run.
-struct LazyGrid<'a> {
-    points: &'a [DVec3],
-    ids: &'a [u64],
-    grid: OnceLock<Result<GridIndex<'a>, IndexError>>,
-}
-
-impl<'a> LazyGrid<'a> {
-    fn new(points: &'a [DVec3], ids: &'a [u64]) -> Self {
-        LazyGrid {
-            points,
-            ids,
-            grid: OnceLock::new(),
-        }
-    }
-
-    /// The build's error, if a query needed the index and it failed (the
-    /// queries then found nothing).
-    fn finish(self) -> Result<(), IndexError> {
-        match self.grid.into_inner() {
-            Some(Err(e)) => Err(e),
-            _ => Ok(()),
-        }
-    }
-}
-
-impl KnnIndex for LazyGrid<'_> {
-    fn knn(&self, q: DVec3, k: usize, exclude: Option<u32>, out: &mut Vec<Neighbour>) {
-        match self
-            .grid
-            .get_or_init(|| GridIndex::new(self.points, self.ids))
-        {
-            Ok(g) => g.knn(q, k, exclude, out),
-            Err(_) => out.clear(),
-        }
-    }
-
-    fn len(&self) -> usize {
-        self.points.len()
-    }
+    out
 }
 
 /// The view points' lists in job indices; neighbours outside the view are

@@ -51,13 +51,12 @@ impl Neighbourhoods for TileHoods {
     }
 }
 
-/// The index over the loaded points, their neighbour lists and point
-/// data. Fails with `MarginTooSmall` when a core point's list may reach
+/// The loaded points' neighbour lists and point data. Fails with `MarginTooSmall` when a core point's list may reach
 /// beyond the loaded region.
-pub(crate) fn local_data<'a>(
-    tile: &'a TilePoints,
+pub(crate) fn local_data(
+    tile: &TilePoints,
     params: &ProjectionParams,
-) -> Result<(HoodIndex<'a>, TileHoods, Vec<PointInfo>), KernelError> {
+) -> Result<(TileHoods, Vec<PointInfo>), KernelError> {
     let index = HoodIndex::build(tile, &params.hood())?;
     let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
     let n_core = tile.n_core;
@@ -68,7 +67,6 @@ pub(crate) fn local_data<'a>(
     info.extend(margin_info);
     let n_core = u32::try_from(n_core).map_err(KernelError::failed)?;
     Ok((
-        index,
         TileHoods {
             core,
             margin,

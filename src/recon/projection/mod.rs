@@ -45,6 +45,7 @@ pub(crate) mod lattice;
 pub(crate) mod local;
 pub(crate) mod orient;
 pub(crate) mod params;
+pub(crate) mod probe;
 pub(crate) mod reconstruct;
 pub(crate) mod star;
 pub(crate) mod stitch;

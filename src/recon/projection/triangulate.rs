@@ -7,6 +7,7 @@ use super::grow::Grower;
 use super::local::{local_data, PointInfo, TileHoods};
 use super::orient::settle;
 use super::params::ProjectionParams;
+use super::probe::Probe;
 use super::surface::{State, Surface};
 use crate::pipeline::KernelError;
 use crate::tiling::TilePoints;
@@ -25,11 +26,12 @@ pub fn triangulate_tile(
     tile: &TilePoints,
     params: &ProjectionParams,
 ) -> Result<TileSurface, KernelError> {
-    let (index, hoods, info) = local_data(tile, params)?;
+    let (hoods, info) = local_data(tile, params)?;
     let normals: Vec<DVec3> = info.iter().map(|p| p.normal).collect();
     let spacing: Vec<f64> = info.iter().map(|p| p.spacing).collect();
     let centre: Vec<bool> = info.iter().map(|p| p.complete).collect();
     let joinable = vec![true; tile.points.len()];
+    let probe = Probe::new(&tile.points, &tile.ids, &spacing);
     let cloud = Cloud {
         points: &tile.points,
         normals: &normals,
@@ -37,7 +39,7 @@ pub fn triangulate_tile(
         hoods: &hoods,
         centre: &centre,
         joinable: &joinable,
-        index: index.as_knn(),
+        probe: &probe,
     };
     let mut surface = Surface::new(tile.points.len());
     for (state, p) in surface.state.iter_mut().zip(&info) {
@@ -50,7 +52,6 @@ pub fn triangulate_tile(
     let mut grower = Grower::new(params, tile.points.len());
     grower.grow(&cloud, &mut surface, &seeds);
     let processed = grower.processed;
-    drop(index);
     Ok(TileSurface {
         surface,
         info,
