@@ -21,6 +21,9 @@ pub const HOLE_MAX_ANGLE_COS: f64 = -0.99985;
 /// The other boundary neighbour of `y` (not `prev`), when `y` has exactly
 /// two boundary edges.
 fn boundary_next(s: &Surface, y: u32, prev: u32) -> Option<u32> {
+    if s.open_edges(y) != 2 {
+        return None;
+    }
     let mut ends = [0u32; 32];
     let mut n = 0;
     for w in s.wedges(y) {

@@ -275,7 +275,9 @@ impl Star {
         self.front.clear();
         let frame = *self.frame();
         let open = |x: u32| matches!(s.state[x as usize], State::Fringe | State::Boundary);
-        let xs = std::iter::once(self.v).chain(self.pts.iter().map(|p| p.id).filter(|&x| open(x)));
+        let xs = std::iter::once(self.v)
+            .chain(self.pts.iter().map(|p| p.id).filter(|&x| open(x)))
+            .filter(|&x| s.has_open_edges(x));
         let mut ends = [0u32; 32];
         for x in xs {
             // A triangle edge at `x` is on the boundary when its far end

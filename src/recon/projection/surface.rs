@@ -18,8 +18,11 @@
 //! refused. The pieces are settled at the end (`orient.rs`).
 //!
 //! Storage: triangles in an array, and for each vertex a linked list of its
-//! corners (4 B per corner, 4 B per vertex): about 28 B per vertex for a
-//! mesh of two triangles per vertex.
+//! corners (4 B per corner, 4 B per vertex), its triangle count and its
+//! count of open edges (edges of one triangle), 8 B: about 36 B per vertex
+//! for a mesh of two triangles per vertex. The counts answer
+//! [`Surface::is_closed`] without walking the corners, which the growth
+//! asks after every triangle it adds.
 
 use crate::normals::unionfind::ParityUnionFind;
 
@@ -59,6 +62,10 @@ pub struct Surface {
     next: Vec<u32>,
     /// First corner at each vertex, or [`NONE`].
     head: Vec<u32>,
+    /// Triangles at each vertex.
+    degree: Vec<u32>,
+    /// Edges at each vertex that have one triangle.
+    open: Vec<u32>,
     pub state: Vec<State>,
     /// Pieces: pieces handed in first (`seed_base` of them), then one
     /// element per vertex (a new piece is named by its seed).
@@ -88,6 +95,8 @@ impl Surface {
             piece: Vec::with_capacity(2 * n),
             next: Vec::with_capacity(6 * n),
             head: vec![NONE; n],
+            degree: vec![0; n],
+            open: vec![0; n],
             state: vec![State::Free; n],
             pieces: ParityUnionFind::new(given as usize + n),
             seed_base: given,
@@ -145,9 +154,11 @@ impl Surface {
         // The relations this triangle imposes: (other piece, its parity to
         // the new triangle's frame).
         let mut joins: [(u32, bool); 3] = [(NONE, false); 3];
+        let mut shared = [0; 3];
         for (i, join) in joins.iter_mut().enumerate() {
             let (x, y) = (t[i], t[(i + 1) % 3]);
             let (tris, n) = self.edge_triangles(x, y);
+            shared[i] = n;
             match n {
                 0 => {}
                 1 => {
@@ -182,44 +193,54 @@ impl Surface {
                 self.pieces.union(r, root, need);
             }
         }
-        Ok(self.push(t, piece))
+        Ok(self.append(t, piece, shared))
     }
 
     /// Appends a triangle without checks (fixed triangles handed in, which
     /// met the invariant when they were made).
     pub fn push(&mut self, t: [u32; 3], piece: u32) -> u32 {
+        let shared = [0, 1, 2].map(|i| self.edge_triangles(t[i], t[(i + 1) % 3]).1);
+        self.append(t, piece, shared)
+    }
+
+    /// Appends `t`, whose edges had `shared[i]` triangles before it.
+    fn append(&mut self, t: [u32; 3], piece: u32, shared: [usize; 3]) -> u32 {
         let tri = self.tris.len() as u32;
         self.tris.push(t);
         self.piece.push(piece);
         for (i, &v) in t.iter().enumerate() {
             self.next.push(self.head[v as usize]);
             self.head[v as usize] = 3 * tri + i as u32;
+            self.degree[v as usize] += 1;
+        }
+        for (i, &n) in shared.iter().enumerate() {
+            let ends = [t[i], t[(i + 1) % 3]].map(|v| v as usize);
+            match n {
+                0 => ends.iter().for_each(|&v| self.open[v] += 1),
+                1 => ends.iter().for_each(|&v| self.open[v] -= 1),
+                _ => {}
+            }
         }
         tri
     }
 
+    /// Whether `v` has an edge with one triangle.
+    pub fn has_open_edges(&self, v: u32) -> bool {
+        self.open[v as usize] > 0
+    }
+
+    /// Edges at `v` with one triangle.
+    pub fn open_edges(&self, v: u32) -> u32 {
+        self.open[v as usize]
+    }
+
     /// Whether the triangles around `v` close around it: at least three,
-    /// and every triangle edge at `v` shared by two of them (each far end
-    /// appears twice). With the directed-edge rule that is one closed fan,
-    /// or, rarely, two fans pinched at `v`; either way nothing more can be
-    /// added at `v`.
+    /// and every triangle edge at `v` shared by two of them. With the
+    /// directed-edge rule that is one closed fan, or, rarely, two fans
+    /// pinched at `v`; either way nothing more can be added at `v`.
     pub fn is_closed(&self, v: u32) -> bool {
-        let mut ends = [0u32; 2 * MAX_CLOSED];
-        let mut n = 0;
-        for w in self.wedges(v) {
-            if n == ends.len() {
-                return false;
-            }
-            ends[n] = w.a;
-            ends[n + 1] = w.b;
-            n += 2;
-        }
-        if n < 6 {
-            return false;
-        }
-        let ends = &mut ends[..n];
-        ends.sort_unstable();
-        ends.chunks(2).all(|pair| pair[0] == pair[1])
+        let v = v as usize;
+        self.open[v] == 0 && (3..=MAX_CLOSED).contains(&self.degree[v])
     }
 
     fn wedge_at(&self, corner: u32) -> Wedge {
@@ -233,9 +254,10 @@ impl Surface {
     }
 }
 
-/// Fans longer than this are not checked for closure (never closed); a
-/// vertex of a sane surface mesh has about six triangles.
-const MAX_CLOSED: usize = 24;
+/// Fans of more triangles than this are never closed (a vertex of a sane
+/// surface mesh has about six): the cap the corner walk this count
+/// replaced had, kept so that the output did not change.
+const MAX_CLOSED: u32 = 24;
 
 pub struct Wedges<'a> {
     s: &'a Surface,
@@ -299,5 +321,27 @@ mod tests {
         s.try_add([0, 4, 1], 0).unwrap();
         assert!(s.is_closed(0));
         assert!(!s.is_closed(1));
+    }
+
+    #[test]
+    fn closure_counts_follow_pushed_and_added_triangles() {
+        let mut s = Surface::new(8);
+        // Two triangles on the same three vertices (a pillow): every edge
+        // has two triangles, but two triangles do not close a fan.
+        s.push([0, 1, 2], 0);
+        s.try_add([0, 2, 1], 0).unwrap();
+        assert_eq!(s.open_edges(0), 0);
+        assert!(!s.is_closed(0));
+        // A fan of four around 3, the first two handed in unchecked.
+        let mut s = Surface::new(8);
+        s.push([3, 4, 5], 0);
+        s.push([3, 5, 6], 0);
+        assert_eq!((s.open_edges(3), s.open_edges(5)), (2, 2));
+        s.try_add([3, 6, 7], 0).unwrap();
+        assert!(!s.is_closed(3));
+        s.try_add([3, 7, 4], 0).unwrap();
+        assert!(s.is_closed(3));
+        assert_eq!(s.open_edges(4), 2);
+        assert!(s.has_open_edges(7) && !s.has_open_edges(3));
     }
 }
