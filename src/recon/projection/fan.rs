@@ -355,10 +355,11 @@ fn risky<H: Neighbourhoods>(star: &Star, cloud: &Cloud<H>, t: [u32; 3]) -> bool 
 /// neighbours (exact test, shared vertices handled: `mesh::intersect`).
 ///
 /// The three lists overlap, and each triangle sits at three vertices: the
-/// vertices are deduplicated first (at most `1 + 3k`), and only triangles
-/// whose boxes overlap `t`'s are remembered, so the exact test runs once
-/// each (a list of every triangle seen, scanned per triangle, was a sixth
-/// of the whole run on the 1M dragon).
+/// vertices are deduplicated first (at most `1 + 3k`), each marked with its
+/// place, and a triangle is tested only at the first of its corners among
+/// them, only when its box meets `t`'s, so the exact test runs once each
+/// (a list of every triangle seen, scanned per triangle, was a sixth of the
+/// whole run on the 1M dragon).
 fn meets_nearby<H: Neighbourhoods>(
     star: &mut Star,
     cloud: &Cloud<H>,
@@ -367,35 +368,44 @@ fn meets_nearby<H: Neighbourhoods>(
 ) -> bool {
     let p = t.map(|x| cloud.points[x as usize]);
     let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-    let mut around = std::mem::take(&mut star.around);
-    around.clear();
-    around.push(star.v);
-    for x in t {
-        for &y in cloud.hoods.get(x) {
-            if !around.contains(&y) {
-                around.push(y);
-            }
-        }
+    if star.marks.len() < cloud.points.len() {
+        star.marks.resize(cloud.points.len(), 0);
     }
-    let mut seen = std::mem::take(&mut star.seen);
-    seen.clear();
-    let mut hit = false;
-    'outer: for &x in &around {
+    star.calls += 1;
+    let call = star.calls;
+    let marks = &mut star.marks;
+    let around = &mut star.around;
+    around.clear();
+    let mut add = |y: u32| {
+        let m = &mut marks[y as usize];
+        if *m >> 32 != call {
+            *m = call << 32 | around.len() as u64;
+            around.push(y);
+        }
+    };
+    add(star.v);
+    for x in t {
+        cloud.hoods.get(x).iter().for_each(|&y| add(y));
+    }
+    let earlier = |y: u32, place: usize| {
+        let m = marks[y as usize];
+        m >> 32 == call && ((m & 0xffff_ffff) as usize) < place
+    };
+    for (place, &x) in around.iter().enumerate() {
         for w in s.wedges(x) {
+            if earlier(w.a, place) || earlier(w.b, place) {
+                continue;
+            }
             let o = s.tris[w.tri as usize];
             let q = o.map(|y| cloud.points[y as usize]);
             let (olo, ohi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
-            if olo.cmpgt(hi).any() || lo.cmpgt(ohi).any() || seen.contains(&w.tri) {
+            if olo.cmpgt(hi).any() || lo.cmpgt(ohi).any() {
                 continue;
             }
-            seen.push(w.tri);
             if crate::mesh::intersect::triangles_intersect(t, &p, o, &q) {
-                hit = true;
-                break 'outer;
+                return true;
             }
         }
     }
-    star.seen = seen;
-    star.around = around;
-    hit
+    false
 }

@@ -125,10 +125,12 @@ pub struct Star {
     corner_arcs: Vec<Arc>,
     /// The gap being triangulated closes a small hole.
     pub closing_hole: bool,
-    /// Triangles already tested (`fan.rs`).
-    pub seen: Vec<u32>,
-    /// Scratch: the vertices whose triangles `fan::meets_nearby` checks.
+    /// Scratch of `fan::meets_nearby`: the vertices whose triangles it
+    /// checks; for each point, `call << 32 | place` while it is among them
+    /// (its place in `around`, at the call numbered `call`).
     pub around: Vec<u32>,
+    pub marks: Vec<u64>,
+    pub calls: u64,
     /// kNN answers (`fan.rs`).
     pub found: Vec<crate::spatial::Neighbour>,
 }
