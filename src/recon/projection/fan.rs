@@ -135,9 +135,12 @@ impl Fan {
             } else {
                 [(star.v, DVec2::ZERO), (next.id, next.q), (cur.id, cur.q)]
             };
-            if !t.iter().all(|x| cloud.joinable[x.0 as usize])
-                || !acceptable(star, cloud, s, lim, t)
-                || !self.add(s, t.map(|x| x.0), star.piece)
+            if !t.iter().all(|x| cloud.joinable[x.0 as usize]) {
+                break;
+            }
+            let edges = s.edges(t.map(|x| x.0));
+            if !acceptable(star, cloud, s, lim, t, edges.map(|e| e.1 > 0))
+                || !self.add(s, t.map(|x| x.0), star.piece, edges)
             {
                 break;
             }
@@ -150,8 +153,14 @@ impl Fan {
         cur
     }
 
-    fn add(&mut self, s: &mut Surface, t: [u32; 3], piece: u32) -> bool {
-        match s.try_add(t, piece) {
+    fn add(
+        &mut self,
+        s: &mut Surface,
+        t: [u32; 3],
+        piece: u32,
+        edges: [([u32; 2], usize); 3],
+    ) -> bool {
+        match s.try_add_on(t, piece, edges) {
             Ok(_) => {
                 self.added.push(t);
                 true
@@ -205,16 +214,17 @@ fn next_neighbour(
     best.map(|(_, e)| e)
 }
 
-/// Whether the counter-clockwise (in the star's frame) triangle `t` may be
-/// added; see the module docs for the list of checks.
+/// Whether the counter-clockwise (in the star's frame) triangle `t`, whose
+/// edge `t[i]`-`t[i + 1]` is in the mesh when `existing[i]`, may be added;
+/// see the module docs for the list of checks.
 fn acceptable<H: Neighbourhoods>(
     star: &mut Star,
     cloud: &Cloud<H>,
     s: &Surface,
     lim: &Limits,
     t: [(u32, DVec2); 3],
+    existing: [bool; 3],
 ) -> bool {
-    let existing = [0, 1, 2].map(|i| s.edge_triangles(t[i].0, t[(i + 1) % 3].0).1 > 0);
     // A triangle whose three edges exist closes a three-edge hole: it adds
     // no edge, and a sliver there is better than a hole. Closing a hole
     // (this one, or a small one `v`'s gap opens onto), the corners are not

@@ -150,15 +150,29 @@ impl Surface {
     /// whose root frame the winding is expressed in, if the invariant
     /// allows; joins the pieces it meets across its edges.
     pub fn try_add(&mut self, t: [u32; 3], piece: u32) -> Result<u32, Refusal> {
+        self.try_add_on(t, piece, self.edges(t))
+    }
+
+    /// The triangles on each edge `t[i]`-`t[i + 1]` ([`Surface::edge_triangles`]).
+    pub fn edges(&self, t: [u32; 3]) -> [([u32; 2], usize); 3] {
+        [0, 1, 2].map(|i| self.edge_triangles(t[i], t[(i + 1) % 3]))
+    }
+
+    /// [`Surface::try_add`] with `t`'s [`Surface::edges`], found by a
+    /// caller that read them for its own checks.
+    pub fn try_add_on(
+        &mut self,
+        t: [u32; 3],
+        piece: u32,
+        edges: [([u32; 2], usize); 3],
+    ) -> Result<u32, Refusal> {
         let (root, flip) = self.pieces.find(piece);
         // The relations this triangle imposes: (other piece, its parity to
         // the new triangle's frame).
         let mut joins: [(u32, bool); 3] = [(NONE, false); 3];
-        let mut shared = [0; 3];
         for (i, join) in joins.iter_mut().enumerate() {
             let (x, y) = (t[i], t[(i + 1) % 3]);
-            let (tris, n) = self.edge_triangles(x, y);
-            shared[i] = n;
+            let (tris, n) = edges[i];
             match n {
                 0 => {}
                 1 => {
@@ -193,13 +207,13 @@ impl Surface {
                 self.pieces.union(r, root, need);
             }
         }
-        Ok(self.append(t, piece, shared))
+        Ok(self.append(t, piece, edges.map(|e| e.1)))
     }
 
     /// Appends a triangle without checks (fixed triangles handed in, which
     /// met the invariant when they were made).
     pub fn push(&mut self, t: [u32; 3], piece: u32) -> u32 {
-        let shared = [0, 1, 2].map(|i| self.edge_triangles(t[i], t[(i + 1) % 3]).1);
+        let shared = self.edges(t).map(|e| e.1);
         self.append(t, piece, shared)
     }
 
