@@ -79,9 +79,9 @@ pub fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
 /// touch at an endpoint or a collinear overlap is not a crossing: the
 /// callers test segments that may share endpoints).
 pub fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
-    let (d1, d2) = (orient(a, b, c), orient(a, b, d));
-    let (d3, d4) = (orient(c, d, a), orient(c, d, b));
-    d1 * d2 < 0.0 && d3 * d4 < 0.0
+    // The second pair only when the first straddles: most segments a
+    // front check meets lie to one side (it runs 44M times on 1M points).
+    orient(a, b, c) * orient(a, b, d) < 0.0 && orient(c, d, a) * orient(c, d, b) < 0.0
 }
 
 /// Whether `p` lies strictly inside the counter-clockwise triangle `abc`.
