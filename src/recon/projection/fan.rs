@@ -344,9 +344,9 @@ fn corners_free<H: Neighbourhoods>(
 /// A vertex of the mesh (not free, not unused) strictly inside `t`.
 fn holds_a_vertex(star: &Star, s: &Surface, t: [(u32, DVec2); 3]) -> bool {
     star.pts.iter().any(|l| {
-        !matches!(s.state[l.id as usize], State::Free | State::Unused)
+        strictly_inside(l.q, t[0].1, t[1].1, t[2].1)
             && t.iter().all(|c| c.0 != l.id)
-            && strictly_inside(l.q, t[0].1, t[1].1, t[2].1)
+            && !matches!(s.state[l.id as usize], State::Free | State::Unused)
     })
 }
 

@@ -92,10 +92,10 @@ impl Star {
             if !usable || self.cands.iter().any(|&c| self.pts[c].id == x) {
                 continue;
             }
-            let q = frame.project(cloud.points[x as usize]).0;
+            let (q, height) = frame.project(cloud.points[x as usize]);
             let ang = pseudo_angle(q);
             if gap.contains(ang) {
-                self.pts.push(Local { id: x, q, ang });
+                self.pts.push(Local { id: x, q, ang, height });
                 self.cands.push(self.pts.len() - 1);
             }
         }

@@ -23,6 +23,8 @@ pub struct Local {
     pub id: u32,
     pub q: DVec2,
     pub ang: f64,
+    /// Height over the tangent plane.
+    pub height: f64,
 }
 
 /// An open counter-clockwise arc of directions (pseudo-angles), swept by a
@@ -219,6 +221,7 @@ impl Star {
                     id: u,
                     q,
                     ang: pseudo_angle(q),
+                    height,
                 });
             }
         }
@@ -366,8 +369,7 @@ impl Star {
             if d.length() > lim.max_edge * hv.max(cloud.spacing[u]) {
                 continue;
             }
-            let (_, height) = self.frame().project(cloud.points[u]);
-            if height.abs() > lim.tan_elevation * p.q.length() {
+            if p.height.abs() > lim.tan_elevation * p.q.length() {
                 continue;
             }
             if !self.gaps.iter().any(|g| g.contains(p.ang)) {

@@ -258,13 +258,14 @@ impl Surface {
     }
 
     fn wedge_at(&self, corner: u32) -> Wedge {
-        let t = self.tris[(corner / 3) as usize];
-        let i = (corner % 3) as usize;
-        Wedge {
-            a: t[(i + 1) % 3],
-            b: t[(i + 2) % 3],
-            tri: corner / 3,
-        }
+        let tri = corner / 3;
+        let t = self.tris[tri as usize];
+        let (a, b) = match corner - 3 * tri {
+            0 => (t[1], t[2]),
+            1 => (t[2], t[0]),
+            _ => (t[0], t[1]),
+        };
+        Wedge { a, b, tri }
     }
 }
 
