@@ -25,6 +25,7 @@ use super::probe::Probe;
 use super::surface::{State, Surface, NONE};
 use crate::geom::Aabb;
 use glam::DVec3;
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// What a job made.
@@ -63,7 +64,7 @@ pub struct TileView<'a, H: Neighbourhoods> {
 /// it, so that a job sorts its points by comparing plain integers.
 pub fn id_order(ids: &[u64]) -> (Vec<u32>, Vec<u32>) {
     let mut by_id: Vec<u32> = (0..ids.len() as u32).collect();
-    by_id.sort_unstable_by_key(|&i| ids[i as usize]);
+    by_id.par_sort_unstable_by_key(|&i| ids[i as usize]);
     let mut rank = vec![0u32; ids.len()];
     for (r, &i) in by_id.iter().enumerate() {
         rank[i as usize] = r as u32;
@@ -82,11 +83,11 @@ impl Buckets {
     pub fn new(points: &[DVec3], size: f64) -> Self {
         let key = |p: DVec3| [p.x, p.y, p.z].map(|c| (c / size).floor() as i64);
         let mut keyed: Vec<([i64; 3], u32)> = points
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, p)| (key(*p), i as u32))
             .collect();
-        keyed.sort_unstable();
+        keyed.par_sort_unstable();
         let mut ranges = HashMap::new();
         let mut start = 0;
         while start < keyed.len() {

@@ -84,15 +84,17 @@ impl TileKernel for ProjectionKernel {
             buckets: &buckets,
         };
         // Every point a job reads must have the whole cloud's list.
-        let mut members = Vec::new();
-        let mut short = 0.0f64;
-        for &k in &required {
-            members.clear();
-            buckets.inside(&tile.points, &lat.view_box(k), &mut members);
-            for &i in &members {
-                short = short.max(info[i as usize].short_by);
-            }
-        }
+        let short = required
+            .par_iter()
+            .map_init(Vec::new, |members, &k| {
+                members.clear();
+                buckets.inside(&tile.points, &lat.view_box(k), members);
+                members
+                    .iter()
+                    .map(|&i| info[i as usize].short_by)
+                    .fold(0.0f64, f64::max)
+            })
+            .reduce(|| 0.0, f64::max);
         KernelError::unless_short(short, tile.margin)?;
         let mut done: BTreeMap<JobKey, JobOutput> = BTreeMap::new();
         for level in 0..LEVELS {
