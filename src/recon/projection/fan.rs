@@ -370,7 +370,7 @@ fn risky<H: Neighbourhoods>(star: &Star, cloud: &Cloud<H>, t: [u32; 3]) -> bool 
 /// them, only when its box meets `t`'s, so the exact test runs once each
 /// (a list of every triangle seen, scanned per triangle, was a sixth of the
 /// whole run on the 1M dragon).
-fn meets_nearby<H: Neighbourhoods>(
+pub(super) fn meets_nearby<H: Neighbourhoods>(
     star: &mut Star,
     cloud: &Cloud<H>,
     s: &Surface,

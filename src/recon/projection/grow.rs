@@ -15,6 +15,7 @@
 
 use super::cloud::{Cloud, Neighbourhoods};
 use super::fan::Fan;
+use super::holes::close_three_edge_holes;
 use super::params::ProjectionParams;
 use super::star::{Limits, Star};
 use super::surface::{State, Surface};
@@ -68,6 +69,7 @@ impl Grower {
                 self.drain(cloud, s);
             }
         }
+        close_three_edge_holes(&mut self.star, cloud, s);
     }
 
     fn drain<H: Neighbourhoods>(&mut self, cloud: &Cloud<H>, s: &mut Surface) {
