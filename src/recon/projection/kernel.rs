@@ -200,13 +200,21 @@ fn hand_over(
         out.jobs_owned += 1;
         out.processed += job.processed;
         out.relations.extend_from_slice(&job.relations);
+        // The tile's number for each of the job's pieces, looked up once
+        // per piece rather than once per triangle.
+        let numbers: Vec<u32> = job
+            .names
+            .iter()
+            .map(|&name| {
+                *dense.entry(name).or_insert_with(|| {
+                    out.names.push(name);
+                    out.volumes.push(0.0);
+                    out.names.len() as u32 - 1
+                })
+            })
+            .collect();
         for (t, &piece) in job.tris.iter().zip(&job.piece) {
-            let name = job.names[piece as usize];
-            let p = *dense.entry(name).or_insert_with(|| {
-                out.names.push(name);
-                out.volumes.push(0.0);
-                out.names.len() as u32 - 1
-            });
+            let p = numbers[piece as usize];
             out.volumes[p as usize] += volume6(&tile.points, *t, DVec3::ZERO);
             out.triangles.push([
                 store_u32(tile, t[0])?,
