@@ -247,8 +247,9 @@ fn acceptable<H: Neighbourhoods>(
 /// For a triangle too big for `v`'s neighbour list to vouch for (a corner
 /// beyond the list's reach): whether a point (other than its corners, and
 /// not left out) inside its smallest enclosing ball lies over it, as seen
-/// along its normal (`probe.rs` finds the ball's points). A long triangle across a gap otherwise lays itself over
-/// triangles of points `v` does not see.
+/// along its normal (`probe.rs` finds the ball's points). A long triangle
+/// across a gap otherwise lays itself over triangles of points `v` does
+/// not see.
 fn big_and_not_empty<H: Neighbourhoods>(
     star: &mut Star,
     cloud: &Cloud<H>,
