@@ -10,7 +10,7 @@ use super::cloud::{Cloud, Neighbourhoods};
 use super::fan::meets_nearby;
 use super::frame::pseudo_angle;
 use super::star::{Local, Star};
-use super::surface::{State, Surface, NONE};
+use super::surface::{State, Surface};
 
 /// Longest hole (in edges) closed from one of its vertices whatever the
 /// reach of its neighbour list.
@@ -22,43 +22,11 @@ pub const HOLE_MAX_ANGLE_COS: f64 = -0.99985;
 /// The other boundary neighbour of `y` (not `prev`), when `y` has exactly
 /// two boundary edges.
 fn boundary_next(s: &Surface, y: u32, prev: u32) -> Option<u32> {
-    match boundary_ends(s, y)? {
+    match s.boundary_ends(y)? {
         [a, b] if a == prev => Some(b),
         [a, b] if b == prev => Some(a),
         _ => None,
     }
-}
-
-/// The far ends of `y`'s two boundary edges, when it has exactly two.
-fn boundary_ends(s: &Surface, y: u32) -> Option<[u32; 2]> {
-    if s.open_edges(y) != 2 {
-        return None;
-    }
-    let mut ends = [0u32; 32];
-    let mut n = 0;
-    for w in s.wedges(y) {
-        if n + 2 > ends.len() {
-            return None;
-        }
-        ends[n] = w.a;
-        ends[n + 1] = w.b;
-        n += 2;
-    }
-    let ends = &mut ends[..n];
-    ends.sort_unstable();
-    let mut single = [NONE; 2];
-    let mut k = 0;
-    for i in 0..n {
-        let y = ends[i];
-        if (i == 0 || ends[i - 1] != y) && (i + 1 == n || ends[i + 1] != y) {
-            if k == 2 {
-                return None;
-            }
-            single[k] = y;
-            k += 1;
-        }
-    }
-    (k == 2).then_some(single)
 }
 
 /// Closes the holes of three edges the growth left, each with one triangle
@@ -80,12 +48,12 @@ pub fn close_three_edge_holes<H: Neighbourhoods>(
         if !cloud.joinable[v as usize] {
             continue;
         }
-        let Some([a, b]) = boundary_ends(s, v) else {
+        let Some([a, b]) = s.boundary_ends(v) else {
             continue;
         };
         let t = [v, a, b];
         let hole = v < a.min(b)
-            && boundary_ends(s, a).is_some_and(|e| e.contains(&b))
+            && s.boundary_ends(a).is_some_and(|e| e.contains(&b))
             && t.iter().all(|&x| cloud.joinable[x as usize])
             && open_corners(cloud, t);
         if !hole {
@@ -233,7 +201,7 @@ mod tests {
     #[test]
     fn a_hole_of_three_edges_gets_its_triangle_wound_with_its_neighbours() {
         let (points, mut s) = ring();
-        assert_eq!(boundary_ends(&s, 3), Some([4, 5]));
+        assert_eq!(s.boundary_ends(3), Some([4, 5]));
         close(&points, &mut s, &[true; 6]);
         assert_eq!(s.tris.len(), 7);
         let added = s.tris[6];

@@ -285,6 +285,16 @@ impl Star {
             .filter(|&x| s.has_open_edges(x));
         let mut ends = [0u32; 32];
         for x in xs {
+            let qx = frame.project(cloud.points[x as usize]).0;
+            // Most front vertices have two boundary edges, which the
+            // surface names without a walk.
+            if let Some(two) = s.boundary_ends(x) {
+                for y in two {
+                    let qy = frame.project(cloud.points[y as usize]).0;
+                    self.front.push(FrontEdge { x, y, qx, qy });
+                }
+                continue;
+            }
             // A triangle edge at `x` is on the boundary when its far end
             // appears once among the ends of `x`'s triangles.
             let mut n = 0;
@@ -298,7 +308,6 @@ impl Star {
             }
             let ends = &mut ends[..n];
             ends.sort_unstable();
-            let qx = frame.project(cloud.points[x as usize]).0;
             for i in 0..n {
                 let y = ends[i];
                 let single = (i == 0 || ends[i - 1] != y) && (i + 1 == n || ends[i + 1] != y);

@@ -18,11 +18,13 @@
 //! refused. The pieces are settled at the end (`orient.rs`).
 //!
 //! Storage: triangles in an array, and for each vertex a linked list of its
-//! corners (4 B per corner, 4 B per vertex), its triangle count and its
-//! count of open edges (edges of one triangle), 8 B: about 36 B per vertex
-//! for a mesh of two triangles per vertex. The counts answer
-//! [`Surface::is_closed`] without walking the corners, which the growth
-//! asks after every triangle it adds.
+//! corners (4 B per corner, 4 B per vertex), its triangle count, its count
+//! of open edges (edges of one triangle) and two sums over their far ends,
+//! 24 B: about 52 B per vertex for a mesh of two triangles per vertex. The
+//! counts answer [`Surface::is_closed`], and the sums
+//! [`Surface::boundary_ends`], without walking the corners: the growth
+//! asks the first after every triangle it adds, the second for every front
+//! vertex it looks at (walking corners there was a tenth of the run).
 
 use crate::normals::unionfind::ParityUnionFind;
 
@@ -66,6 +68,10 @@ pub struct Surface {
     degree: Vec<u32>,
     /// Edges at each vertex that have one triangle.
     open: Vec<u32>,
+    /// The far ends of those edges: their sum, and the sum of their
+    /// squares (wrapping), which give the two ends of a vertex with two.
+    open_sum: Vec<u64>,
+    open_squares: Vec<u64>,
     pub state: Vec<State>,
     /// Pieces: pieces handed in first (`seed_base` of them), then one
     /// element per vertex (a new piece is named by its seed).
@@ -97,6 +103,8 @@ impl Surface {
             head: vec![NONE; n],
             degree: vec![0; n],
             open: vec![0; n],
+            open_sum: vec![0; n],
+            open_squares: vec![0; n],
             state: vec![State::Free; n],
             pieces: ParityUnionFind::new(given as usize + n),
             seed_base: given,
@@ -230,12 +238,49 @@ impl Surface {
         for (i, &n) in shared.iter().enumerate() {
             let ends = [t[i], t[(i + 1) % 3]].map(|v| v as usize);
             match n {
-                0 => ends.iter().for_each(|&v| self.open[v] += 1),
-                1 => ends.iter().for_each(|&v| self.open[v] -= 1),
+                0 => {
+                    self.open_end(ends[0], ends[1], true);
+                    self.open_end(ends[1], ends[0], true);
+                }
+                1 => {
+                    self.open_end(ends[0], ends[1], false);
+                    self.open_end(ends[1], ends[0], false);
+                }
                 _ => {}
             }
         }
         tri
+    }
+
+    /// The edge `v`-`far` becomes open (`opens`) or closed at `v`.
+    fn open_end(&mut self, v: usize, far: usize, opens: bool) {
+        let (y, y2) = (far as u64, (far as u64).wrapping_mul(far as u64));
+        if opens {
+            self.open[v] += 1;
+            self.open_sum[v] += y;
+            self.open_squares[v] = self.open_squares[v].wrapping_add(y2);
+        } else {
+            self.open[v] -= 1;
+            self.open_sum[v] -= y;
+            self.open_squares[v] = self.open_squares[v].wrapping_sub(y2);
+        }
+    }
+
+    /// The far ends of `v`'s two open edges, smaller first, when it has
+    /// exactly two: from their sum `a` and sum of squares `b`, whose
+    /// `2b - a^2` is the square of their difference (below 2^64, so exact
+    /// in wrapping arithmetic). No corner walk.
+    pub fn boundary_ends(&self, v: u32) -> Option<[u32; 2]> {
+        let v = v as usize;
+        if self.open[v] != 2 {
+            return None;
+        }
+        let a = self.open_sum[v];
+        let d2 = self.open_squares[v]
+            .wrapping_mul(2)
+            .wrapping_sub(a.wrapping_mul(a));
+        let d = isqrt(d2);
+        Some([((a - d) / 2) as u32, ((a + d) / 2) as u32])
     }
 
     /// Whether `v` has an edge with one triangle.
@@ -267,6 +312,18 @@ impl Surface {
         };
         Wedge { a, b, tri }
     }
+}
+
+/// The integer square root of `x`.
+fn isqrt(x: u64) -> u64 {
+    let mut r = (x as f64).sqrt() as u64;
+    while u128::from(r) * u128::from(r) > u128::from(x) {
+        r -= 1;
+    }
+    while u128::from(r + 1) * u128::from(r + 1) <= u128::from(x) {
+        r += 1;
+    }
+    r
 }
 
 /// Fans of more triangles than this are never closed (a vertex of a sane
@@ -358,5 +415,52 @@ mod tests {
         assert!(s.is_closed(3));
         assert_eq!(s.open_edges(4), 2);
         assert!(s.has_open_edges(7) && !s.has_open_edges(3));
+        assert_eq!(s.boundary_ends(4), Some([5, 7]));
+        assert_eq!(s.boundary_ends(3), None);
+    }
+
+    #[test]
+    fn the_two_ends_come_back_from_their_sums_even_where_squares_wrap() {
+        assert_eq!(isqrt(u64::MAX), u64::from(u32::MAX));
+        assert_eq!((isqrt(15), isqrt(16), isqrt(0)), (3, 4, 0));
+        for (e1, e2) in [
+            (0u32, 1u32),
+            (7, 7 + 1),
+            (3, u32::MAX),
+            (u32::MAX - 7, u32::MAX),
+        ] {
+            let mut s = Surface::new(1);
+            s.open_end(0, e1 as usize, true);
+            s.open_end(0, 12_345, true);
+            s.open_end(0, e2 as usize, true);
+            s.open_end(0, 12_345, false);
+            assert_eq!(s.boundary_ends(0), Some([e1, e2]));
+        }
+    }
+
+    #[test]
+    fn boundary_ends_match_a_corner_walk_over_a_strip() {
+        // A fan strip 0-1-2-...: each vertex's open edges by walking its
+        // corners, against the sums.
+        let mut s = Surface::new(12);
+        for i in 0..10u32 {
+            let t = if i % 2 == 0 {
+                [i, i + 1, i + 2]
+            } else {
+                [i + 1, i, i + 2]
+            };
+            s.try_add(t, 0).unwrap();
+        }
+        for v in 0..12u32 {
+            let mut ends: Vec<u32> = s.wedges(v).flat_map(|w| [w.a, w.b]).collect();
+            ends.sort_unstable();
+            let single: Vec<u32> = ends
+                .iter()
+                .copied()
+                .filter(|e| ends.iter().filter(|x| *x == e).count() == 1)
+                .collect();
+            let want = (single.len() == 2).then(|| [single[0], single[1]]);
+            assert_eq!(s.boundary_ends(v), want, "vertex {v}");
+        }
     }
 }
