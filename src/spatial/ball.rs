@@ -71,16 +71,7 @@ impl<'a> BallGrid<'a> {
             .collect();
         keyed.sort_unstable();
         let mut cells = HashMap::with_capacity_and_hasher(keyed.len() / 4, Default::default());
-        let mut start = 0;
-        while start < keyed.len() {
-            let key = keyed[start].0;
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == key {
-                end += 1;
-            }
-            cells.insert(key, (start as u32, end as u32));
-            start = end;
-        }
+        cells.extend(key_runs(&keyed, |e| e.0));
         Some(BallGrid {
             points,
             ids,
@@ -172,6 +163,23 @@ impl<'a> BallGrid<'a> {
                 .then(self.id(a.index).cmp(&self.id(b.index)))
         });
     }
+}
+
+/// The runs of equal keys in `sorted` (entries sorted by `key`): each key
+/// with the range of its entries, as a cell map over points sorted by
+/// cell holds them.
+pub(crate) fn key_runs<'a, T, K: PartialEq>(
+    sorted: &'a [T],
+    key: impl Fn(&T) -> K + Copy + 'a,
+) -> impl Iterator<Item = (K, (u32, u32))> + 'a {
+    let mut start = 0u32;
+    sorted
+        .chunk_by(move |a, b| key(a) == key(b))
+        .map(move |run| {
+            let first = start;
+            start += run.len() as u32;
+            (key(&run[0]), (first, start))
+        })
 }
 
 /// Cell coordinates, clamped to 21 bits each side so that they pack into a

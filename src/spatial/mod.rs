@@ -17,7 +17,7 @@ mod kdtree;
 pub mod rtree;
 pub mod topological;
 
-pub(crate) use ball::BallGrid;
+pub(crate) use ball::{key_runs, BallGrid};
 pub use brute::{brute_knn, neighbour_order};
 pub use grid::GridIndex;
 pub use kdtree::KdIndex;

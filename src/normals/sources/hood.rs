@@ -9,7 +9,9 @@
 
 use super::SourcesError;
 use crate::spatial::brute::dist2;
-use crate::spatial::{build_index, neighbour_order, IndexError, KnnBackend, KnnIndex, Neighbour};
+use crate::spatial::{
+    build_index, key_runs, neighbour_order, IndexError, KnnBackend, KnnIndex, Neighbour,
+};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -99,17 +101,7 @@ impl<'a> RadiusGrid<'a> {
             .map(|(i, p)| (cell_of(*p, inv), i as u32))
             .collect();
         keyed.sort_unstable();
-        let mut cells = HashMap::new();
-        let mut start = 0;
-        while start < keyed.len() {
-            let key = keyed[start].0;
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == key {
-                end += 1;
-            }
-            cells.insert(key, (start as u32, end as u32));
-            start = end;
-        }
+        let cells: HashMap<_, _> = key_runs(&keyed, |e| e.0).collect();
         Ok(RadiusGrid {
             points,
             ids,

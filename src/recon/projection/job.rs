@@ -24,6 +24,7 @@ use super::params::ProjectionParams;
 use super::probe::Probe;
 use super::surface::{State, Surface, NONE};
 use crate::geom::Aabb;
+use crate::spatial::key_runs;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -88,16 +89,7 @@ impl Buckets {
             .map(|(i, p)| (key(*p), i as u32))
             .collect();
         keyed.par_sort_unstable();
-        let mut ranges = HashMap::new();
-        let mut start = 0;
-        while start < keyed.len() {
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == keyed[start].0 {
-                end += 1;
-            }
-            ranges.insert(keyed[start].0, (start as u32, end as u32));
-            start = end;
-        }
+        let ranges = key_runs(&keyed, |e| e.0).collect();
         Buckets {
             size,
             order: keyed.into_iter().map(|e| e.1).collect(),
