@@ -14,7 +14,7 @@
 
 use super::job::{id_order, run_job, Buckets, JobOutput, TileView, ToLocal};
 use super::lattice::{JobKey, Lattice, LEVELS};
-use super::local::local_data;
+use super::local::wanted_data;
 use super::orient::volume6;
 use super::params::ProjectionParams;
 use crate::geom::Aabb;
@@ -63,7 +63,6 @@ impl TileKernel for ProjectionKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ProjectionTile, KernelError> {
-        let (hoods, info) = local_data(tile, &self.params)?;
         let lat = &self.lattice;
         let present = present_jobs(lat, &tile.points);
         let owned: Vec<JobKey> = present
@@ -73,6 +72,14 @@ impl TileKernel for ProjectionKernel {
             .collect();
         let required = self.required(tile, &owned, &present)?;
         let buckets = Buckets::new(&tile.points, lat.cell / 4.0);
+        let wanted = read_points(lat, tile, &buckets, &required);
+        let (hoods, info) = wanted_data(tile, &self.params, &wanted)?;
+        // Every point a job reads must have the whole cloud's list.
+        let short = wanted
+            .iter()
+            .map(|&i| info[i as usize].short_by)
+            .fold(0.0f64, f64::max);
+        KernelError::unless_short(short, tile.margin)?;
         let (by_id, rank) = id_order(&tile.ids);
         let view = TileView {
             by_id: &by_id,
@@ -83,19 +90,6 @@ impl TileKernel for ProjectionKernel {
             hoods: &hoods,
             buckets: &buckets,
         };
-        // Every point a job reads must have the whole cloud's list.
-        let short = required
-            .par_iter()
-            .map_init(Vec::new, |members, &k| {
-                members.clear();
-                buckets.inside(&tile.points, &lat.view_box(k), members);
-                members
-                    .iter()
-                    .map(|&i| info[i as usize].short_by)
-                    .fold(0.0f64, f64::max)
-            })
-            .reduce(|| 0.0, f64::max);
-        KernelError::unless_short(short, tile.margin)?;
         let mut done: BTreeMap<JobKey, JobOutput> = BTreeMap::new();
         for level in 0..LEVELS {
             let keys: Vec<JobKey> = required
@@ -174,6 +168,37 @@ fn present_jobs(lat: &Lattice, points: &[DVec3]) -> BTreeSet<JobKey> {
             a
         })
         .into_iter()
+        .collect()
+}
+
+/// The points in the view of some job in `required`, in index order:
+/// the only ones whose lists and planes a job reads.
+fn read_points(
+    lat: &Lattice,
+    tile: &TilePoints,
+    buckets: &Buckets,
+    required: &BTreeSet<JobKey>,
+) -> Vec<u32> {
+    let keys: Vec<JobKey> = required.iter().copied().collect();
+    let read = keys
+        .par_iter()
+        .fold(
+            || (vec![false; tile.points.len()], Vec::new()),
+            |(mut read, mut members), &k| {
+                members.clear();
+                buckets.inside(&tile.points, &lat.view_box(k), &mut members);
+                members.iter().for_each(|&i| read[i as usize] = true);
+                (read, members)
+            },
+        )
+        .map(|(read, _)| read)
+        .reduce_with(|mut a, b| {
+            a.iter_mut().zip(b).for_each(|(x, y)| *x |= y);
+            a
+        })
+        .unwrap_or_else(|| vec![false; tile.points.len()]);
+    (0..tile.points.len() as u32)
+        .filter(|&i| read[i as usize])
         .collect()
 }
 

@@ -76,6 +76,56 @@ pub(crate) fn local_data(
     ))
 }
 
+/// The lists of some of a tile's points: those in the view of a job the
+/// tile runs. The margin is sized for the worst lattice alignment; at 64
+/// tiles most of it lies in no such view, and its lists cost a third of
+/// the kNN time.
+pub struct WantedHoods {
+    lists: Hoods,
+    /// Where each loaded point's list is in `lists` (`NO_LIST`: never read).
+    slot: Vec<u32>,
+}
+
+const NO_LIST: u32 = u32::MAX;
+
+impl Neighbourhoods for WantedHoods {
+    fn get(&self, i: u32) -> &[u32] {
+        match self.slot[i as usize] {
+            NO_LIST => &[],
+            s => self.lists.get(s as usize),
+        }
+    }
+}
+
+/// The lists and data of the points `wanted` (increasing indices); fails
+/// with `MarginTooSmall` when one of their lists may reach beyond the
+/// loaded region. The other points get no list and a `PointInfo` that is
+/// never complete.
+pub(crate) fn wanted_data(
+    tile: &TilePoints,
+    params: &ProjectionParams,
+    wanted: &[u32],
+) -> Result<(WantedHoods, Vec<PointInfo>), KernelError> {
+    let index = HoodIndex::build(tile, &params.hood())?;
+    let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
+    let (lists, got) = index.hoods(tile, wanted.len(), |j| wanted[j] as usize, visit)?;
+    KernelError::unless_short(lists.short_by, tile.margin)?;
+    let unread = PointInfo {
+        normal: DVec3::ZERO,
+        spacing: 0.0,
+        thinned: false,
+        complete: false,
+        short_by: f64::INFINITY,
+    };
+    let mut info = vec![unread; tile.points.len()];
+    let mut slot = vec![NO_LIST; tile.points.len()];
+    for (j, (&i, p)) in wanted.iter().zip(got).enumerate() {
+        info[i as usize] = p;
+        slot[i as usize] = j as u32;
+    }
+    Ok((WantedHoods { lists, slot }, info))
+}
+
 fn point_info(
     tile: &TilePoints,
     params: &ProjectionParams,
