@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use scanmesh::io::e57::is_e57_magic;
 use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
 use scanmesh::io::InvalidPolicy;
-use scanmesh::memory::plan::{MARGIN_FACTOR, MIN_TILE_POINTS};
+use scanmesh::memory::plan::MIN_TILE_POINTS;
 use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan};
@@ -221,8 +221,8 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         "  tiles: at most {} core points each (at least {MIN_TILE_POINTS}), about {} tiles; {} in flight, margins up to {:.1}x the core",
         plan.tile_points,
         points.div_ceil(plan.tile_points),
-        threads + 1,
-        MARGIN_FACTOR
+        cost.in_flight(threads),
+        cost.loaded_per_core(plan.tile_points)
     );
     let global = if cost.global_per_point == 0 {
         "none".to_string()

@@ -65,6 +65,8 @@ impl CurvatureParams {
             window_bytes_per_point: 2 * slot,
             scratch_per_point: SCRATCH_PER_POINT + slot,
             output_per_point: RECORD as u64,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
             ..normals
         }
     }
@@ -85,6 +87,8 @@ impl FeatureParams {
             scratch_per_point: SCRATCH_PER_POINT,
             // Vertices (24 B) and edges (9 B) of the PLY.
             output_per_point: (LINE_VERTICES_PER_POINT * 33.0).ceil() as u64,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
             ..curvature
         }
     }

@@ -29,12 +29,18 @@ impl MemoryBudget {
         points.saturating_mul(bytes_per_point) <= self.bytes.saturating_sub(BASE_BYTES) / 2
     }
 
-    /// Largest tile (core points) such that `threads + 1` tiles in flight, each
+    /// Largest tile (core points) such that `in_flight` tiles, each
     /// with `margin_factor` times its core points loaded at
     /// `bytes_per_point`, fit beside `reserved` bytes and the base cost.
-    pub fn tile_points(&self, bytes_per_point: u64, margin_factor: f64, reserved: u64) -> u64 {
+    pub fn tile_points(
+        &self,
+        bytes_per_point: u64,
+        margin_factor: f64,
+        reserved: u64,
+        in_flight: u64,
+    ) -> u64 {
         let free = self.bytes.saturating_sub(BASE_BYTES + reserved);
-        let per_tile = free / (self.threads as u64 + 1);
+        let per_tile = free / in_flight.max(1);
         let pts = per_tile as f64 / (bytes_per_point.max(1) as f64 * margin_factor.max(1.0));
         pts as u64
     }
@@ -54,9 +60,9 @@ mod tests {
 
     #[test]
     fn tiles_shrink_with_budget_and_threads() {
-        let a = MemoryBudget::new(1 << 30, 2).tile_points(400, 1.3, 0);
-        let b = MemoryBudget::new(256 << 20, 2).tile_points(400, 1.3, 0);
-        let c = MemoryBudget::new(256 << 20, 4).tile_points(400, 1.3, 0);
+        let a = MemoryBudget::new(1 << 30, 2).tile_points(400, 1.3, 0, 3);
+        let b = MemoryBudget::new(256 << 20, 2).tile_points(400, 1.3, 0, 3);
+        let c = MemoryBudget::new(256 << 20, 4).tile_points(400, 1.3, 0, 5);
         assert!(a > b && b > c, "{a} {b} {c}");
         assert!(b * 3 * 400 * 13 / 10 <= (256 << 20) - BASE_BYTES);
     }

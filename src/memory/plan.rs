@@ -8,7 +8,8 @@
 //! - histogram: at most `histogram_cells` occupied cells, 36 bytes each at
 //!   the peak (the grid coarsens to fit, see `store::cells`);
 //! - scatter: `scatter_buffer` bytes of per-tile buffers in all;
-//! - tiles: `threads + 1` tiles in flight, each `tile_points` core points
+//! - tiles: `threads + 1` tiles in flight (one for a kernel parallel
+//!   inside a tile), each `tile_points` core points
 //!   and up to half as many again in its margin, at the kernel's bytes per
 //!   loaded point;
 //! - global pass: the kernel's per-point state when it fits half the
@@ -60,6 +61,61 @@ pub struct KernelCost {
     pub scratch_per_point: u64,
     /// Output file bytes per input point, roughly.
     pub output_per_point: u64,
+    /// The kernel keeps every thread busy inside one tile (the projection's
+    /// lattice jobs run in parallel), so tiles run one at a time and the
+    /// plan gives that one tile what `threads + 1` would share: larger
+    /// tiles, whose margins are a smaller share of the work.
+    pub parallel_in_tile: bool,
+    /// The kernel's margin in mean spacings when it is wide enough to set
+    /// the tile sizes (0: the flat [`MARGIN_FACTOR`]). A tile of `c` core
+    /// points on a scanned surface spans about `sqrt(c)` spacings, so it
+    /// loads `((sqrt(c) + 2 m) / sqrt(c))^2` points per core point: the
+    /// smaller the budget, the larger that share.
+    pub margin_spacings: f64,
+}
+
+impl KernelCost {
+    /// Tiles running at once for `threads` threads.
+    pub fn workers(&self, threads: usize) -> usize {
+        if self.parallel_in_tile {
+            1
+        } else {
+            threads.max(1)
+        }
+    }
+
+    /// Loaded points per core point the plan allows for in tiles of `core`
+    /// points.
+    pub fn loaded_per_core(&self, core: u64) -> f64 {
+        let side = (core.max(1) as f64).sqrt();
+        let grown = (side + 2.0 * self.margin_spacings.max(0.0)) / side;
+        (grown * grown).max(MARGIN_FACTOR)
+    }
+
+    /// Largest tile whose `in_flight` copies, margins included, fit `free`
+    /// bytes: the flat factor's size, or smaller where the margin is wide
+    /// (`in_flight * bpp * (sqrt(c) + 2 m)^2 <= free`).
+    fn tile_points(&self, budget: MemoryBudget, reserved: u64, in_flight: u64) -> u64 {
+        let flat = budget.tile_points(self.bytes_per_point, MARGIN_FACTOR, reserved, in_flight);
+        if self.margin_spacings <= 0.0 {
+            return flat;
+        }
+        let free = budget.bytes.saturating_sub(BASE_BYTES + reserved) / in_flight.max(1);
+        let side = (free as f64 / self.bytes_per_point.max(1) as f64).sqrt();
+        let core = (side - 2.0 * self.margin_spacings).max(0.0);
+        flat.min((core * core) as u64)
+    }
+
+    /// Tiles loaded, running or waiting at once for `threads` threads: one
+    /// more than run, so the next loads while the others run, except when
+    /// one tile takes every thread (loading a tile costs little beside it).
+    pub fn in_flight(&self, threads: usize) -> usize {
+        if self.parallel_in_tile {
+            1
+        } else {
+            threads.max(1) + 1
+        }
+    }
 }
 
 /// Why no plan fits.
@@ -134,7 +190,8 @@ impl MemoryPlan {
             0
         };
         let reserved = resident.max(global);
-        let tile_points = budget.tile_points(cost.bytes_per_point, MARGIN_FACTOR, reserved);
+        let in_flight = cost.in_flight(budget.threads) as u64;
+        let tile_points = cost.tile_points(budget, reserved, in_flight);
         if free == 0 || tile_points < MIN_TILE_POINTS {
             return Err("tiles of at least 8192 points beside the fixed costs");
         }
@@ -176,7 +233,7 @@ impl MemoryPlan {
     }
 
     /// Tiles in flight for a store whose largest tile holds `largest` core
-    /// points: `threads + 1` when that many such tiles fit the plan, else
+    /// points: `cost.in_flight` when that many such tiles fit the plan, else
     /// fewer (a store built under a larger budget), down to one; none
     /// fitting is an error naming the budget needed.
     pub(crate) fn tiles_in_flight(
@@ -196,20 +253,20 @@ impl MemoryPlan {
                 reason: "the store's largest tile: the store was tiled for a larger budget",
             });
         }
-        Ok((self.budget.threads + 1).min(fit))
+        Ok(cost.in_flight(self.budget.threads).min(fit))
     }
 
     /// Bytes one tile in flight may use: the largest tile's core points
     /// with the margin allowed for, at the kernel's bytes per point.
     pub(crate) fn tile_bytes(&self, cost: &KernelCost, largest: u64) -> u64 {
-        (largest as f64 * MARGIN_FACTOR * cost.bytes_per_point as f64) as u64
+        (largest as f64 * cost.loaded_per_core(largest) * cost.bytes_per_point as f64) as u64
     }
 
     /// Estimated peak of each stage beside the fixed costs, for `info --plan`.
     pub fn stages(&self, cost: &KernelCost) -> Vec<(&'static str, u64)> {
-        let tiles = (self.budget.threads as u64 + 1) as f64
+        let tiles = cost.in_flight(self.budget.threads) as f64
             * self.tile_points as f64
-            * MARGIN_FACTOR
+            * cost.loaded_per_core(self.tile_points)
             * cost.bytes_per_point as f64;
         let global = if self.global_in_memory {
             self.reserved
@@ -259,6 +316,8 @@ mod tests {
             window_bytes_per_point: 48,
             scratch_per_point: 94,
             output_per_point: 37,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
         }
     }
 
@@ -304,5 +363,52 @@ mod tests {
         assert!(at(512, 100_000_000) > at(256, 100_000_000));
         // In memory at 10M (its union-find reserved), external at 100M.
         assert!(at(256, 10_000_000) < at(256, 100_000_000));
+    }
+
+    #[test]
+    fn one_tile_in_flight_gets_the_budget_of_all() {
+        let budget = MemoryBudget::new(512 << 20, 2);
+        let shared = MemoryPlan::new(budget, 10_000_000, &normals()).unwrap();
+        let alone = KernelCost {
+            parallel_in_tile: true,
+            ..normals()
+        };
+        let plan = MemoryPlan::new(budget, 10_000_000, &alone).unwrap();
+        assert_eq!(plan.tiles_in_flight(&alone, plan.tile_points), Ok(1));
+        assert_eq!((alone.workers(2), normals().workers(2)), (1, 2));
+        let ratio = plan.tile_points as f64 / shared.tile_points as f64;
+        assert!((2.9..3.1).contains(&ratio), "{ratio}");
+    }
+
+    #[test]
+    fn a_wide_margin_shrinks_small_budgets_tiles_and_fits_them() {
+        let wide = KernelCost {
+            margin_spacings: 140.0,
+            global_per_point: 0,
+            ..normals()
+        };
+        for mib in [128u64, 192, 256, 512, 4096] {
+            let budget = MemoryBudget::new(mib << 20, 2);
+            let narrow = KernelCost {
+                margin_spacings: 0.0,
+                ..wide
+            };
+            let flat = MemoryPlan::new(budget, 10_000_000, &narrow).unwrap();
+            let Ok(plan) = MemoryPlan::new(budget, 10_000_000, &wide) else {
+                // Three tiles of 360 B per point and a 140-spacing margin
+                // do not fit 128 MiB: refused, never overrun.
+                assert!(mib <= 128, "{mib} MiB does not plan");
+                continue;
+            };
+            assert!(plan.tile_points <= flat.tile_points);
+            let c = plan.tile_points;
+            let loaded = c as f64 * wide.loaded_per_core(c);
+            let side = (c as f64).sqrt();
+            assert!(loaded >= (side + 280.0).powi(2) * 0.999, "{mib}: {loaded}");
+            let tiles = 3.0 * loaded * wide.bytes_per_point as f64;
+            assert!(tiles <= (budget.bytes - BASE_BYTES) as f64, "{mib} MiB");
+        }
+        // Large tiles keep at least the flat allowance.
+        assert_eq!(wide.loaded_per_core(1 << 40), MARGIN_FACTOR);
     }
 }

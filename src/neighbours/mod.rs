@@ -135,6 +135,8 @@ impl NeighbourParams {
             // The store (20) and the spilled lists with their index.
             scratch_per_point: 36 + 4 * self.expected_size(),
             output_per_point: 8 + 4 * self.expected_size(),
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
         }
     }
 

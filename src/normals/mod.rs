@@ -205,6 +205,8 @@ impl NormalParams {
             scratch_per_point: 94,
             // x y z as double, normals as float, flags.
             output_per_point: 37,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
         }
     }
 

@@ -37,7 +37,7 @@ impl RunOptions {
         cost: &KernelCost,
         largest: u64,
     ) -> Result<Self, BudgetError> {
-        let opts = RunOptions::new(plan.budget.threads).within(plan.budget);
+        let opts = RunOptions::new(cost.workers(plan.budget.threads)).within(plan.budget);
         Ok(RunOptions {
             in_flight: plan.tiles_in_flight(cost, largest)?,
             tile_bytes: Some(plan.tile_bytes(cost, largest)),

@@ -57,6 +57,8 @@ pub fn cost() -> KernelCost {
         // triangles per input point (vertices are the input points).
         scratch_per_point: 20 + 2 * 12,
         output_per_point: 24 + 2 * 13,
+        parallel_in_tile: false,
+        margin_spacings: 0.0,
     }
 }
 

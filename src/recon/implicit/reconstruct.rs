@@ -83,6 +83,8 @@ impl ImplicitParams {
             },
             // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
             output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
             ..normals
         }
     }

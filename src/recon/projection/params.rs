@@ -107,14 +107,15 @@ impl ProjectionParams {
     }
 
     /// What a run costs, for the memory plan (measured, see
-    /// `BYTES_PER_POINT_BASE`): the kernel's bytes per loaded point.
-    /// The lattice's margin (~108 units) loads more than the plan's 1.5
-    /// points per core point on small tiles, but the kernel no longer
-    /// holds a whole tile's growth, only its jobs' outputs and a few jobs
-    /// at a time: measured peaks 181 MiB for 1M points at `--mem 256MiB`
-    /// (8 tiles; 188 MiB with the 96-unit cell) and 368 MiB for 10M at
-    /// `--mem 512MiB` (64 tiles; 357 MiB with the 96-unit cell), so the
-    /// declared bytes keep the promise with room.
+    /// `BYTES_PER_POINT_BASE`): the kernel's bytes per loaded point, one
+    /// tile at a time (its lattice jobs keep every thread busy), and the
+    /// lattice's margin in spacings, which sets how many points a tile
+    /// loads. Measured peaks (jemalloc, one tile in flight): 1M points in
+    /// one tile at the default 1 GiB, 303 MiB; at `--mem 256MiB`, 4 tiles,
+    /// 175 MiB; 3M at 512 MiB, 4 tiles, 380 MiB; 10M at 512 MiB, 16 tiles,
+    /// 361 MiB; 10M at 256 MiB, 32 tiles, 261 MiB (the flat margin factor
+    /// planned those: the margin model makes the small budgets' tiles
+    /// smaller, see `MARGIN_SPACINGS`).
     pub fn cost(&self) -> KernelCost {
         let k = self.k as u64;
         let per_k = match self.neighbourhood {
@@ -133,9 +134,19 @@ impl ProjectionParams {
             scratch_per_point: 20 + 2 * 16,
             // Vertices (3 f64) and faces (13 B, two per point).
             output_per_point: 24 + 2 * 13,
+            parallel_in_tile: true,
+            margin_spacings: MARGIN_SPACINGS,
         }
     }
 }
+
+/// The tile margin in mean spacings: `reconstruct.rs` asks for a lattice
+/// cell less the band, plus spill, view and two list reaches, times 1.05:
+/// about 112 lattice units, and a unit (0.8 x extent / sqrt(n)) is 1.2
+/// spacings on the dragon. Below that, at 10M points in 256 MiB (32 tiles
+/// of 312k points) the peak was 261 MiB: tiles that small load more than
+/// twice their core.
+pub const MARGIN_SPACINGS: f64 = 140.0;
 
 /// Kernel bytes per loaded point beside the neighbour lists. Measured with
 /// `peak-rss` on the 1M dragon as one tile, one thread (the tile's points,
