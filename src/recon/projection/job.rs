@@ -17,7 +17,7 @@
 
 use super::cloud::{Cloud, Csr, Neighbourhoods};
 use super::grow::Grower;
-use super::lattice::{JobKey, Lattice};
+use super::lattice::{JobKey, Lattice, LEVELS};
 use super::local::PointInfo;
 use super::orient::flipped;
 use super::params::ProjectionParams;
@@ -131,6 +131,9 @@ struct JobPoints {
     centre: Vec<bool>,
     joinable: Vec<bool>,
     keep: Vec<bool>,
+    /// Outside the window, but a kept triangle may still reach it (see
+    /// `may_borrow`).
+    borrow: Vec<bool>,
     unused: Vec<bool>,
 }
 
@@ -145,6 +148,7 @@ impl JobPoints {
             centre: Vec::with_capacity(n),
             joinable: Vec::with_capacity(n),
             keep: Vec::with_capacity(n),
+            borrow: Vec::with_capacity(n),
             unused: Vec::with_capacity(n),
         }
     }
@@ -167,6 +171,7 @@ impl JobPoints {
         self.centre.push(grows && info.is_some_and(|i| i.complete));
         self.joinable.push(grows);
         self.keep.push(keep);
+        self.borrow.push(false);
         self.unused
             .push(info.is_some_and(|i| i.thinned || i.spacing == 0.0));
     }
@@ -229,14 +234,9 @@ pub fn run_job<'a, H: Neighbourhoods>(
         let p = tile.points[i as usize];
         let info = &tile.info[i as usize];
         let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
-        jp.push(
-            i,
-            p,
-            tile.ids[i as usize],
-            Some(info),
-            grows,
-            lat.in_window(key, p),
-        );
+        let keep = lat.in_window(key, p);
+        jp.push(i, p, tile.ids[i as usize], Some(info), grows, keep);
+        *jp.borrow.last_mut().expect("pushed") = grows && !keep && may_borrow(lat, key, p);
     }
     for (l, &i) in members.iter().enumerate() {
         local.0[i as usize] = l as u32;
@@ -365,7 +365,9 @@ fn grow_job<'a, H: Neighbourhoods>(
     let mut out_names = Names::default();
     for tri in fixed..s.tris.len() {
         let t = s.tris[tri];
-        if !t.iter().all(|&v| jp.keep[v as usize]) {
+        let kept = |v: u32| jp.keep[v as usize];
+        let reached = |v: u32| kept(v) || jp.borrow[v as usize];
+        if !(t.iter().any(|&v| kept(v)) && t.iter().all(|&v| reached(v))) {
             continue;
         }
         let (root, flip) = s.orientation(tri as u32);
@@ -395,6 +397,26 @@ fn grow_job<'a, H: Neighbourhoods>(
     out
 }
 
+/// Whether a triangle kept by `key` may have a corner at `p`, outside
+/// its window but in its growth box: where `p` lies in a lower level's
+/// window only (those jobs ran before and left it fixed), in no higher
+/// level's (whose jobs will re-grow there), and in no other job's growth
+/// box of this level (which could grow there too). Without this, a
+/// triangle longer than the overlap (8 units: sparse ground, where the
+/// local spacing is 2 to 3 units) that spans from within the band of a
+/// plane to beyond the overlap lies in no window, so no job keeps it and
+/// a hole is left.
+fn may_borrow(lat: &Lattice, key: JobKey, p: DVec3) -> bool {
+    let in_level = |l: u8| lat.job_of(p, l).is_some();
+    if !(0..key.level).any(in_level) || (key.level + 1..LEVELS).any(in_level) {
+        return false;
+    }
+    let near = Aabb::new(p - DVec3::splat(lat.spill), p + DVec3::splat(lat.spill));
+    lat.jobs_meeting(key.level, &near)
+        .into_iter()
+        .all(|k| k == key || !lat.grow_box(k).contains(p))
+}
+
 /// The view points' lists in job indices; neighbours outside the view are
 /// dropped (only points near the view's edge have any, and they are never
 /// processed).
@@ -409,4 +431,58 @@ fn remap_lists<H: Neighbourhoods>(members: &[u32], hoods: &H, local: &ToLocal) -
         out.ends.push(out.items.len() as u32);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recon::projection::reconstruct::lattice;
+
+    /// Unit 1: band 4, overlap 8, spill 2, cell 96.
+    fn lat() -> Lattice {
+        lattice(1.0, 3.9)
+    }
+
+    #[test]
+    fn a_face_job_borrows_corners_only_beside_its_own_window() {
+        let lat = lat();
+        let face = |p: DVec3| lat.job_of(p, 1).expect("in a face window");
+        let f = face(DVec3::new(5.0, 48.0, 48.0));
+        // In the cell window, within the face job's spill: borrowed.
+        let beside = DVec3::new(13.0, 48.0, 48.0);
+        assert!(lat.grow_box(f).contains(beside) && !lat.in_window(f, beside));
+        assert!(may_borrow(&lat, f, beside));
+        // Near an edge of the lattice, where an edge job re-grows: not.
+        let near_edge = DVec3::new(13.0, 13.0, 48.0);
+        let g = face(DVec3::new(5.0, 22.0, 48.0));
+        assert!(lat.grow_box(g).contains(near_edge));
+        assert!(!may_borrow(&lat, g, near_edge));
+        // A cell job has no lower level to borrow from.
+        let c = lat.job_of(DVec3::new(48.0, 48.0, 48.0), 0).unwrap();
+        assert!(!may_borrow(&lat, c, DVec3::new(3.0, 48.0, 48.0)));
+    }
+
+    #[test]
+    fn no_point_is_borrowed_by_two_jobs_of_a_level() {
+        let lat = lat();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 200.0 - 100.0
+        };
+        for _ in 0..20_000 {
+            let p = DVec3::new(next(), next(), next());
+            for level in 1..LEVELS {
+                let near = Aabb::new(p - DVec3::splat(lat.spill), p + DVec3::splat(lat.spill));
+                let borrowers = lat
+                    .jobs_meeting(level, &near)
+                    .into_iter()
+                    .filter(|&k| lat.grow_box(k).contains(p) && may_borrow(&lat, k, p))
+                    .count();
+                assert!(borrowers <= 1, "{p} at level {level}: {borrowers}");
+            }
+        }
+    }
 }
