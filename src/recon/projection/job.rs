@@ -236,7 +236,11 @@ pub fn run_job<'a, H: Neighbourhoods>(
         let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
         let keep = lat.in_window(key, p);
         jp.push(i, p, tile.ids[i as usize], Some(info), grows, keep);
-        *jp.borrow.last_mut().expect("pushed") = grows && !keep && may_borrow(lat, key, p);
+        if !keep && may_borrow(lat, key, p) {
+            // Joined, never grown from: its fan is a lower job's.
+            *jp.borrow.last_mut().expect("pushed") = true;
+            *jp.joinable.last_mut().expect("pushed") = true;
+        }
     }
     for (l, &i) in members.iter().enumerate() {
         local.0[i as usize] = l as u32;
@@ -397,25 +401,36 @@ fn grow_job<'a, H: Neighbourhoods>(
     out
 }
 
-/// Whether a triangle kept by `key` may have a corner at `p`, outside
-/// its window but in its growth box: where `p` lies in a lower level's
-/// window only (those jobs ran before and left it fixed), in no higher
-/// level's (whose jobs will re-grow there), and in no other job's growth
-/// box of this level (which could grow there too). Without this, a
-/// triangle longer than the overlap (8 units: sparse ground, where the
-/// local spacing is 2 to 3 units) that spans from within the band of a
-/// plane to beyond the overlap lies in no window, so no job keeps it and
-/// a hole is left.
+/// Whether a triangle kept by `key` may have a corner at `p`, outside its
+/// window: where `p` lies within [`BORROW_SPILLS`] spills of the window,
+/// in a lower level's window only (those jobs ran before and left it
+/// fixed), in no higher level's (whose jobs will re-grow there), and
+/// within that reach of no other job of this level (which could join it
+/// too). Without this, a triangle longer than the overlap (8 units:
+/// sparse ground, where the local spacing is 2 to 3 units) that spans
+/// from within the band of a plane to beyond the overlap lies in no
+/// window, so no job keeps it and a hole is left.
 fn may_borrow(lat: &Lattice, key: JobKey, p: DVec3) -> bool {
     let in_level = |l: u8| lat.job_of(p, l).is_some();
     if !(0..key.level).any(in_level) || (key.level + 1..LEVELS).any(in_level) {
         return false;
     }
-    let near = Aabb::new(p - DVec3::splat(lat.spill), p + DVec3::splat(lat.spill));
-    lat.jobs_meeting(key.level, &near)
-        .into_iter()
-        .all(|k| k == key || !lat.grow_box(k).contains(p))
+    let reach = BORROW_SPILLS * lat.spill;
+    let reaches = |k: JobKey| {
+        let w = lat.window(k);
+        Aabb::new(w.min - DVec3::splat(reach), w.max + DVec3::splat(reach)).contains(p)
+    };
+    let near = Aabb::new(p - DVec3::splat(reach), p + DVec3::splat(reach));
+    reaches(key)
+        && lat
+            .jobs_meeting(key.level, &near)
+            .into_iter()
+            .all(|k| k == key || !reaches(k))
 }
+
+/// How far beyond its window, in spills, a job may join points of lower
+/// windows (see `may_borrow`).
+const BORROW_SPILLS: f64 = 3.0;
 
 /// The view points' lists in job indices; neighbours outside the view are
 /// dropped (only points near the view's edge have any, and they are never
