@@ -9,9 +9,10 @@
 //!   the peak (the grid coarsens to fit, see `store::cells`);
 //! - scatter: `scatter_buffer` bytes of per-tile buffers in all;
 //! - tiles: `threads + 1` tiles in flight (one for a kernel parallel
-//!   inside a tile), each `tile_points` core points
-//!   and up to half as many again in its margin, at the kernel's bytes per
-//!   loaded point;
+//!   inside a tile), each `tile_points` core points and up to half as
+//!   many again in its margin (more where a kernel declares a wide margin,
+//!   [`KernelCost::margin_spacings`]), at the kernel's bytes per loaded
+//!   point;
 //! - global pass: the kernel's per-point state when it fits half the
 //!   budget; otherwise the contracted graph of the external pass, whose
 //!   nodes are the tiles' boundary points: about `NODES_PER_SQRT_TILE` /
