@@ -153,28 +153,36 @@ impl JobPoints {
         }
     }
 
-    /// A point; `grows`: in the job's growth box, `keep`: in its window.
-    fn push(
-        &mut self,
-        tile: u32,
-        p: DVec3,
-        id: u64,
-        info: Option<&PointInfo>,
-        grows: bool,
-        keep: bool,
-    ) {
+    /// A point and where it lies for the job.
+    fn push(&mut self, tile: u32, p: DVec3, id: u64, info: Option<&PointInfo>, at: Place) {
+        let Place {
+            grows,
+            keep,
+            borrow,
+        } = at;
         self.tile.push(tile);
         self.points.push(p);
         self.ids.push(id);
         self.normals.push(info.map_or(DVec3::ZERO, |i| i.normal));
         self.spacing.push(info.map_or(0.0, |i| i.spacing));
         self.centre.push(grows && info.is_some_and(|i| i.complete));
-        self.joinable.push(grows);
+        // A borrowed point is joined, never grown from: its fan is a
+        // lower job's.
+        self.joinable.push(grows || borrow);
         self.keep.push(keep);
-        self.borrow.push(false);
+        self.borrow.push(borrow);
         self.unused
             .push(info.is_some_and(|i| i.thinned || i.spacing == 0.0));
     }
+}
+
+/// Where a point lies for a job: in its growth box, in its window, or
+/// outside the window where its triangles may still reach (`may_borrow`).
+#[derive(Clone, Copy)]
+struct Place {
+    grows: bool,
+    keep: bool,
+    borrow: bool,
 }
 
 /// Tile index -> job index: a tile-sized map (`NONE` where absent) that
@@ -235,12 +243,13 @@ pub fn run_job<'a, H: Neighbourhoods>(
         let info = &tile.info[i as usize];
         let grows = p.cmpge(grow.min).all() && p.cmple(grow.max).all();
         let keep = lat.in_window(key, p);
-        jp.push(i, p, tile.ids[i as usize], Some(info), grows, keep);
-        if !keep && may_borrow(lat, key, p) {
-            // Joined, never grown from: its fan is a lower job's.
-            *jp.borrow.last_mut().expect("pushed") = true;
-            *jp.joinable.last_mut().expect("pushed") = true;
-        }
+        let borrow = !keep && may_borrow(lat, key, p);
+        let at = Place {
+            grows,
+            keep,
+            borrow,
+        };
+        jp.push(i, p, tile.ids[i as usize], Some(info), at);
     }
     for (l, &i) in members.iter().enumerate() {
         local.0[i as usize] = l as u32;
@@ -297,7 +306,12 @@ fn grow_job<'a, H: Neighbourhoods>(
                                 // Ghosts are never processed; their tie key
                                 // only has to differ from every input id.
                                 let id = u64::MAX - tile.ids[v];
-                                jp.push(t[c], tile.points[v], id, None, false, false);
+                                let at = Place {
+                                    grows: false,
+                                    keep: false,
+                                    borrow: false,
+                                };
+                                jp.push(t[c], tile.points[v], id, None, at);
                                 jp.points.len() as u32 - 1
                             }),
                         };

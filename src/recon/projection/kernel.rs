@@ -73,13 +73,8 @@ impl TileKernel for ProjectionKernel {
         let required = self.required(tile, &owned, &present)?;
         let buckets = Buckets::new(&tile.points, lat.cell / 4.0);
         let wanted = read_points(lat, tile, &buckets, &required);
-        let (hoods, info) = wanted_data(tile, &self.params, &wanted)?;
         // Every point a job reads must have the whole cloud's list.
-        let short = wanted
-            .iter()
-            .map(|&i| info[i as usize].short_by)
-            .fold(0.0f64, f64::max);
-        KernelError::unless_short(short, tile.margin)?;
+        let (hoods, info) = wanted_data(tile, &self.params, &wanted)?;
         let (by_id, rank) = id_order(&tile.ids);
         let view = TileView {
             by_id: &by_id,

@@ -109,7 +109,13 @@ pub(crate) fn wanted_data(
     let index = HoodIndex::build(tile, &params.hood())?;
     let visit = |i: usize, nbrs: &[Neighbour]| point_info(tile, params, i, nbrs);
     let (lists, got) = index.hoods(tile, wanted.len(), |j| wanted[j] as usize, visit)?;
-    KernelError::unless_short(lists.short_by, tile.margin)?;
+    // The search's own reach, and the list's (infinite when fewer than k
+    // points were loaded).
+    let short = got
+        .iter()
+        .map(|p| p.short_by)
+        .fold(lists.short_by, f64::max);
+    KernelError::unless_short(short, tile.margin)?;
     let unread = PointInfo {
         normal: DVec3::ZERO,
         spacing: 0.0,
