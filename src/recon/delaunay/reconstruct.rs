@@ -22,10 +22,12 @@ use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
 /// Margin first loaded, in store spacings: the doubt from the loaded
-/// region's faces reaches about 70 spacings in on the noisy dragon (the
+/// region's faces reaches about 90 spacings in on the noisy dragon (the
 /// fans' proofs about 35, the deletion rounds 27, the pieces and patches
-/// 5), and the kernel asks for 1.25 times that when short.
-const MARGIN_SPACINGS: f64 = 90.0;
+/// 25 since patches read four rings round their loop), and the kernel asks
+/// for 1.25 times that when short. At 90 the 1M dragon reloaded 5 of 8
+/// tiles (44 s); at 110, 1 (32 s).
+const MARGIN_SPACINGS: f64 = 110.0;
 
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's

@@ -135,7 +135,7 @@ pub fn select(
             Hole::Local(_) => None,
         },
     );
-    report.patches = patches.len() as u64;
+    report.patches = patches.added.len() as u64;
     if !doubt.is_empty() {
         // The extra fans read the triangles at each corner: one ring over
         // the survivors keeps the doubt closed (see the stages' docs).
@@ -143,7 +143,8 @@ pub fn select(
         piece_doubt(&fans, &mut doubt);
         patch_doubt(&kept, &patches, &mut doubt);
     }
-    kept.extend(patches);
+    kept.retain(|t| patches.dropped.binary_search(t).is_err());
+    kept.extend(patches.added);
     let input: Vec<u32> = ids.order.iter().map(|&v| d.input_index(v)).collect();
     Ok(to_input(&input, &kept, &doubt, &interior, n, report))
 }
