@@ -172,7 +172,8 @@ fn small_loops(points: &[DVec3], order: &BTreeMap<Edge, u32>, delta: Option<f64>
 /// Loops are found over boundary edges alone, and a boundary edge differs
 /// only between doubtful corners, so doubt then travels along boundary
 /// edges as far as a grown loop reaches and as far again for the loops a
-/// closed loop blocks; then every patch triangle, added or dropped, with a
+/// closed loop blocks (by an edge, or by a corner a later loop may not
+/// drop round); then every patch triangle, added or dropped, with a
 /// doubtful corner is doubtful in all its corners.
 pub fn patch_doubt(tris: &[[u32; 3]], patches: &Patches, doubt: &mut [bool]) {
     for _ in 0..4 {
