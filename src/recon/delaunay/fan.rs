@@ -222,30 +222,28 @@ impl Walk<'_, '_> {
             };
             obtuse.then_some((z, w))
         });
-        let mut inherit = false;
-        if let Some(f) = self.inherited {
-            let mut unknown = false;
-            for (z, _) in candidates.clone() {
-                match f(tri(self.i, e, z)) {
-                    Membership::In => inherit = true,
-                    Membership::Unknown => unknown = true,
-                    Membership::Out => {}
-                }
-            }
-            *self.proven &= !unknown;
+        // Each candidate's membership in the first round, read once.
+        let member: Vec<(u32, &Wing, Membership)> = candidates
+            .map(|(z, w)| {
+                let m = self
+                    .inherited
+                    .map_or(Membership::Out, |f| f(tri(self.i, e, z)));
+                (z, w, m)
+            })
+            .collect();
+        let inherit = member.iter().any(|c| c.2 == Membership::In);
+        if member.iter().any(|c| c.2 == Membership::Unknown) {
+            *self.proven = false;
         }
         let ranks = sel.d.ranks();
         let cosine = |z: u32| {
             let (a, b) = (pi - sel.p(z), pe - sel.p(z));
             a.dot(b) / (a.length() * b.length())
         };
-        let in_first = |z: u32| {
-            self.inherited
-                .is_some_and(|f| f(tri(self.i, e, z)) == Membership::In)
-        };
-        let mut ranked: Vec<(f64, u32, &Wing)> = candidates
-            .filter(|(z, _)| !inherit || in_first(*z))
-            .map(|(z, w)| (cosine(z), z, w))
+        let mut ranked: Vec<(f64, u32, &Wing)> = member
+            .iter()
+            .filter(|c| !inherit || c.2 == Membership::In)
+            .map(|&(z, w, _)| (cosine(z), z, w))
             .collect();
         ranked.sort_by(|a, b| {
             a.0.total_cmp(&b.0)

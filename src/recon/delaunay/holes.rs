@@ -47,13 +47,17 @@ type Edge = (u32, u32);
 /// Triangles on each edge of `tris` (corners sorted, so each edge comes
 /// as `(low, high)`).
 fn edge_orders(tris: &[[u32; 3]]) -> BTreeMap<Edge, u32> {
-    let mut order: BTreeMap<Edge, u32> = BTreeMap::new();
-    for t in tris {
-        for e in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
-            *order.entry(e).or_default() += 1;
-        }
-    }
-    order
+    // Counted in a sorted list and built in bulk: one map entry per
+    // triangle side took 4 % of the run.
+    let mut sides: Vec<Edge> = tris
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])])
+        .collect();
+    sides.sort_unstable();
+    sides
+        .chunk_by(|a, b| a == b)
+        .map(|run| (run[0], run.len() as u32))
+        .collect()
 }
 
 /// What closing the small holes changes: the triangles added, and the

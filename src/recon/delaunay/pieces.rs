@@ -37,27 +37,29 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
 /// into a gap; the hole the dropped fan leaves is closed by
 /// [`super::holes`]. Reads one ring.
 pub fn drop_extra_fans(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
-    let mut at: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for (t, c) in tris.iter().enumerate() {
-        for &v in c {
-            at.entry(v).or_default().push(t as u32);
-        }
-    }
+    let mut at: Vec<(u32, u32)> = tris
+        .iter()
+        .enumerate()
+        .flat_map(|(t, c)| c.map(|v| (v, t as u32)))
+        .collect();
+    at.sort_unstable();
     let mut drop = vec![false; tris.len()];
-    for (&v, ts) in &at {
+    for group in at.chunk_by(|x, y| x.0 == y.0) {
+        let v = group[0].0;
+        let ts: Vec<u32> = group.iter().map(|&(_, t)| t).collect();
         // Fans: triangles around v joined by an edge through v.
         let mut parent: Vec<u32> = (0..ts.len() as u32).collect();
-        let mut by_other: BTreeMap<u32, u32> = BTreeMap::new();
+        let mut by_other: Vec<(u32, u32)> = Vec::new();
         for (k, &t) in ts.iter().enumerate() {
             for &u in &tris[t as usize] {
                 if u == v {
                     continue;
                 }
-                if let Some(&j) = by_other.get(&u) {
+                if let Some(&(_, j)) = by_other.iter().find(|o| o.0 == u) {
                     let (a, b) = (find(&mut parent, j), find(&mut parent, k as u32));
                     parent[a.max(b) as usize] = a.min(b);
                 } else {
-                    by_other.insert(u, k as u32);
+                    by_other.push((u, k as u32));
                 }
             }
         }
@@ -91,31 +93,31 @@ pub fn drop_extra_fans(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
 /// kept).
 pub fn drop_small_pieces(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
     let mut parent: Vec<u32> = (0..tris.len() as u32).collect();
-    let mut first_on_edge: BTreeMap<(u32, u32), u32> = BTreeMap::new();
-    for (t, c) in tris.iter().enumerate() {
-        for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[0], c[2])] {
-            let e = (a.min(b), a.max(b));
-            match first_on_edge.get(&e) {
-                Some(&s) => {
-                    let (rs, rt) = (find(&mut parent, s), find(&mut parent, t as u32));
-                    parent[rs.max(rt) as usize] = rs.min(rt);
-                }
-                None => {
-                    first_on_edge.insert(e, t as u32);
-                }
-            }
+    let mut on_edge: Vec<(u64, u32)> = tris
+        .iter()
+        .enumerate()
+        .flat_map(|(t, c)| {
+            [(c[0], c[1]), (c[1], c[2]), (c[0], c[2])]
+                .map(|(a, b)| ((a.min(b) as u64) << 32 | a.max(b) as u64, t as u32))
+        })
+        .collect();
+    on_edge.sort_unstable();
+    for pair in on_edge.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            let (rs, rt) = (find(&mut parent, pair[0].1), find(&mut parent, pair[1].1));
+            parent[rs.max(rt) as usize] = rs.min(rt);
         }
     }
     let roots: Vec<u32> = (0..tris.len() as u32)
         .map(|t| find(&mut parent, t))
         .collect();
-    let mut size: BTreeMap<u32, usize> = BTreeMap::new();
+    let mut size = vec![0usize; tris.len()];
     for &r in &roots {
-        *size.entry(r).or_default() += 1;
+        size[r as usize] += 1;
     }
     tris.iter()
         .zip(&roots)
-        .filter(|(_, r)| size[r] > MAX_PIECE)
+        .filter(|(_, &r)| size[r as usize] > MAX_PIECE)
         .map(|(t, _)| *t)
         .collect()
 }

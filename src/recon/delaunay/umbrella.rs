@@ -25,39 +25,42 @@ pub struct Wing {
 }
 
 /// The umbrella of vertex `i`, appended to `out` (cleared first); `star`
-/// is scratch. Wings come sorted by `(a, b)`.
+/// is scratch. Wings come sorted by `(a, b)`, apexes in increasing order.
+/// Each triangle is read once, from the lower-numbered of its two cells,
+/// with the other cell's apex read across the shared face (sorting every
+/// cell's three triangles and pairing them was 15 % of the run).
 pub fn umbrella(d: &Delaunay, i: u32, star: &mut Vec<u32>, out: &mut Vec<Wing>) {
     out.clear();
     d.star(i, star);
     for &c in star.iter() {
-        let v = d.cell(c).v;
-        let Some(s) = v.iter().position(|&x| x == i) else {
+        let cell = d.cell(c);
+        let Some(s) = cell.v.iter().position(|&x| x == i) else {
             continue;
         };
-        let o = [v[(s + 1) & 3], v[(s + 2) & 3], v[(s + 3) & 3]];
-        for k in 0..3 {
-            let (a, b, w) = (o[k], o[(k + 1) % 3], o[(k + 2) % 3]);
-            if a != INFINITE && b != INFINITE {
-                out.push(Wing {
-                    a: a.min(b),
-                    b: a.max(b),
-                    apex: [w, INFINITE],
-                });
+        for k in 1..4 {
+            // The face through `i` opposite corner `f`, shared with the
+            // neighbour across it.
+            let f = (s + k) & 3;
+            let (next, face) = (cell.n[f] >> 2, (cell.n[f] & 3) as usize);
+            if next < c {
+                continue;
             }
+            let mut rest = (0..4).filter(|&j| j != s && j != f).map(|j| cell.v[j]);
+            let (Some(a), Some(b)) = (rest.next(), rest.next()) else {
+                continue;
+            };
+            if a == INFINITE || b == INFINITE {
+                continue;
+            }
+            let (w, z) = (cell.v[f], d.cell(next).v[face]);
+            out.push(Wing {
+                a: a.min(b),
+                b: a.max(b),
+                apex: [w.min(z), w.max(z)],
+            });
         }
     }
-    out.sort_unstable_by_key(|w| (w.a, w.b, w.apex[0]));
-    // Each triangle came once from each of its two cells.
-    let mut k = 0;
-    for r in 0..out.len() {
-        if k > 0 && out[k - 1].a == out[r].a && out[k - 1].b == out[r].b {
-            out[k - 1].apex[1] = out[r].apex[0];
-        } else {
-            out[k] = out[r];
-            k += 1;
-        }
-    }
-    out.truncate(k);
+    out.sort_unstable_by_key(|w| (w.a as u64) << 32 | w.b as u64);
 }
 
 /// Distance from every vertex to its nearest other vertex (a Delaunay
