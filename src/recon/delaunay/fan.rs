@@ -26,7 +26,7 @@
 //! give ([`Region::proves`]); a tile whose core needs an unproven fan asks
 //! for a wider margin.
 
-use super::triangulation::Delaunay;
+use super::triangulation::{Delaunay, INFINITE};
 use super::umbrella::{umbrella, Region, Wing};
 use glam::DVec3;
 
@@ -76,6 +76,8 @@ pub struct Selector<'a> {
     pub d: &'a Delaunay,
     /// Nearest-neighbour distance per vertex, and whether it is proven.
     pub nn: &'a [f64],
+    /// Each vertex's nearest neighbour ([`INFINITE`]: none).
+    pub near: &'a [u32],
     pub nn_proven: &'a [bool],
     pub hole: Hole,
     pub region: Region,
@@ -106,7 +108,7 @@ impl Selector<'_> {
             proven: true,
             ..Fan::default()
         };
-        let Some(x) = self.nearest(i, &s.wings, &mut fan.proven) else {
+        let Some(x) = self.nearest(i, &mut fan.proven) else {
             return fan;
         };
         let mut walk = Walk {
@@ -147,19 +149,10 @@ impl Selector<'_> {
     }
 
     /// The nearest Delaunay neighbour of `i` (ties: smaller id).
-    fn nearest(&self, i: u32, wings: &[Wing], proven: &mut bool) -> Option<u32> {
-        let pi = self.p(i);
-        let ranks = self.d.ranks();
-        let x = wings.iter().flat_map(|w| [w.a, w.b]).min_by(|&a, &b| {
-            let (da, db) = (
-                pi.distance_squared(self.p(a)),
-                pi.distance_squared(self.p(b)),
-            );
-            da.total_cmp(&db)
-                .then(ranks[a as usize].cmp(&ranks[b as usize]))
-        })?;
+    fn nearest(&self, i: u32, proven: &mut bool) -> Option<u32> {
+        let x = self.near[i as usize];
         *proven &= self.nn_proven[i as usize];
-        Some(x)
+        (x != INFINITE).then_some(x)
     }
 
     /// Whether some fan could select `t`: its circumradius is below its

@@ -10,7 +10,7 @@ use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
 use super::holes::{patch_doubt, small_hole_patches};
 use super::pieces::{drop_extra_fans, drop_small_pieces, piece_doubt};
 use super::triangulation::{Delaunay, DelaunayError};
-use super::umbrella::{nearest_distances, umbrella, Region};
+use super::umbrella::{nearest_neighbours, umbrella, Region};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -80,7 +80,7 @@ pub fn select(
 ) -> Result<Selection, DelaunayError> {
     let n = points.len();
     let d = Delaunay::new(points, ranks)?;
-    let nn = nearest_distances(&d);
+    let (near, nn) = nearest_neighbours(&d);
     let nn_proven: Vec<bool> = d
         .points()
         .iter()
@@ -90,6 +90,7 @@ pub fn select(
     let sel = Selector {
         d: &d,
         nn: &nn,
+        near: &near,
         nn_proven: &nn_proven,
         hole,
         region,

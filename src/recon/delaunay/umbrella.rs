@@ -63,11 +63,23 @@ pub fn umbrella(d: &Delaunay, i: u32, star: &mut Vec<u32>, out: &mut Vec<Wing>) 
     out.sort_unstable_by_key(|w| (w.a as u64) << 32 | w.b as u64);
 }
 
-/// Distance from every vertex to its nearest other vertex (a Delaunay
-/// neighbour, always): one pass over the cells' edges.
-pub fn nearest_distances(d: &Delaunay) -> Vec<f64> {
-    let p = d.points();
-    let mut nn = vec![f64::INFINITY; p.len()];
+/// Every vertex's nearest other vertex (a Delaunay neighbour, always;
+/// ties: the smaller rank) and the distance to it, [`INFINITE`] and
+/// infinity for a vertex with none: one pass over the cells' edges.
+pub fn nearest_neighbours(d: &Delaunay) -> (Vec<u32>, Vec<f64>) {
+    let (p, ranks) = (d.points(), d.ranks());
+    // Squared distances decide, as a fan's nearest neighbour did.
+    let mut best = vec![f64::INFINITY; p.len()];
+    let mut near = vec![INFINITE; p.len()];
+    let mut offer = |v: u32, u: u32, d2: f64| {
+        let (v, w) = (v as usize, near[v as usize]);
+        let closer = d2 < best[v]
+            || (d2 == best[v] && w != INFINITE && ranks[u as usize] < ranks[w as usize]);
+        if closer {
+            best[v] = d2;
+            near[v] = u;
+        }
+    };
     for cell in d.cell_slots() {
         if cell.is_free() {
             continue;
@@ -78,14 +90,13 @@ pub fn nearest_distances(d: &Delaunay) -> Vec<f64> {
                 if a == INFINITE || b == INFINITE {
                     continue;
                 }
-                let dist = p[a as usize].distance(p[b as usize]);
-                let (a, b) = (a as usize, b as usize);
-                nn[a] = nn[a].min(dist);
-                nn[b] = nn[b].min(dist);
+                let d2 = p[a as usize].distance_squared(p[b as usize]);
+                offer(a, b, d2);
+                offer(b, a, d2);
             }
         }
     }
-    nn
+    (near, best.into_iter().map(f64::sqrt).collect())
 }
 
 /// The region whose points were all triangulated: a tile's loaded box
