@@ -23,14 +23,7 @@ pub struct WindReport {
 
 /// Winds `tris` (rewritten in place; any corner order on entry).
 pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
-    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(tris.len() * 3);
-    for (t, c) in tris.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (c[k], c[(k + 1) % 3]);
-            keyed.push(((a.min(b) as u64) << 32 | a.max(b) as u64, t as u32));
-        }
-    }
-    keyed.sort_unstable();
+    let mut across = neighbours(tris);
     let mut seen = vec![false; tris.len()];
     let mut order: Vec<u32> = (0..tris.len() as u32).collect();
     order.sort_unstable_by_key(|&t| {
@@ -56,18 +49,12 @@ pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
             report.component[t as usize] = id;
             let c = tris[t as usize];
             for k in 0..3 {
+                // Side `k` as `t` runs it, opposite corner `k + 2`.
                 let (a, b) = (c[k], c[(k + 1) % 3]);
-                let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
-                let lo = keyed.partition_point(|e| e.0 < key);
-                let hi = keyed.partition_point(|e| e.0 <= key);
-                if hi - lo != 2 {
+                let o = across[t as usize][(k + 2) % 3];
+                if o == NONE {
                     continue;
                 }
-                let o = if keyed[lo].1 == t {
-                    keyed[lo + 1].1
-                } else {
-                    keyed[lo].1
-                };
                 let same_way = has_directed(tris[o as usize], a, b);
                 if seen[o as usize] {
                     consistent &= !same_way;
@@ -75,6 +62,7 @@ pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
                 }
                 if same_way {
                     tris[o as usize].swap(0, 1);
+                    across[o as usize].swap(0, 1);
                 }
                 seen[o as usize] = true;
                 queue.push_back(o);
@@ -86,6 +74,34 @@ pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
         report.inconsistent.push(!consistent);
     }
     report
+}
+
+/// No triangle across an edge (a boundary edge, or one of more than two).
+const NONE: u32 = u32::MAX;
+
+/// Per triangle, the triangle across the edge opposite each corner, when
+/// the edge has exactly two: one sort of all sides (a binary search per
+/// side of the walk was 2 % of the Delaunay run).
+fn neighbours(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(tris.len() * 3);
+    for (t, c) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
+            keyed.push((
+                (a.min(b) as u64) << 32 | a.max(b) as u64,
+                t as u32 * 3 + k as u32,
+            ));
+        }
+    }
+    keyed.sort_unstable();
+    let mut across = vec![[NONE; 3]; tris.len()];
+    for run in keyed.chunk_by(|x, y| x.0 == y.0) {
+        if let [(_, s), (_, t)] = run {
+            across[(s / 3) as usize][(s % 3) as usize] = t / 3;
+            across[(t / 3) as usize][(t % 3) as usize] = s / 3;
+        }
+    }
+    across
 }
 
 fn has_directed(c: [u32; 3], a: u32, b: u32) -> bool {
