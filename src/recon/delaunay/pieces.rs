@@ -44,18 +44,22 @@ pub fn drop_extra_fans(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
         .collect();
     at.sort_unstable();
     let mut drop = vec![false; tris.len()];
+    // Buffers kept from vertex to vertex (their allocations were most of
+    // this pass's time).
+    let (mut parent, mut by_other, mut roots) = (Vec::new(), Vec::new(), Vec::new());
     for group in at.chunk_by(|x, y| x.0 == y.0) {
         let v = group[0].0;
-        let ts: Vec<u32> = group.iter().map(|&(_, t)| t).collect();
+        let t_at = |k: usize| group[k].1;
         // Fans: triangles around v joined by an edge through v.
-        let mut parent: Vec<u32> = (0..ts.len() as u32).collect();
-        let mut by_other: Vec<(u32, u32)> = Vec::new();
-        for (k, &t) in ts.iter().enumerate() {
-            for &u in &tris[t as usize] {
+        parent.clear();
+        parent.extend(0..group.len() as u32);
+        by_other.clear();
+        for k in 0..group.len() {
+            for &u in &tris[t_at(k) as usize] {
                 if u == v {
                     continue;
                 }
-                if let Some(&(_, j)) = by_other.iter().find(|o| o.0 == u) {
+                if let Some(&(_, j)) = by_other.iter().find(|o: &&(u32, u32)| o.0 == u) {
                     let (a, b) = (find(&mut parent, j), find(&mut parent, k as u32));
                     parent[a.max(b) as usize] = a.min(b);
                 } else {
@@ -63,22 +67,24 @@ pub fn drop_extra_fans(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
                 }
             }
         }
-        let roots: Vec<u32> = (0..ts.len() as u32).map(|k| find(&mut parent, k)).collect();
+        roots.clear();
+        roots.extend((0..group.len() as u32).map(|k| find(&mut parent, k)));
+        // The first triangle is its fan's root: one fan when all are its.
+        if roots.iter().all(|&r| r == 0) {
+            continue;
+        }
         let mut sizes: BTreeMap<u32, usize> = BTreeMap::new();
         for &r in &roots {
             *sizes.entry(r).or_default() += 1;
         }
-        if sizes.len() < 2 {
-            continue;
-        }
         // The root is the fan's first triangle (smallest by tris order).
         let keep = sizes
             .iter()
-            .max_by_key(|(&r, &n)| (n, std::cmp::Reverse(tris[ts[r as usize] as usize])))
+            .max_by_key(|(&r, &n)| (n, std::cmp::Reverse(tris[t_at(r as usize) as usize])))
             .map(|(&r, _)| r);
         for (k, &r) in roots.iter().enumerate() {
             if Some(r) != keep {
-                drop[ts[k] as usize] = true;
+                drop[t_at(k) as usize] = true;
             }
         }
     }
