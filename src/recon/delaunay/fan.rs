@@ -235,11 +235,13 @@ impl Walk<'_, '_> {
             let m = inherited.map_or(Membership::Out, |f| f(tri(i, e, z)));
             (cosine(z), z, *w, m)
         }));
-        if ranked.iter().any(|c| c.3 == Membership::In) {
-            ranked.retain(|c| c.3 == Membership::In);
-        }
+        // Any candidate of unknown membership leaves the step unproven,
+        // inherited or not.
         if ranked.iter().any(|c| c.3 == Membership::Unknown) {
             *self.proven = false;
+        }
+        if ranked.iter().any(|c| c.3 == Membership::In) {
+            ranked.retain(|c| c.3 == Membership::In);
         }
         ranked.sort_by(|a, b| {
             a.0.total_cmp(&b.0)
