@@ -120,12 +120,8 @@ impl<'a> Cleanup<'a> {
     pub fn acute(&self, e: u32, s: u32, t: u32) -> bool {
         let (a, b) = self.edges[e as usize];
         let p = |v: u32| self.points[v as usize];
-        let axis = p(b) - p(a);
-        let across = |q: DVec3| {
-            let r = q - p(a);
-            r - axis * (r.dot(axis) / axis.length_squared())
-        };
-        across(p(self.apex(s, e))).dot(across(p(self.apex(t, e)))) > 0.0
+        let side = |t: u32| across(p(a), p(b), p(self.apex(t, e)));
+        side(s).dot(side(t)) > 0.0
     }
 
     /// An acute pair on `e`, or more than two triangles (deviation: paper
@@ -351,15 +347,11 @@ impl<'a> Cleanup<'a> {
     fn flattest_pair(&self, e: u32, on: &[u32]) -> (u32, u32) {
         let (a, b) = self.edges[e as usize];
         let p = |v: u32| self.points[v as usize];
-        let axis = p(b) - p(a);
-        let across = |t: u32| {
-            let r = p(self.apex(t, e)) - p(a);
-            (r - axis * (r.dot(axis) / axis.length_squared())).normalize_or_zero()
-        };
+        let side = |t: u32| across(p(a), p(b), p(self.apex(t, e))).normalize_or_zero();
         let mut best = (f64::INFINITY, on[0], on[1]);
         for (k, &s) in on.iter().enumerate() {
             for &t in &on[k + 1..] {
-                let c = across(s).dot(across(t));
+                let c = side(s).dot(side(t));
                 if c < best.0 {
                     best = (c, s, t);
                 }
@@ -376,6 +368,15 @@ impl<'a> Cleanup<'a> {
             .filter(|(_, &a)| a)
             .map(|(t, _)| *t)
     }
+}
+
+/// The part of `q - a` square to the line through `a` and `b`: which side
+/// of edge `ab` a triangle's apex lies on, seen along the edge (two
+/// triangles on the edge make an acute dihedral angle when theirs point
+/// the same way).
+pub fn across(a: DVec3, b: DVec3, q: DVec3) -> DVec3 {
+    let (axis, r) = (b - a, q - a);
+    r - axis * (r.dot(axis) / axis.length_squared())
 }
 
 /// Spreads doubt one ring over `tris`: every corner of a triangle with a

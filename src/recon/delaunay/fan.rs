@@ -26,6 +26,7 @@
 //! give ([`Region::proves`]); a tile whose core needs an unproven fan asks
 //! for a wider margin.
 
+use super::cleanup::across;
 use super::triangulation::{Delaunay, INFINITE};
 use super::umbrella::{umbrella, Region, Wing};
 use glam::DVec3;
@@ -199,12 +200,8 @@ impl Walk<'_, '_> {
     fn choose(&mut self, e: u32, prev: Option<u32>) -> Option<(u32, bool)> {
         let sel = self.sel;
         let (pi, pe) = (sel.p(self.i), sel.p(e));
-        let axis = pe - pi;
-        let across = |q: DVec3| {
-            let r = q - pi;
-            r - axis * (r.dot(axis) / axis.length_squared())
-        };
-        let back = prev.map(|v| across(sel.p(v)));
+        let side = |q: DVec3| across(pi, pe, q);
+        let back = prev.map(|v| side(sel.p(v)));
         let candidates = self.wings.iter().filter_map(|w| {
             let z = if w.a == e {
                 w.b
@@ -214,7 +211,7 @@ impl Walk<'_, '_> {
                 return None;
             };
             let obtuse = match back {
-                Some(u) => prev != Some(z) && u.dot(across(sel.p(z))) < 0.0,
+                Some(u) => prev != Some(z) && u.dot(side(sel.p(z))) < 0.0,
                 None => true,
             };
             obtuse.then_some((z, w))

@@ -35,14 +35,12 @@
 
 use super::cleanup::dilate;
 use super::patch::{crosses, least_fold_patch};
-use super::rim::{edge, Rim};
+use super::rim::{edge, Edge, Rim};
 use glam::DVec3;
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 /// Longest loop closed, in edges.
 pub const MAX_LOOP: usize = 10;
-
-type Edge = (u32, u32);
 
 /// Triangles on each edge of `tris` (corners sorted, so each edge comes
 /// as `(low, high)`).

@@ -15,15 +15,11 @@
 //! of them three-edge holes whose one fold is near square (median cosine
 //! 0.12), with no crossing.
 
+use super::cleanup::across;
+use super::rim::{edge, Edge};
 use crate::mesh::intersect::triangles_intersect;
 use glam::DVec3;
 use std::collections::{BTreeMap, BTreeSet};
-
-type Edge = (u32, u32);
-
-fn edge(a: u32, b: u32) -> Edge {
-    (a.min(b), a.max(b))
-}
 
 pub(crate) fn sorted(mut t: [u32; 3]) -> [u32; 3] {
     t.sort_unstable();
@@ -36,12 +32,8 @@ pub(crate) fn sorted(mut t: [u32; 3]) -> [u32; 3] {
 /// [`super::cleanup::Cleanup::acute`]), else 0.
 fn fold(points: &[DVec3], a: u32, b: u32, s: u32, t: u32) -> f64 {
     let p = |v: u32| points[v as usize];
-    let axis = p(b) - p(a);
-    let across = |q: DVec3| {
-        let r = q - p(a);
-        (r - axis * (r.dot(axis) / axis.length_squared())).normalize_or_zero()
-    };
-    across(p(s)).dot(across(p(t))).max(0.0)
+    let side = |q: u32| across(p(a), p(b), p(q)).normalize_or_zero();
+    side(s).dot(side(t)).max(0.0)
 }
 
 /// A sub-polygon's triangulation measure: worst fold, then area.

@@ -17,7 +17,8 @@ use super::wind::wind;
 use glam::DVec3;
 use std::collections::BTreeMap;
 
-type Edge = (u32, u32);
+/// An edge, as its two vertices, lower first.
+pub type Edge = (u32, u32);
 
 pub fn edge(a: u32, b: u32) -> Edge {
     (a.min(b), a.max(b))
