@@ -47,9 +47,10 @@ pub struct ReconstructArgs {
     plane: Plane,
     /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
     /// triangles with a larger circumradius are boundaries. Default: 5 x
-    /// the largest nearest-neighbour distance of the triangle's corners
-    /// (from the local sampling, not the paper's share of the bounding
-    /// sphere).
+    /// the largest spacing of the triangle's corners, a corner's spacing
+    /// being its nearest-neighbour distance but at most 4 x its
+    /// neighbour's (from the local sampling, not the paper's share of the
+    /// bounding sphere; an outlier is not sparse sampling).
     #[arg(long, value_name = "DELTA")]
     hole: Option<f64>,
     /// Drop connected pieces with fewer triangles than this share of the

@@ -223,7 +223,7 @@ fn unbounded_beyond(mut region: Aabb, data: &Aabb) -> Aabb {
     region
 }
 
-fn entry_bounds(t: &TileEntry) -> Aabb {
+pub(crate) fn entry_bounds(t: &TileEntry) -> Aabb {
     Aabb::new(
         DVec3::from_array(t.points_min.map(f64::from)),
         DVec3::from_array(t.points_max.map(f64::from)),

@@ -2,6 +2,8 @@
 //! points of its neighbours. (The tiles themselves are planned when the
 //! store is laid out: `store::tile_plan`.)
 
+pub(crate) mod beyond;
 pub(crate) mod load;
 
+pub use beyond::{Beyond, Seen};
 pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};

@@ -5,13 +5,18 @@
 //! whole cloud's, and every whole-cloud triangle with such a corner in the
 //! part must be the part's. The noise makes the deletions' forced choices
 //! and ties common, which is where a part's own vertex numbering once
-//! leaked into the result.
+//! leaked into the result. A part that asks the store about the spheres
+//! poking out of it (`tiling::Beyond`) must be sure of more, and as right.
 
 use super::fan::{Hole, LOCAL_HOLE};
 use super::select::{select, Selection};
 use super::umbrella::Region;
 use crate::geom::Aabb;
+use crate::io::memory::MemoryReader;
+use crate::progress::NoProgress;
+use crate::store::{build_store, BuildOptions, PointStore, TileTarget};
 use crate::synth::{generate, mean_spacing_hint, Rng, Shape};
+use crate::tiling::Beyond;
 use glam::DVec3;
 use std::collections::BTreeSet;
 
@@ -38,23 +43,82 @@ fn a_part_is_sure_only_of_the_whole_clouds_triangles() {
         (0.1, 13, DVec3::new(-0.6, -inf, -inf), DVec3::splat(inf)),
     ];
     for (noise, seed, lo, hi) in cases {
-        check_part(noise, seed, Aabb::new(lo, hi));
+        let dir = tempfile::tempdir().unwrap();
+        let cloud = Cloud::stored(noise, seed, &dir.path().join("s"));
+        // The box in the store's coordinates (relative to its origin).
+        let loaded = Aabb::new(lo - cloud.origin, hi - cloud.origin);
+        let alone = check_part(
+            &cloud,
+            noise,
+            Region {
+                loaded,
+                beyond: None,
+            },
+        );
+        let beyond = Beyond::new(&cloud.store, loaded, 0.5);
+        let asking = Region {
+            loaded,
+            beyond: Some(&beyond),
+        };
+        // Asking the store about spheres that poke out proves more.
+        let more = check_part(&cloud, noise, asking);
+        assert!(
+            more > alone,
+            "noise {noise}: {more} sure asking, {alone} alone"
+        );
     }
 }
 
-fn check_part(noise: f64, seed: u64, loaded: Aabb) {
-    let shape = Shape::torus(1.0, 0.35);
-    let n = 20_000;
-    let sp = mean_spacing_hint(&shape, n).unwrap();
-    let points = generate(&shape, n, noise * sp, seed).unwrap().points;
-    let ids: Vec<u64> = (0..n as u64).collect();
+/// A noisy torus as a store holds it (f32 relative to its origin, as the
+/// tiles and `Beyond` read it), with its ids.
+struct Cloud {
+    store: PointStore,
+    origin: DVec3,
+    points: Vec<DVec3>,
+    ids: Vec<u64>,
+}
+
+impl Cloud {
+    fn stored(noise: f64, seed: u64, dir: &std::path::Path) -> Self {
+        let shape = Shape::torus(1.0, 0.35);
+        let n = 20_000;
+        let sp = mean_spacing_hint(&shape, n).unwrap();
+        let points = generate(&shape, n, noise * sp, seed).unwrap().points;
+        let mut reader = MemoryReader::new("torus", points, None);
+        let opts = BuildOptions {
+            tiles: TileTarget::Points(4000),
+            ..Default::default()
+        };
+        let store = build_store(&mut reader, dir, &opts, &NoProgress).unwrap();
+        let (mut points, mut ids) = (Vec::new(), Vec::new());
+        let (mut p, mut i) = (Vec::new(), Vec::new());
+        for t in store.tiles() {
+            store.read_points(t.start, t.count, &mut p).unwrap();
+            store.read_indices(t.start, t.count, &mut i).unwrap();
+            points.extend_from_slice(&p);
+            ids.extend_from_slice(&i);
+        }
+        Cloud {
+            origin: store.origin(),
+            store,
+            points,
+            ids,
+        }
+    }
+}
+
+/// Checks the part of `cloud` in `region` against the whole cloud and
+/// returns how many triangles the part is sure of.
+fn check_part(cloud: &Cloud, noise: f64, region: Region) -> usize {
+    let (points, ids) = (&cloud.points, &cloud.ids);
     let hole = Hole::Local(LOCAL_HOLE);
-    let whole = select(&points, &ids, hole, Region::everything()).unwrap();
+    let whole = select(points, ids, hole, Region::everything()).unwrap();
     assert!(whole.report.cleanup.forced > 0, "no forced choice");
 
+    let loaded = region.loaded;
     let mut part: Vec<(DVec3, u64)> = points
         .iter()
-        .zip(&ids)
+        .zip(ids)
         .filter(|(p, _)| loaded.contains(**p))
         .map(|(p, &i)| (*p, i))
         .collect();
@@ -63,7 +127,7 @@ fn check_part(noise: f64, seed: u64, loaded: Aabb) {
         part.swap(k, rng.below(k as u64 + 1) as usize);
     }
     let (pp, pi): (Vec<DVec3>, Vec<u64>) = part.into_iter().unzip();
-    let sel = select(&pp, &pi, hole, Region { loaded }).unwrap();
+    let sel = select(&pp, &pi, hole, region).unwrap();
 
     let mut sure_ids = BTreeSet::new();
     for (v, &d) in sel.doubtful.iter().enumerate() {
@@ -72,7 +136,7 @@ fn check_part(noise: f64, seed: u64, loaded: Aabb) {
         }
     }
     let sure = |t: &[u64; 3]| t.iter().any(|v| sure_ids.contains(v));
-    let whole_set: BTreeSet<[u64; 3]> = by_id(&whole, &ids).into_iter().collect();
+    let whole_set: BTreeSet<[u64; 3]> = by_id(&whole, ids).into_iter().collect();
     let part_set: BTreeSet<[u64; 3]> = by_id(&sel, &pi).into_iter().collect();
     let part_sure: Vec<&[u64; 3]> = part_set.iter().filter(|t| sure(t)).collect();
     let whole_sure: Vec<&[u64; 3]> = whole_set.iter().filter(|t| sure(t)).collect();
@@ -95,4 +159,5 @@ fn check_part(noise: f64, seed: u64, loaded: Aabb) {
         (0, 0),
         "noise {noise}: sure but not the whole cloud's"
     );
+    part_sure.len()
 }

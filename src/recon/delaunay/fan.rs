@@ -28,7 +28,7 @@
 
 use super::cleanup::across;
 use super::triangulation::{Delaunay, INFINITE};
-use super::umbrella::{umbrella, Region, Wing};
+use super::umbrella::{umbrella, Proof, Region, Wing};
 use glam::DVec3;
 
 /// The sampling-hole radius delta of paper 4 (definition 4): triangles with
@@ -38,14 +38,27 @@ pub enum Hole {
     /// One radius everywhere (paper 4 gives it relative to the bounding
     /// sphere; here it is absolute, in the input's units).
     Absolute(f64),
-    /// Deviation: this multiple of the largest nearest-neighbour distance
-    /// of the triangle's corners, so the threshold follows the local
-    /// sampling density and needs no global statistic.
+    /// Deviation: this multiple of the largest spacing of the triangle's
+    /// corners, so the threshold follows the local sampling density and
+    /// needs no global statistic. A corner's spacing is its
+    /// nearest-neighbour distance, but at most [`OUTLIER`] times its
+    /// nearest neighbour's own.
     Local(f64),
 }
 
 /// Default multiple for [`Hole::Local`].
 pub const LOCAL_HOLE: f64 = 5.0;
+
+/// Deviation: a sample farther from its nearest neighbour than this many
+/// times that neighbour's own nearest-neighbour distance is an outlier
+/// beside denser samples, not sparse sampling, and its spacing is capped
+/// there. Uncapped, a stray sample 37 spacings from the 10M noisy dragon
+/// made triangles of 185 spacings selectable, and a tile near it doubted
+/// 200 spacings deep (a margin no 512 MiB plan holds). Capped at 4, it
+/// would have changed the selectability of 148 of the 1M dragon's 2M
+/// triangles (at 3: 362; at 8: 17); a density step keeps its bridging
+/// triangles, as their corners' spacings differ by the step's square root.
+pub const OUTLIER: f64 = 4.0;
 
 /// Whether a triangle is in the first round's fans (for inheritance).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,8 +95,11 @@ pub struct Selector<'a> {
     /// Each vertex's nearest neighbour ([`INFINITE`]: none).
     pub near: &'a [u32],
     pub nn_proven: &'a [bool],
+    /// Per vertex: an upper bound on its spacing in the whole cloud (see
+    /// [`Selector::spacing`]), read where the spacing is not proven.
+    pub spacing_bound: &'a [f64],
     pub hole: Hole,
-    pub region: Region,
+    pub region: Region<'a>,
 }
 
 /// Corners sorted: the triangle's identity.
@@ -175,11 +191,57 @@ impl Selector<'_> {
         match self.hole {
             Hole::Absolute(d) => d,
             Hole::Local(k) => {
-                *proven &= t.iter().all(|&v| self.nn_proven[v as usize]);
-                k * t.iter().map(|&v| self.nn[v as usize]).fold(0.0, f64::max)
+                k * t
+                    .iter()
+                    .map(|&v| self.spacing(v, proven))
+                    .fold(0.0, f64::max)
             }
         }
     }
+
+    /// The spacing of sample `v` for [`Hole::Local`]; where it is not
+    /// proven, an upper bound on the cloud's ([`spacing_bounds`]).
+    fn spacing(&self, v: u32, proven: &mut bool) -> f64 {
+        let x = self.near[v as usize];
+        let known = self.nn_proven[v as usize] && (x == INFINITE || self.nn_proven[x as usize]);
+        if !known {
+            *proven = false;
+            return self.spacing_bound[v as usize];
+        }
+        capped(
+            self.nn[v as usize],
+            (x != INFINITE).then(|| self.nn[x as usize]),
+        )
+    }
+}
+
+/// A sample's spacing from its nearest-neighbour distance `nn` and its
+/// nearest neighbour's own (if it has a neighbour), capped at [`OUTLIER`].
+fn capped(nn: f64, neighbours: Option<f64>) -> f64 {
+    neighbours.map_or(nn, |x| nn.min(OUTLIER * x))
+}
+
+/// Per vertex, an upper bound on its spacing ([`Hole::Local`]) in the whole
+/// cloud. The tile's nearest-neighbour distance is one (the cloud's
+/// neighbours are only nearer, and the cap only lowers it); where the
+/// region can show the points not loaded, the bound is tighter: the
+/// cloud's nearest distance, and the nearest neighbour's distance to the
+/// nearest other point seen. Without the cap's bound, a stray sample whose
+/// nearest neighbour lay outside its tile kept a hole radius of 185
+/// spacings and doubt ran 140 spacings into the tile.
+pub fn spacing_bounds(points: &[DVec3], near: &[u32], nn: &[f64], region: &Region) -> Vec<f64> {
+    (0..points.len())
+        .map(|v| {
+            let x = near[v];
+            let tile = (x != INFINITE).then(|| nn[x as usize]);
+            region
+                .nearest_beyond(points[v], nn[v])
+                .map_or(capped(nn[v], tile), |(d, y)| match y {
+                    Some(y) => capped(d, Some(y)),
+                    None => capped(d, tile),
+                })
+        })
+        .collect()
 }
 
 /// The state of one fan walk.
@@ -232,50 +294,69 @@ impl Walk<'_, '_> {
             let m = inherited.map_or(Membership::Out, |f| f(tri(i, e, z)));
             (cosine(z), z, *w, m)
         }));
-        // Any candidate of unknown membership leaves the step unproven,
-        // inherited or not.
-        if ranked.iter().any(|c| c.3 == Membership::Unknown) {
-            *self.proven = false;
-        }
-        if ranked.iter().any(|c| c.3 == Membership::In) {
-            ranked.retain(|c| c.3 == Membership::In);
-        }
         ranked.sort_by(|a, b| {
             a.0.total_cmp(&b.0)
                 .then(ranks[a.1 as usize].cmp(&ranks[b.1 as usize]))
         });
-        let &(_, z, _, _) = self.ranked.first()?;
-        if !sel.region.is_everything() {
-            *self.proven &= self.settled(e);
+        // A candidate of unknown membership may be inherited in the cloud,
+        // which leaves the step unproven unless an inherited candidate
+        // outranks it (the cloud's choice is that one either way). Without
+        // that exception, a stray sample's unproven fan unsettled every
+        // step whose candidates reached it, 140 spacings into a tile.
+        let best_in = ranked.iter().position(|c| c.3 == Membership::In);
+        let unknown = ranked.iter().position(|c| c.3 == Membership::Unknown);
+        if unknown.is_some_and(|u| best_in.is_none_or(|b| u < b)) {
+            *self.proven = false;
         }
+        if best_in.is_some() {
+            ranked.retain(|c| c.3 == Membership::In);
+        }
+        // A tile's candidate shown not to be the cloud's is passed over
+        // (a tile sees one only where the cloud's sphere reaches beyond
+        // what it loaded).
+        let mut k = 0;
+        if !sel.region.is_everything() {
+            match self.settle(e) {
+                Some(w) => k = w,
+                None => *self.proven = false,
+            }
+        }
+        let &(_, z, _, _) = self.ranked.get(k)?;
         let delta = sel.delta([self.i, e, z], &mut true);
         Some((z, circumradius(pi, pe, sel.p(z)) < delta))
     }
 
-    /// Whether the whole cloud's choice among `ranked` (best first) is
-    /// the tile's. The cloud's candidates are a subset of the tile's: the
-    /// proven ones and perhaps some others. If the best is proven it wins
-    /// there too; otherwise the cloud's winner is one of the candidates up
-    /// to the first proven one, and the outcome is still certain when none
-    /// of them could be selected (a boundary either way).
-    fn settled(&self, e: u32) -> bool {
+    /// The whole cloud's choice among `ranked` (best first), when the tile
+    /// is sure of it: its place in `ranked` (`ranked.len()`: none). The
+    /// cloud's candidates are a subset of the tile's: those proven its
+    /// own, none of those proven absent, perhaps some others. If the best
+    /// of those not absent is proven it wins there too; otherwise the
+    /// cloud's winner is one of the candidates up to the first proven one,
+    /// and the outcome is still certain when none of them could be
+    /// selected (a boundary either way; the first stands for them all).
+    fn settle(&self, e: u32) -> Option<usize> {
         let sel = self.sel;
+        let mut first = None;
         for (k, &(_, z, ref w, _)) in self.ranked.iter().enumerate() {
-            let proven = sel.region.proves(sel.d, self.i, w);
-            if proven && k == 0 {
+            let proof = sel.region.triangle(sel.d, self.i, w);
+            if proof == Proof::Absent {
+                continue;
+            }
+            let best = *first.get_or_insert(k);
+            if proof == Proof::Held && k == best {
                 // The winner is certain; so must be its hole radius.
                 let mut known = true;
                 sel.delta(tri(self.i, e, z), &mut known);
-                return known;
+                return known.then_some(k);
             }
             if sel.selectable(tri(self.i, e, z)) {
-                return false;
+                return None;
             }
-            if proven {
-                return true;
+            if proof == Proof::Held {
+                return Some(best);
             }
         }
-        true
+        Some(first.unwrap_or(self.ranked.len()))
     }
 }
 

@@ -6,7 +6,8 @@
 //! whose core holds its corner of smallest input id, so each is written
 //! once. It is exact: every choice the kernel makes for an owned triangle
 //! is proven to be the whole cloud's (a triangle's empty sphere lies in the
-//! loaded region, see [`super::umbrella`]; doubt spreads as far as the
+//! loaded region or the store shows it empty beyond, see
+//! [`super::umbrella`]; doubt spreads as far as the
 //! deletion rounds can carry it, see [`super::cleanup`]); a tile with a
 //! doubtful core point asks for a wider margin.
 //!
@@ -20,7 +21,8 @@ use super::select::{select, SelectionReport};
 use super::umbrella::Region;
 use super::wind::wind;
 use crate::pipeline::{KernelError, TileKernel};
-use crate::tiling::TilePoints;
+use crate::store::PointStore;
+use crate::tiling::{Beyond, TilePoints};
 use glam::DVec3;
 
 /// One tile's share of the surface.
@@ -41,12 +43,15 @@ pub struct DelaunayTile {
     pub report: SelectionReport,
 }
 
-pub struct DelaunayKernel {
+pub struct DelaunayKernel<'a> {
     pub hole: Hole,
     pub initial_margin: f64,
+    /// The store, for proofs whose spheres poke out of a tile's loaded
+    /// region (`tiling::Beyond`); `None` proves inside the region only.
+    pub store: Option<&'a PointStore>,
 }
 
-impl TileKernel for DelaunayKernel {
+impl TileKernel for DelaunayKernel<'_> {
     type Output = DelaunayTile;
 
     fn name(&self) -> &str {
@@ -64,8 +69,17 @@ impl TileKernel for DelaunayKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<DelaunayTile, KernelError> {
+        // Proofs may read as far beyond the region again as twice its
+        // margin: the widest empty spheres met (115 spacings across, at the
+        // first margin of 110) need that, and the points read stay a shell
+        // round the tile, kept at 24 B each (at most about 6 % of the
+        // kernel's bytes; reading without bounds kept most of the store).
+        let beyond = self
+            .store
+            .map(|s| Beyond::new(s, tile.loaded, 2.0 * tile.margin));
         let region = Region {
             loaded: tile.loaded,
+            beyond: beyond.as_ref(),
         };
         let sel =
             select(&tile.points, &tile.ids, self.hole, region).map_err(KernelError::failed)?;

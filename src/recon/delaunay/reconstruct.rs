@@ -10,7 +10,7 @@
 //! Memory: the seam edges waiting for their twin (about the tiles' borders),
 //! one union-find entry per tile component; the triangles wait on disk.
 
-use super::fan::{Hole, LOCAL_HOLE};
+use super::fan::{Hole, LOCAL_HOLE, OUTLIER};
 use super::kernel::{DelaunayKernel, DelaunayTile};
 use crate::memory::plan::MARGIN_FACTOR;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
@@ -32,8 +32,9 @@ const MARGIN_SPACINGS: f64 = 110.0;
 /// Kernel bytes per loaded point, for tile sizing: the triangulation's
 /// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
 /// edge index, the tile's own columns; rounded up from the 800 B the 1M
-/// untiled run shows, for the points a tile waiting for memory holds and
-/// the seam side. The 3M noisy dragon under `--mem 768MiB` still peaks at
+/// untiled run shows, for the points a tile waiting for memory holds, the
+/// seam side, and the store points the proofs read beyond the tile
+/// (`tiling::Beyond`: 24 B each, at most a shell of twice the margin). The 3M noisy dragon under `--mem 768MiB` still peaks at
 /// 867 MiB: freed tile memory stays in the workers' allocator arenas
 /// (ARCHITECTURE.md, memory model).
 pub(crate) const BYTES_PER_POINT: u64 = 1000;
@@ -165,6 +166,7 @@ pub fn reconstruct_delaunay(
     let kernel = DelaunayKernel {
         hole,
         initial_margin: MARGIN_SPACINGS * spacing,
+        store: Some(store),
     };
     let mut seam = Seams::new(MeshWriter::create(output, format)?, store)?;
     let run = run_tiles(store, &kernel, opts, progress, |_, out| {
@@ -175,7 +177,7 @@ pub fn reconstruct_delaunay(
     report.hole = match hole {
         Hole::Absolute(h) => format!("{h:.4e}"),
         Hole::Local(k) => {
-            format!("{k} x the largest nearest-neighbour distance of a triangle's corners")
+            format!("{k} x the largest spacing of a triangle's corners (nearest-neighbour distance, at most {OUTLIER} x the neighbour's)")
         }
     };
     Ok(report)

@@ -6,7 +6,7 @@
 //! to hold every point of the cloud inside it.
 
 use super::cleanup::{dilate, Cleanup, CleanupReport};
-use super::fan::{tri, Fan, FanScratch, Hole, Membership, Selector};
+use super::fan::{spacing_bounds, tri, Fan, FanScratch, Hole, Membership, Selector};
 use super::holes::{patch_doubt, small_hole_patches};
 use super::pieces::{drop_extra_fans, drop_small_pieces, piece_doubt};
 use super::triangulation::{Delaunay, DelaunayError};
@@ -87,11 +87,17 @@ pub fn select(
         .zip(&nn)
         .map(|(p, &r)| region.holds_reach(*p, r))
         .collect();
+    let spacing_bound = if region.is_everything() {
+        Vec::new()
+    } else {
+        spacing_bounds(d.points(), &near, &nn, &region)
+    };
     let sel = Selector {
         d: &d,
         nn: &nn,
         near: &near,
         nn_proven: &nn_proven,
+        spacing_bound: &spacing_bound,
         hole,
         region,
     };
