@@ -189,16 +189,17 @@ mod tests {
             DVec3::new(2.0, 3.0, -1.0) - o,
             DVec3::new(6.0, 7.0, 1.0) - o,
         );
-        let beyond = Beyond::new(&store, loaded, 1.0);
+        let beyond = Beyond::new(&store, loaded, 2.5);
         let mut rng = Rng::new(11);
-        let (mut empty, mut full) = (0, 0);
+        let (mut empty, mut full, mut far) = (0, 0, 0);
         for _ in 0..400 {
             let near = stored[rng.below(stored.len() as u64) as usize];
             let c = near + rng.gaussian_vector(0.2);
             let r = rng.range(0.0, 0.3);
-            let far = !beyond.within.contains(c - r) || !beyond.within.contains(c + r);
-            if far {
+            let too_far = !beyond.within.contains(c - r) || !beyond.within.contains(c + r);
+            if too_far {
                 assert!(!beyond.ball_is_empty(c, r), "ball {c} {r} reaches too far");
+                far += 1;
                 continue;
             }
             let truth = !stored
@@ -211,8 +212,11 @@ mod tests {
                 full += 1;
             }
         }
-        // Both answers were exercised.
-        assert!(empty > 50 && full > 50, "{empty} empty, {full} not");
+        // Every answer was exercised.
+        assert!(
+            empty > 50 && full > 50 && far > 10,
+            "{empty} empty, {full} not, {far} too far"
+        );
     }
 
     #[test]
