@@ -216,7 +216,7 @@ impl Region<'_> {
         let whole = (pencil.lo, pencil.hi) == (lo, hi);
         match beyond.each_outside(centre, radius * (1.0 + SLACK), |q| pencil.exclude(q)) {
             Seen::All if pencil.smallest().is_some() => Proof::Held,
-            Seen::Stopped if whole && pencil.sure => Proof::Absent,
+            Seen::Stopped if whole && pencil.sure && pencil.clearly_empty() => Proof::Absent,
             _ => Proof::Unknown,
         }
     }
@@ -293,13 +293,23 @@ impl Pencil {
     /// the interval (the spheres are computed in f64 and the proof must
     /// hold for the exact ones); `None` when the slack closes it.
     fn smallest(&self) -> Option<f64> {
-        let r = self.r2.sqrt();
+        let tol = self.tolerance();
+        (self.lo + tol <= self.hi - tol).then(|| 0.0f64.clamp(self.lo + tol, self.hi - tol))
+    }
+
+    /// Whether no sphere is left by more than the slack either way, so the
+    /// exact spheres hold a point too.
+    fn clearly_empty(&self) -> bool {
+        let tol = self.tolerance();
+        self.lo - tol > self.hi + tol
+    }
+
+    fn tolerance(&self) -> f64 {
         let span = [self.lo, self.hi]
             .into_iter()
             .filter(|t| t.is_finite())
             .fold(0.0, |m: f64, t| m.max(t.abs()));
-        let tol = SLACK * (r + span);
-        (self.lo + tol <= self.hi - tol).then(|| 0.0f64.clamp(self.lo + tol, self.hi - tol))
+        SLACK * (self.r2.sqrt() + span)
     }
 
     fn sphere(&self, t: f64) -> (DVec3, f64) {
@@ -348,7 +358,7 @@ mod tests {
         // Delaunay, and the pencil knows it for sure.
         assert!(!pencil.exclude(DVec3::new(0.5, 0.5, -0.1)));
         assert!(pencil.smallest().is_none());
-        assert!(pencil.sure);
+        assert!(pencil.sure && pencil.clearly_empty());
     }
 
     #[test]
