@@ -35,9 +35,9 @@ struct Blocks {
 }
 
 impl<'a> Beyond<'a> {
-    /// The points outside `loaded` up to `reach` beyond it (a kernel that
-    /// loads a margin `m` may read as far again: the shell holds about as
-    /// many points as the tile, at 24 B each against a kernel's hundreds).
+    /// The points outside `loaded` up to `reach` beyond it: those read are
+    /// kept (24 B each, against a kernel's hundreds per loaded point) and
+    /// stay within a shell round the tile.
     pub fn new(store: &'a PointStore, loaded: Aabb, reach: f64) -> Self {
         Beyond {
             store,
@@ -48,8 +48,9 @@ impl<'a> Beyond<'a> {
     }
 
     /// Whether no stored point outside the loaded region lies within
-    /// `radius` of `centre` (closed ball). A store read that fails answers
-    /// "not known empty", which costs the caller a proof, never a wrong one.
+    /// `radius` of `centre` (closed ball). A ball reaching too far, or a
+    /// store read that fails, answers "not known empty", which costs the
+    /// caller a proof, never a wrong one.
     pub fn ball_is_empty(&self, centre: DVec3, radius: f64) -> bool {
         self.each_outside(centre, radius, |_| false) == Seen::All
     }
