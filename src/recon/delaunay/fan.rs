@@ -229,13 +229,22 @@ fn capped(nn: f64, neighbours: Option<f64>) -> f64 {
 /// nearest other point seen. Without the cap's bound, a stray sample whose
 /// nearest neighbour lay outside its tile kept a hole radius of 185
 /// spacings and doubt ran 140 spacings into the tile.
-pub fn spacing_bounds(points: &[DVec3], near: &[u32], nn: &[f64], region: &Region) -> Vec<f64> {
+/// A vertex whose nearest distance is proven (`nn_proven`) is not asked
+/// again: the region already showed its ball holds no point beyond.
+pub fn spacing_bounds(
+    points: &[DVec3],
+    near: &[u32],
+    nn: &[f64],
+    nn_proven: &[bool],
+    region: &Region,
+) -> Vec<f64> {
     (0..points.len())
         .map(|v| {
             let x = near[v];
             let tile = (x != INFINITE).then(|| nn[x as usize]);
-            region
-                .nearest_beyond(points[v], nn[v])
+            let beyond = (!nn_proven[v]).then(|| region.nearest_beyond(points[v], nn[v]));
+            beyond
+                .flatten()
                 .map_or(capped(nn[v], tile), |(d, y)| match y {
                     Some(y) => capped(d, Some(y)),
                     None => capped(d, tile),

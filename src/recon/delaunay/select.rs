@@ -90,7 +90,7 @@ pub fn select(
     let spacing_bound = if region.is_everything() {
         Vec::new()
     } else {
-        spacing_bounds(d.points(), &near, &nn, &region)
+        spacing_bounds(d.points(), &near, &nn, &nn_proven, &region)
     };
     let sel = Selector {
         d: &d,

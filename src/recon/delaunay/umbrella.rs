@@ -152,12 +152,14 @@ impl Region<'_> {
         self.holds_ball(p, radius)
     }
 
-    /// For a point whose nearest loaded neighbour lies `nn` away: its
-    /// nearest distance in the whole cloud, and when that neighbour is not
-    /// loaded, an upper bound on the neighbour's own nearest distance (the
-    /// nearest other point seen). `None` when nothing is known beyond.
+    /// For a point whose nearest loaded neighbour lies `nn` away and whose
+    /// ball of that radius pokes out of the region (the caller checked it
+    /// is not held): its nearest distance in the whole cloud, and when
+    /// that neighbour is not loaded, an upper bound on the neighbour's own
+    /// nearest distance (the nearest other point seen). `None` when nothing
+    /// is known beyond.
     pub fn nearest_beyond(&self, p: DVec3, nn: f64) -> Option<(f64, Option<f64>)> {
-        if !nn.is_finite() || self.holds_ball(p, nn) {
+        if !nn.is_finite() {
             return None;
         }
         let mut seen = Vec::new();
