@@ -11,6 +11,7 @@
 use glam::DVec3;
 
 pub(crate) mod ball;
+pub(crate) mod blocks;
 pub(crate) mod brute;
 pub(crate) mod grid;
 mod kdtree;

@@ -91,7 +91,12 @@ impl LogHistogram {
     /// The value below which a fraction `q` of the values lie (bin upper
     /// edge: at most 1.1 % high).
     pub fn quantile(&self, q: f64) -> f64 {
-        let target = (q.clamp(0.0, 1.0) * self.count() as f64).ceil() as u64;
+        self.ranked((q.clamp(0.0, 1.0) * self.count() as f64).ceil() as u64)
+    }
+
+    /// The `target`-th smallest value, counting from 1 (bin upper edge, as
+    /// [`LogHistogram::quantile`]).
+    pub fn ranked(&self, target: u64) -> f64 {
         let mut seen = self.zeros;
         if seen >= target {
             return 0.0;

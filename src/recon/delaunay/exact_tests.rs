@@ -76,6 +76,7 @@ struct Cloud {
     origin: DVec3,
     points: Vec<DVec3>,
     ids: Vec<u64>,
+    sp: f64,
 }
 
 impl Cloud {
@@ -99,6 +100,7 @@ impl Cloud {
             ids.extend_from_slice(&i);
         }
         Cloud {
+            sp,
             origin: store.origin(),
             store,
             points,
@@ -111,7 +113,12 @@ impl Cloud {
 /// returns how many triangles the part is sure of.
 fn check_part(cloud: &Cloud, noise: f64, region: Region) -> usize {
     let (points, ids) = (&cloud.points, &cloud.ids);
-    let hole = Hole::Local(LOCAL_HOLE);
+    // A ceiling below most corners' spacings, so the hole radius of most
+    // triangles comes from it and the rest from the spacings.
+    let hole = Hole::Local {
+        multiple: LOCAL_HOLE,
+        ceiling: 0.8 * cloud.sp,
+    };
     let whole = select(points, ids, hole, Region::everything()).unwrap();
     assert!(whole.report.cleanup.forced > 0, "no forced choice");
 

@@ -38,12 +38,13 @@ pub enum Hole {
     /// One radius everywhere (paper 4 gives it relative to the bounding
     /// sphere; here it is absolute, in the input's units).
     Absolute(f64),
-    /// Deviation: this multiple of the largest spacing of the triangle's
-    /// corners, so the threshold follows the local sampling density and
-    /// needs no global statistic. A corner's spacing is its
-    /// nearest-neighbour distance, but at most [`OUTLIER`] times its
-    /// nearest neighbour's own.
-    Local(f64),
+    /// Deviation: `multiple` times the largest spacing of the triangle's
+    /// corners, so the threshold follows the local sampling density. A
+    /// corner's spacing is its nearest-neighbour distance, but at most
+    /// [`OUTLIER`] times its nearest neighbour's own, and at most
+    /// `ceiling` ([`SPARSEST`] times the cloud's median spacing; infinite
+    /// for none).
+    Local { multiple: f64, ceiling: f64 },
 }
 
 /// Default multiple for [`Hole::Local`].
@@ -59,6 +60,18 @@ pub const LOCAL_HOLE: f64 = 5.0;
 /// triangles (at 3: 362; at 8: 17); a density step keeps its bridging
 /// triangles, as their corners' spacings differ by the step's square root.
 pub const OUTLIER: f64 = 4.0;
+
+/// Deviation: no corner's spacing counts for more than this many times the
+/// cloud's median spacing (`super::scale`), so no triangle wider than
+/// [`LOCAL_HOLE`] times that is selected. Paper 4's hole radius is global;
+/// ours follows the local spacing up to this ceiling. A few samples on the
+/// 10M noisy dragon's filaments lie 30 to 38 spacings from any other, beside
+/// neighbours as sparse (the [`OUTLIER`] cap does not reach them), and their
+/// triangles, over a hundred spacings wide, made tiles doubt deeper than any
+/// margin a 512 MiB plan holds. Points above 8 times the median spacing: 2
+/// of the 1M dragon's, 6 of the 10M's; a scan sparser than that somewhere
+/// (a density ratio above 64:1) gets boundaries there, or `--hole`.
+pub const SPARSEST: f64 = 8.0;
 
 /// Whether a triangle is in the first round's fans (for inheritance).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -190,11 +203,11 @@ impl Selector<'_> {
     fn delta(&self, t: [u32; 3], proven: &mut bool) -> f64 {
         match self.hole {
             Hole::Absolute(d) => d,
-            Hole::Local(k) => {
-                k * t
-                    .iter()
-                    .map(|&v| self.spacing(v, proven))
-                    .fold(0.0, f64::max)
+            Hole::Local { multiple, .. } => {
+                multiple
+                    * t.iter()
+                        .map(|&v| self.spacing(v, proven))
+                        .fold(0.0, f64::max)
             }
         }
     }
@@ -211,44 +224,58 @@ impl Selector<'_> {
         capped(
             self.nn[v as usize],
             (x != INFINITE).then(|| self.nn[x as usize]),
+            self.hole.ceiling(),
         )
     }
 }
 
+impl Hole {
+    /// The largest spacing a corner counts for (infinite for none).
+    pub fn ceiling(&self) -> f64 {
+        match self {
+            Hole::Absolute(_) => f64::INFINITY,
+            Hole::Local { ceiling, .. } => *ceiling,
+        }
+    }
+}
+
 /// A sample's spacing from its nearest-neighbour distance `nn` and its
-/// nearest neighbour's own (if it has a neighbour), capped at [`OUTLIER`].
-fn capped(nn: f64, neighbours: Option<f64>) -> f64 {
-    neighbours.map_or(nn, |x| nn.min(OUTLIER * x))
+/// nearest neighbour's own (if it has a neighbour): at most [`OUTLIER`]
+/// times the neighbour's, and at most `ceiling`.
+fn capped(nn: f64, neighbours: Option<f64>, ceiling: f64) -> f64 {
+    neighbours.map_or(nn, |x| nn.min(OUTLIER * x)).min(ceiling)
 }
 
 /// Per vertex, an upper bound on its spacing ([`Hole::Local`]) in the whole
-/// cloud. The tile's nearest-neighbour distance is one (the cloud's
-/// neighbours are only nearer, and the cap only lowers it); where the
-/// region can show the points not loaded, the bound is tighter: the
+/// cloud. A vertex whose nearest distance is proven (`nn_proven`) has the
+/// cloud's nearest neighbour, whose distance in the tile bounds its own.
+/// Otherwise the region shows the points not loaded when it can: the
 /// cloud's nearest distance, and the nearest neighbour's distance to the
-/// nearest other point seen. Without the cap's bound, a stray sample whose
-/// nearest neighbour lay outside its tile kept a hole radius of 185
-/// spacings and doubt ran 140 spacings into the tile.
-/// A vertex whose nearest distance is proven (`nn_proven`) is not asked
-/// again: the region already showed its ball holds no point beyond.
+/// nearest other point seen. When it cannot, the tile's nearest distance
+/// is the bound, uncapped: the cloud's nearest neighbour may be a point
+/// not seen, whose own spacing is unknown. Without the cap's bound, a
+/// stray sample whose nearest neighbour lay outside its tile kept a hole
+/// radius of 185 spacings and doubt ran 140 spacings into the tile.
 pub fn spacing_bounds(
     points: &[DVec3],
     near: &[u32],
     nn: &[f64],
     nn_proven: &[bool],
     region: &Region,
+    ceiling: f64,
 ) -> Vec<f64> {
     (0..points.len())
         .map(|v| {
             let x = near[v];
             let tile = (x != INFINITE).then(|| nn[x as usize]);
-            let beyond = (!nn_proven[v]).then(|| region.nearest_beyond(points[v], nn[v]));
-            beyond
-                .flatten()
-                .map_or(capped(nn[v], tile), |(d, y)| match y {
-                    Some(y) => capped(d, Some(y)),
-                    None => capped(d, tile),
-                })
+            if nn_proven[v] {
+                return capped(nn[v], tile, ceiling);
+            }
+            match region.nearest_beyond(points[v], nn[v]) {
+                None => capped(nn[v], None, ceiling),
+                Some((d, None)) => capped(d, tile, ceiling),
+                Some((d, Some(y))) => capped(d, Some(y), ceiling),
+            }
         })
         .collect()
 }

@@ -21,6 +21,7 @@ pub(crate) mod pieces;
 pub(crate) mod predicates;
 pub mod reconstruct;
 pub(crate) mod rim;
+pub(crate) mod scale;
 pub(crate) mod select;
 pub(crate) mod triangulation;
 pub(crate) mod umbrella;

@@ -10,8 +10,9 @@
 //! Memory: the seam edges waiting for their twin (about the tiles' borders),
 //! one union-find entry per tile component; the triangles wait on disk.
 
-use super::fan::{Hole, LOCAL_HOLE, OUTLIER};
+use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile};
+use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
 use crate::mesh::{MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
@@ -150,10 +151,6 @@ pub fn reconstruct_delaunay(
     progress: &dyn Progress,
 ) -> Result<DelaunayReport, DelaunayReconError> {
     params.validate()?;
-    let hole = match params.hole {
-        Some(h) => Hole::Absolute(h),
-        None => Hole::Local(LOCAL_HOLE),
-    };
     if store.len() > i32::MAX as u64 {
         return Err(DelaunayReconError::TooManyPoints {
             points: store.len(),
@@ -163,6 +160,16 @@ pub fn reconstruct_delaunay(
     // a result (ARCHITECTURE.md).
     let spacing = crate::store::spacing::ensure_spacing(store)?;
     let store = &*store;
+    let hole = match params.hole {
+        Some(h) => Hole::Absolute(h),
+        None => {
+            let median = median_spacing(store, spacing, opts, progress)?;
+            Hole::Local {
+                multiple: LOCAL_HOLE,
+                ceiling: median.map_or(f64::INFINITY, |m| SPARSEST * m),
+            }
+        }
+    };
     let kernel = DelaunayKernel {
         hole,
         initial_margin: MARGIN_SPACINGS * spacing,
@@ -176,9 +183,9 @@ pub fn reconstruct_delaunay(
     report.run = run;
     report.hole = match hole {
         Hole::Absolute(h) => format!("{h:.4e}"),
-        Hole::Local(k) => {
-            format!("{k} x the largest spacing of a triangle's corners (nearest-neighbour distance, at most {OUTLIER} x the neighbour's)")
-        }
+        Hole::Local { multiple, ceiling } => format!(
+            "{multiple} x the largest spacing of a triangle's corners (nearest-neighbour distance, at most {OUTLIER} x the neighbour's and at most {ceiling:.4e}, {SPARSEST} x the median spacing)"
+        ),
     };
     Ok(report)
 }

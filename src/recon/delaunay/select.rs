@@ -90,7 +90,7 @@ pub fn select(
     let spacing_bound = if region.is_everything() {
         Vec::new()
     } else {
-        spacing_bounds(d.points(), &near, &nn, &nn_proven, &region)
+        spacing_bounds(d.points(), &near, &nn, &nn_proven, &region, hole.ceiling())
     };
     let sel = Selector {
         d: &d,
@@ -139,7 +139,7 @@ pub fn select(
         &kept,
         match hole {
             Hole::Absolute(h) => Some(h),
-            Hole::Local(_) => None,
+            Hole::Local { .. } => None,
         },
     );
     report.patches = patches.added.len() as u64;

@@ -12,7 +12,16 @@ use crate::synth::{generate, mean_spacing_hint, Shape};
 
 /// Reconstructs `n` points of `shape` (noise as a share of the spacing).
 pub(crate) fn rebuild(shape: &Shape, n: usize, noise: f64, seed: u64) -> (QualityReport, u64) {
-    rebuild_with(shape, n, noise, seed, Hole::Local(LOCAL_HOLE))
+    rebuild_with(
+        shape,
+        n,
+        noise,
+        seed,
+        Hole::Local {
+            multiple: LOCAL_HOLE,
+            ceiling: f64::INFINITY,
+        },
+    )
 }
 
 fn rebuild_with(
