@@ -74,6 +74,18 @@ fn whole_and_tiled(
         triangle_set(&whole) == triangle_set(&tiled),
         "tiled triangles differ"
     );
+    // The seams join what the tiles cut: the same components, counted
+    // right, and as orientable (where a non-orientable component's
+    // winding turns depends on where the tiles cut it, so the count of
+    // inconsistent edges may differ).
+    let (qw, qt) = (quality(&whole), quality(&tiled));
+    assert_eq!(
+        (wr.components, tr.components),
+        (qw.components, qt.components)
+    );
+    assert_eq!(qw.components, qt.components);
+    assert_eq!(wr.non_orientable, tr.non_orientable);
+    assert_eq!(qw.orientable, qt.orientable);
     ((whole, wr), (tiled, tr))
 }
 
