@@ -91,23 +91,27 @@ impl LogHistogram {
     /// The value below which a fraction `q` of the values lie (bin upper
     /// edge: at most 1.1 % high).
     pub fn quantile(&self, q: f64) -> f64 {
-        self.ranked((q.clamp(0.0, 1.0) * self.count() as f64).ceil() as u64)
+        let target = (q.clamp(0.0, 1.0) * self.count() as f64).ceil() as u64;
+        self.ranked(target)
+            .map_or(self.max, |edge| edge.min(self.max))
     }
 
-    /// The `target`-th smallest value, counting from 1 (bin upper edge, as
-    /// [`LogHistogram::quantile`]).
-    pub fn ranked(&self, target: u64) -> f64 {
+    /// The upper edge of the bin holding the `target`-th smallest value,
+    /// counting from 1 (0 for a zero): read off the bins alone, so two
+    /// histograms whose bins agree up to it agree on it, whatever their
+    /// larger values. `None` when it lies above the bins' range.
+    pub fn ranked(&self, target: u64) -> Option<f64> {
         let mut seen = self.zeros;
         if seen >= target {
-            return 0.0;
+            return Some(0.0);
         }
         for (i, c) in self.bins.iter().enumerate() {
             seen += c;
             if seen >= target {
-                return self.upper_edge(i).min(self.max);
+                return Some(self.upper_edge(i));
             }
         }
-        self.max
+        None
     }
 
     /// Largest value not above `limit`, and how many values exceed it.

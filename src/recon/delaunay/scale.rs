@@ -109,12 +109,14 @@ pub fn median_spacing(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<Option<f64>, PipelineError> {
-    // The bins must not depend on the tiling: the input bounds fix them.
+    // The bins must not depend on the tiling: the input's bounds and count
+    // fix them, about a surface's spacing (the bins reach 24 octaves
+    // either way).
     let extent = store.relative_bounds().extent().max_element();
     let mut kernel = ScaleKernel {
         margin: 4.0 * estimate,
         every: (store.len() / SAMPLE).max(1),
-        scale: if extent > 0.0 { extent } else { 1.0 },
+        scale: bin_scale(extent, store.len()),
     };
     let mut attempt = 0;
     loop {
@@ -139,12 +141,25 @@ pub fn median_spacing(
     }
 }
 
+/// The histogram's scale for a cloud of `n` points spanning `extent`.
+fn bin_scale(extent: f64, n: u64) -> f64 {
+    if extent > 0.0 {
+        extent / (n.max(1) as f64).sqrt()
+    } else {
+        1.0
+    }
+}
+
 /// The median of the known distances and `unknown` more that exceed them
-/// all (`None` when the median is one of the unknown ones).
+/// all, as the upper edge of its bin (`None` when the median is one of the
+/// unknown ones). The edge, not the largest value below it: a tiling that
+/// knows more of the larger distances must find the same median.
 fn median_with_unknowns(known: &LogHistogram, unknown: u64) -> Option<f64> {
     let total = known.count() + unknown;
     let rank = total.div_ceil(2);
-    (rank >= 1 && rank <= known.count()).then(|| known.ranked(rank))
+    (rank >= 1 && rank <= known.count())
+        .then(|| known.ranked(rank))
+        .flatten()
 }
 
 #[cfg(test)]
@@ -157,7 +172,7 @@ mod tests {
     /// The sample's median over the whole cloud at once: every sampled
     /// point's nearest distance among all points (`Blocks` is checked
     /// against brute force in its own tests).
-    fn untiled(pts: &[glam::DVec3], scale: f64) -> f64 {
+    fn untiled(pts: &[glam::DVec3], scale: f64) -> Option<f64> {
         let every = (pts.len() as u64 / SAMPLE).max(1);
         let blocks = Blocks::new(pts);
         let mut h = LogHistogram::new(scale);
@@ -198,7 +213,7 @@ mod tests {
                 let got = median_spacing(&store, estimate, RunOptions::new(threads), &NoProgress)
                     .unwrap()
                     .unwrap();
-                let want = untiled(&rel, extent);
+                let want = untiled(&rel, bin_scale(extent, store.len())).unwrap();
                 assert_eq!(
                     got.to_bits(),
                     want.to_bits(),
@@ -212,8 +227,9 @@ mod tests {
     fn a_median_among_the_unknown_is_none() {
         let mut h = LogHistogram::new(1.0);
         [1.0, 2.0, 3.0].iter().for_each(|&v| h.add(v));
-        assert_eq!(median_with_unknowns(&h, 0), Some(h.ranked(2)));
-        assert_eq!(median_with_unknowns(&h, 3), Some(h.ranked(3)));
+        assert_eq!(median_with_unknowns(&h, 0), h.ranked(2));
+        assert_eq!(median_with_unknowns(&h, 3), h.ranked(3));
+        assert!(h.ranked(2).unwrap() >= 2.0 && h.ranked(2).unwrap() < 2.03);
         assert_eq!(median_with_unknowns(&h, 4), None);
         assert_eq!(median_with_unknowns(&LogHistogram::new(1.0), 0), None);
     }
