@@ -257,6 +257,16 @@ impl MemoryPlan {
         Ok(cost.in_flight(self.budget.threads).min(fit))
     }
 
+    /// How many tiles of `largest` core points, margins as planned, the
+    /// plan's free memory holds at once: the shares a tile whose margin
+    /// outgrows the plan may take. Tiles forced smaller than the budget
+    /// allows (`--tile-points`) leave room for more than the tiles in
+    /// flight, and a reload may use it.
+    pub(crate) fn tile_shares(&self, cost: &KernelCost, largest: u64) -> usize {
+        let free = self.budget.bytes.saturating_sub(BASE_BYTES + self.reserved);
+        (free / self.tile_bytes(cost, largest).max(1)) as usize
+    }
+
     /// Bytes one tile in flight may use: the largest tile's core points
     /// with the margin allowed for, at the kernel's bytes per point.
     pub(crate) fn tile_bytes(&self, cost: &KernelCost, largest: u64) -> u64 {
@@ -350,6 +360,22 @@ mod tests {
         assert!(plan
             .tiles_in_flight(&normals(), plan.tile_points * 4)
             .is_err());
+    }
+
+    /// The shares a reload may take are the budget's room for tiles: as
+    /// many as the tiles in flight for tiles of the planned size, more for
+    /// tiles forced smaller, and never more bytes than the room.
+    #[test]
+    fn smaller_tiles_leave_more_shares() {
+        let budget = MemoryBudget::new(256 << 20, 2);
+        let plan = MemoryPlan::new(budget, 100_000_000, &normals()).unwrap();
+        let planned = plan.tile_shares(&normals(), plan.tile_points);
+        assert_eq!(planned, 3);
+        let tenth = plan.tile_points / 10;
+        let shares = plan.tile_shares(&normals(), tenth);
+        assert!(shares >= 25, "{shares}");
+        let room = budget.bytes - BASE_BYTES - plan.reserved;
+        assert!(shares as u64 * plan.tile_bytes(&normals(), tenth) <= room);
     }
 
     #[test]

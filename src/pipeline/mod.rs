@@ -50,7 +50,7 @@ pub enum PipelineError {
         needed: f64,
     },
     /// A tile's margin grew past what the memory promise can hold.
-    #[error("tile {tile}: its margin {margin:.3e} loads {points} points, {times} times the memory the plan gives a tile and more than all tiles in flight together; a larger --mem makes tiles larger and their margins a smaller share")]
+    #[error("tile {tile}: its margin {margin:.3e} loads {points} points, {times} times the memory the plan gives a tile, more than the budget holds for tiles; a larger --mem gives it room (and larger tiles, whose margins are a smaller share, unless --tile-points fixes their size)")]
     OverBudget {
         /// 0-based index of the tile.
         tile: usize,

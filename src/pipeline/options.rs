@@ -16,6 +16,9 @@ pub struct RunOptions {
     /// Bytes the plan gives each tile in flight (`None`: no plan), for
     /// kernels whose margins outgrow it (`TileKernel::bytes_per_loaded_point`).
     pub tile_bytes: Option<u64>,
+    /// How many `tile_bytes` the plan holds for tiles at once (at least
+    /// `in_flight`): a tile whose margin outgrows one takes several.
+    pub shares: usize,
 }
 
 impl RunOptions {
@@ -27,6 +30,7 @@ impl RunOptions {
             in_flight: threads + 1,
             budget: None,
             tile_bytes: None,
+            shares: threads + 1,
         }
     }
 
@@ -38,9 +42,11 @@ impl RunOptions {
         largest: u64,
     ) -> Result<Self, BudgetError> {
         let opts = RunOptions::new(cost.workers(plan.budget.threads)).within(plan.budget);
+        let in_flight = plan.tiles_in_flight(cost, largest)?;
         Ok(RunOptions {
-            in_flight: plan.tiles_in_flight(cost, largest)?,
+            in_flight,
             tile_bytes: Some(plan.tile_bytes(cost, largest)),
+            shares: plan.tile_shares(cost, largest).max(in_flight),
             ..opts
         })
     }

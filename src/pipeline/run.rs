@@ -66,7 +66,7 @@ pub fn run_tiles<K: TileKernel>(
     let (res_tx, res_rx) = channel::unbounded::<TileOutcome<K::Output>>();
     let cancel = AtomicBool::new(false);
     let retries = AtomicUsize::new(0);
-    let shares = opts.tile_bytes.map(|b| Shares::new(b, opts.in_flight));
+    let shares = opts.tile_bytes.map(|b| Shares::new(b, opts.shares));
     let shares = shares.as_ref();
     progress.begin(&stage, tiles.len() as u64);
     let mut stats = RunStats {

@@ -1,6 +1,8 @@
-//! Memory shares of the tiles in flight: the plan gives each tile in
-//! flight one share, the bytes of its largest tile with the planned margin
-//! (ARCHITECTURE.md, "Memory model"). A kernel whose margin grows on
+//! Memory shares of the tiles in flight: the plan's memory for tiles, cut
+//! into shares of the bytes of its largest tile with the planned margin
+//! (ARCHITECTURE.md, "Memory model"); each tile in flight takes one, and
+//! tiles forced smaller than the budget allows leave more shares than
+//! tiles in flight (`RunOptions::shares`). A kernel whose margin grows on
 //! reload (the Delaunay surface's doubt) can load several times that; it
 //! then waits until it can take as many shares as it needs, so the tiles
 //! running at once never hold more than the plan. A tile that needs more
