@@ -7,9 +7,10 @@
 //! the spool is replayed into the mesh writer; a component whose parities
 //! contradict each other is non-orientable (a Moebius band) and is counted.
 //!
-//! Memory: the seam edges waiting for their twin (about the tiles' borders)
-//! and the surface's boundary edges (they never meet one), one union-find
-//! entry per tile component; the triangles wait on disk.
+//! Memory: the seam edges waiting for their twin (about the tiles' borders;
+//! a tile sends only edges whose twin another tile owns, so each meets
+//! it), one union-find entry per tile component; the triangles wait on
+//! disk.
 
 use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile};

@@ -7,7 +7,7 @@
 //!
 //! The walk starts each component at its triangle of smallest corners and
 //! visits neighbours in sorted order, so the result depends only on the
-//! triangle set.
+//! triangle set (and, in [`wind_beside`], the triangles beside it).
 
 use std::collections::VecDeque;
 
@@ -23,7 +23,16 @@ pub struct WindReport {
 
 /// Winds `tris` (rewritten in place; any corner order on entry).
 pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
-    let mut across = neighbours(tris);
+    wind_beside(tris, &[])
+}
+
+/// Winds `tris` as part of a larger surface that also holds `beside`: an
+/// edge is crossed only when it has exactly two triangles in both lists
+/// together, both in `tris`. A tile winds the triangles it owns this way,
+/// with its other triangles beside them, so an edge a third triangle makes
+/// non-manifold is crossed neither here nor untiled.
+pub fn wind_beside(tris: &mut [[u32; 3]], beside: &[[u32; 3]]) -> WindReport {
+    let mut across = neighbours(tris, beside);
     let mut seen = vec![false; tris.len()];
     let mut order: Vec<u32> = (0..tris.len() as u32).collect();
     order.sort_unstable_by_key(|&t| {
@@ -80,11 +89,12 @@ pub fn wind(tris: &mut [[u32; 3]]) -> WindReport {
 const NONE: u32 = u32::MAX;
 
 /// Per triangle, the triangle across the edge opposite each corner, when
-/// the edge has exactly two: one sort of all sides (a binary search per
-/// side of the walk was 2 % of the Delaunay run).
-fn neighbours(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
-    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(tris.len() * 3);
-    for (t, c) in tris.iter().enumerate() {
+/// the edge has exactly two, both of `tris` (`beside` only counts): one
+/// sort of all sides (a binary search per side of the walk was 2 % of the
+/// Delaunay run).
+fn neighbours(tris: &[[u32; 3]], beside: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity((tris.len() + beside.len()) * 3);
+    for (t, c) in tris.iter().chain(beside).enumerate() {
         for k in 0..3 {
             let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
             keyed.push((
@@ -96,7 +106,11 @@ fn neighbours(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
     keyed.sort_unstable();
     let mut across = vec![[NONE; 3]; tris.len()];
     for run in keyed.chunk_by(|x, y| x.0 == y.0) {
+        let ours = |side: u32| ((side / 3) as usize) < tris.len();
         if let [(_, s), (_, t)] = run {
+            if !(ours(*s) && ours(*t)) {
+                continue;
+            }
             across[(s / 3) as usize][(s % 3) as usize] = t / 3;
             across[(t / 3) as usize][(t % 3) as usize] = s / 3;
         }
@@ -106,4 +120,24 @@ fn neighbours(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
 
 fn has_directed(c: [u32; 3], a: u32, b: u32) -> bool {
     (0..3).any(|k| c[k] == a && c[(k + 1) % 3] == b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles on an edge are wound across it, unless a third
+    /// triangle beside them shares it (a non-manifold edge).
+    #[test]
+    fn an_edge_a_triangle_beside_shares_is_not_crossed() {
+        let mut pair = [[0, 1, 2], [0, 1, 3]];
+        let alone = wind(&mut pair);
+        assert_eq!(alone.components, 1);
+        assert_ne!(has_directed(pair[0], 0, 1), has_directed(pair[1], 0, 1));
+        let mut pair = [[0, 1, 2], [0, 1, 3]];
+        let beside = wind_beside(&mut pair, &[[0, 1, 4]]);
+        assert_eq!(beside.components, 2);
+        let elsewhere = wind_beside(&mut pair, &[[2, 3, 4]]);
+        assert_eq!(elsewhere.components, 1);
+    }
 }
