@@ -242,15 +242,13 @@ impl MemoryPlan {
         cost: &KernelCost,
         largest: u64,
     ) -> Result<usize, BudgetError> {
-        let reserved = self.reserved;
-        let per_tile = self.tile_bytes(cost, largest);
-        let free = self.budget.bytes.saturating_sub(BASE_BYTES + reserved);
-        let fit = (free / per_tile.max(1)) as usize;
+        let fit = self.tile_shares(cost, largest);
         if fit == 0 {
+            let per_tile = self.tile_bytes(cost, largest);
             return Err(BudgetError::TooSmall {
                 budget: self.budget.bytes,
                 points: self.points,
-                needed: (BASE_BYTES + reserved + per_tile).div_ceil(1 << 20) << 20,
+                needed: (BASE_BYTES + self.reserved + per_tile).div_ceil(1 << 20) << 20,
                 reason: "the store's largest tile: the store was tiled for a larger budget",
             });
         }

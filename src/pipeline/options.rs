@@ -25,12 +25,13 @@ impl RunOptions {
     /// `threads` workers, no memory promise.
     pub fn new(threads: usize) -> Self {
         let threads = threads.max(1);
+        let in_flight = threads + 1;
         RunOptions {
             threads,
-            in_flight: threads + 1,
+            in_flight,
             budget: None,
             tile_bytes: None,
-            shares: threads + 1,
+            shares: in_flight,
         }
     }
 
