@@ -149,6 +149,18 @@ fn plane_with_a_hole_has_two_boundary_loops() {
         );
         assert!(v.truncate().length() >= 0.4 - limit, "{v} inside the hole");
     }
+    // The mesh ends where the samples do (`recon::implicit::cover`): at
+    // most one cube past the square's edge and into the hole, where paper
+    // 1's bound alone let it run `rho + delta` past them.
+    let cell = r.report.cell;
+    let past_edge = r
+        .mesh
+        .vertices
+        .iter()
+        .map(|v| v.x.abs().max(v.y.abs()) - 1.0);
+    assert!(past_edge.fold(f64::MIN, f64::max) <= cell);
+    let into_hole = r.mesh.vertices.iter().map(|v| 0.4 - v.truncate().length());
+    assert!(into_hole.fold(f64::MIN, f64::max) <= 3f64.sqrt() * cell);
 }
 
 #[test]
@@ -169,24 +181,44 @@ fn terrain_has_one_outer_boundary_and_nothing_beyond_the_data() {
         let d = nbr[0].dist2.sqrt();
         assert!(d <= limit, "vertex {v} is {d} from the data, limit {limit}");
     }
+    // Nor past the scan's edge by more than a cube's diagonal: paper 1's
+    // bound alone let it run `rho + delta` (3.5 cubes here) past it.
+    let reach = 3f64.sqrt() * r.report.cell;
+    let edge = |q: &DVec3| q.x.abs().max(q.y.abs());
+    let data = scan.points.iter().map(edge).fold(0.0, f64::max);
+    for v in &r.mesh.vertices {
+        assert!(edge(v) <= data + reach, "vertex {v} beyond the scan's edge");
+    }
 }
 
 #[test]
 fn tiled_mesh_equals_untiled_mesh() {
-    tiled_equals_untiled(false);
+    tiled_equals_untiled(&torus_scan(), false);
+}
+
+/// Open boundaries: whether samples surround a projection asks 48 of them,
+/// the farthest reach of the open mode.
+#[test]
+fn tiled_mesh_with_boundaries_equals_untiled_mesh() {
+    let scan = generate(&Shape::hole_plane(2.0, 0.4), 40_000, 0.001, 5).expect("generate");
+    tiled_equals_untiled(&scan.points, false);
 }
 
 /// `--closed` averages many planes a corner, reaching farther than the
 /// open mode's nearest plane: the margins must still hold.
 #[test]
 fn tiled_closed_mesh_equals_untiled_mesh() {
-    tiled_equals_untiled(true);
+    tiled_equals_untiled(&torus_scan(), true);
 }
 
-fn tiled_equals_untiled(closed: bool) {
+fn torus_scan() -> Vec<DVec3> {
     let scan = generate(&Shape::torus(1.0, 0.3), 40_000, 0.001, 12).expect("generate");
-    let whole = reconstruct(&scan.points, u64::MAX, 2, closed);
-    let tiled = reconstruct(&scan.points, 500, 2, closed);
+    scan.points
+}
+
+fn tiled_equals_untiled(points: &[DVec3], closed: bool) {
+    let whole = reconstruct(points, u64::MAX, 2, closed);
+    let tiled = reconstruct(points, 500, 2, closed);
     assert!(
         tiled.report.run.tiles >= 64,
         "{} tiles",

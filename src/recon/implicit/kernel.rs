@@ -1,7 +1,7 @@
 //! The implicit-reconstruction tile kernel (paper 1 sections 2.5-2.6): a
 //! sparse narrow band of lattice cubes near the samples, the signed distance
 //! at their corners, marching cubes on the cubes whose corners are all
-//! defined. A tile owns the cubes whose min corner lies in its core box
+//! defined and not all beyond the data's edge ([`Known::Beyond`]). A tile owns the cubes whose min corner lies in its core box
 //! (half-open), so every cube is polygonised by exactly one tile.
 //!
 //! Deviation: the paper marches the whole bounding box; the band here is the
@@ -14,7 +14,7 @@ use super::dilate::dilate;
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
-use super::sdf::{Corner, Field, Samples};
+use super::sdf::{Corner, Field, Known, Samples};
 use crate::geom::Aabb;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::grid::GridIndex;
@@ -198,7 +198,7 @@ impl ImplicitKernel {
             .collect();
         let short = evaluated.iter().fold(0.0f64, |m, c| match c {
             Corner::Short(s) => m.max(*s),
-            Corner::Value(_) => m,
+            Corner::Value(_) | Corner::Beyond(_) => m,
         });
         if short > 0.0 {
             return Err(short_by(tile, short));
@@ -206,7 +206,14 @@ impl ImplicitKernel {
         Ok(corners
             .into_iter()
             .zip(evaluated)
-            .map(|(c, v)| (c, if let Corner::Value(f) = v { f } else { None }))
+            .map(|(c, v)| {
+                let known = match v {
+                    Corner::Value(f) => f.map(Known::OnData),
+                    Corner::Beyond(f) => Some(Known::Beyond(f)),
+                    Corner::Short(_) => None,
+                };
+                (c, known)
+            })
             .collect())
     }
 }
@@ -242,20 +249,25 @@ impl<'a> CornerCursor<'a> {
     }
 
     /// The values at the corners of `cube` (no earlier than the last cube
-    /// asked), in [`CORNERS`] order, or `None` if one is undefined.
+    /// asked), in [`CORNERS`] order, or `None` if one is undefined or none
+    /// projects onto the data.
     fn values(&mut self, cube: [i64; 3]) -> Result<Option<[f64; 8]>, KernelError> {
         let keys = corner_keys(cube)?;
         let mut values = [0.0; 8];
+        let mut on_data = false;
         for ((at, key), value) in self.at.iter_mut().zip(keys).zip(values.iter_mut()) {
             while self.corners.get(*at).is_some_and(|e| e.0 < key) {
                 *at += 1;
             }
             match self.corners.get(*at) {
-                Some(&(k, Some(f))) if k == key => *value = f,
+                Some(&(k, Some(known))) if k == key => {
+                    on_data |= matches!(known, Known::OnData(_));
+                    *value = known.value();
+                }
                 _ => return Ok(None),
             }
         }
-        Ok(Some(values))
+        Ok(on_data.then_some(values))
     }
 }
 

@@ -14,12 +14,18 @@
 //!
 //! Open boundaries appear as in paper 1: the value is defined only where
 //! its projection `p - f(p) n(p)` (`n` the weighted normal) lies within
-//! `rho + delta` of a sample.
+//! `rho + delta` of a sample. Deviation: a corner so defined is also asked
+//! whether samples surround its projection ([`super::cover`]); one they do
+//! not is [`Corner::Beyond`], which closes a cube only beside a corner on
+//! the data, so the mesh ends where the samples do rather than `rho +
+//! delta` past them (test terrain: Hausdorff 7.4 -> 3.8 spacings, mean
+//! 0.077 -> 0.043).
 //!
 //! Every sum runs in (distance, id) order over an exact kNN, so the value is
 //! the same in every tiling; a kNN that reaches beyond the loaded region
 //! reports the shortfall instead.
 
+use super::cover::{covered, surrounds};
 use super::sdf::{complete, projection_on_data, Corner, Samples};
 use crate::spatial::{KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
@@ -152,13 +158,23 @@ pub fn mls_corner(
         return Corner::Value(Some(v.f));
     }
     let z = p - v.f * v.normal.normalize_or_zero();
-    // The nearest sample's distance to the projection usually settles it.
-    if s.points[v.nearest as usize].distance(z) < limit {
+    // Paper 1's bound first: the nearest sample's distance to the
+    // projection usually settles it, and the field's own neighbours,
+    // still in `nbr`, usually surround the projection.
+    let near = s.points[v.nearest as usize].distance(z) < limit;
+    if near && surrounds(s.points, z, v.normal, nbr) {
         return Corner::Value(Some(v.f));
     }
-    match projection_on_data(s, tile, z, v.nearest, limit, nbr) {
+    if !near {
+        match projection_on_data(s, tile, z, v.nearest, limit, nbr) {
+            Ok(true) => {}
+            Ok(false) => return Corner::Value(None),
+            Err(short) => return Corner::Short(short),
+        }
+    }
+    match covered(s, tile, z, v.normal, nbr) {
         Ok(true) => Corner::Value(Some(v.f)),
-        Ok(false) => Corner::Value(None),
+        Ok(false) => Corner::Beyond(v.f),
         Err(short) => Corner::Short(short),
     }
 }

@@ -6,6 +6,7 @@
 //! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
 //! (one cube, and a reference driver over a set of cubes).
 
+pub(crate) mod cover;
 pub(crate) mod dilate;
 pub(crate) mod hole_guard;
 pub mod holes;

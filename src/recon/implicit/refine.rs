@@ -19,15 +19,15 @@
 use super::lattice::{edge_from_key, Lattice};
 use super::mls::{edge_root, mls_value};
 use super::polygonize::CubeVertex;
-use super::sdf::Samples;
+use super::sdf::{Known, Samples};
 use crate::pipeline::KernelError;
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
 
-/// A corner's key (sorted like its triple) and its value, as the kernel
-/// keeps them.
-pub type CornerValue = (u64, Option<f64>);
+/// A corner's key (sorted like its triple) and its value (`None` where
+/// undefined), as the kernel keeps them.
+pub type CornerValue = (u64, Option<Known>);
 
 /// Moves every vertex of `triangles` to the root on its edge. `corners`
 /// are sorted by key and hold both ends of every cut edge. `Err(short)`
@@ -148,6 +148,7 @@ fn value(corners: &[CornerValue], c: [i64; 3]) -> Result<f64, KernelError> {
     match corners.binary_search_by_key(&key, |e| e.0) {
         Ok(i) => corners[i]
             .1
+            .map(Known::value)
             .ok_or_else(|| KernelError::Failed("a cut edge has an undefined corner".into())),
         Err(_) => Err(KernelError::Failed(
             "a cut edge's corner was not evaluated".into(),

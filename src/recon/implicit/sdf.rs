@@ -27,7 +27,27 @@ pub(crate) struct Samples<'a> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Corner {
     Value(Option<f64>),
+    /// A value whose projection lies off the data (open surfaces): the
+    /// corner closes a cube only beside a corner on the data, so the mesh
+    /// ends inside the cubes the data's edge crosses.
+    Beyond(f64),
     Short(f64),
+}
+
+/// A corner's value as the kernel keeps it, and whether its projection
+/// lies on the data ([`Corner::Beyond`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Known {
+    OnData(f64),
+    Beyond(f64),
+}
+
+impl Known {
+    pub(crate) fn value(self) -> f64 {
+        match self {
+            Known::OnData(f) | Known::Beyond(f) => f,
+        }
+    }
 }
 
 /// Nearest samples whose tangent planes are tried, nearest first, before a
