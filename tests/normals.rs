@@ -155,6 +155,17 @@ fn a_small_island_is_flagged_unoriented() {
         .collect();
     assert_eq!(unoriented, (30_000..30_020).collect::<Vec<_>>());
     assert_eq!(out.report.unoriented, 20);
+    // Still signed by its own root rule (its top point faces +z), so an
+    // open reconstruction can use it: outward, as the big sphere's.
+    let top = (30_000..30_020)
+        .max_by(|&a, &b| pts[a].z.total_cmp(&pts[b].z))
+        .expect("island");
+    assert!(out.normals[top].z > 0.0);
+    let centre = DVec3::new(50.0, 0.0, 0.0);
+    let outward = (30_000..30_020)
+        .filter(|&i| out.normals[i].as_dvec3().dot(pts[i] - centre) > 0.0)
+        .count();
+    assert!(outward >= 18, "{outward} of 20 outward");
 }
 
 /// A band, a sphere and seven 20-point islands: the island rule orients

@@ -163,6 +163,34 @@ fn plane_with_a_hole_has_two_boundary_loops() {
     assert!(into_hole.fold(f64::MIN, f64::max) <= 3f64.sqrt() * cell);
 }
 
+/// A ball of 50 samples above a plane of 60,000: a component of the
+/// orientation graph under a thousandth of the points, which the paper's
+/// island rule leaves unoriented. An open reconstruction still closes its
+/// surface (the island is signed by its own top point); a closed one
+/// leaves it out, as it drops small pieces.
+#[test]
+fn an_island_is_kept_open_and_left_out_closed() {
+    let mut points = generate(&Shape::hole_plane(2.0, 0.4), 60_000, 0.0, 4)
+        .expect("generate")
+        .points;
+    let centre = DVec3::new(0.6, 0.6, 0.5);
+    let ball = generate(&Shape::sphere(centre, 0.03), 50, 0.0, 6).expect("generate");
+    points.extend(ball.points);
+    let on_ball = |r: &Recon| {
+        let near = |v: &&DVec3| (v.distance(centre) - 0.03).abs() < 0.01;
+        r.mesh.vertices.iter().filter(near).count()
+    };
+    let open = reconstruct(&points, u64::MAX, 2, false);
+    assert!(
+        on_ball(&open) >= 20,
+        "{} vertices on the ball",
+        on_ball(&open)
+    );
+    assert_eq!(open.quality.components, 2, "{}", open.quality);
+    let closed = reconstruct(&points, u64::MAX, 2, true);
+    assert_eq!(on_ball(&closed), 0);
+}
+
 #[test]
 fn terrain_has_one_outer_boundary_and_nothing_beyond_the_data() {
     // Buildings on uneven ground, denser near the middle: roof edges and

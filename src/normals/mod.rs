@@ -38,7 +38,8 @@ pub(crate) const EXPORT_BYTES_PER_POINT: u64 = 48;
 /// a tangent plane: the normal is zero, never made up.
 pub const FLAG_DEGENERATE: u8 = 1;
 /// The point has a normal but the orientation could not reach it (an island
-/// dropped by the paper's 1/1000 rule).
+/// dropped by the paper's 1/1000 rule). With the spanning tree, the normal
+/// is still signed by its island's own top point, not tied to the rest.
 pub const FLAG_UNORIENTED: u8 = 2;
 
 /// How normals get their sign.

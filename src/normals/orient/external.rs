@@ -12,7 +12,7 @@
 //! census of sizes, and, when the cut falls inside one size class, which
 //! members of that class come first (by smallest top id).
 
-use super::{rewrite_signs, tile_components, Component, OrientStats};
+use super::{rewrite_signs, tile_components, Component, OrientStats, Sign};
 use crate::normals::labels::ForestLabels;
 use crate::normals::runs::EdgeRuns;
 use crate::normals::NormalsError;
@@ -57,7 +57,10 @@ pub fn orient_external(
                     Some(k) => census.spanning[k],
                     None => find(&local, label),
                 };
-                cut.orients(label, &c).then_some(parity ^ c.sign)
+                match cut.orients(label, &c) {
+                    true => Sign::Reached(parity ^ c.sign),
+                    false => Sign::Island(parity ^ c.sign),
+                }
             });
             progress.advance(t.count);
             n

@@ -7,7 +7,11 @@
 //!    ties to the smallest id) gets `n . (0,0,1) > 0`.
 //! 3. The paper's island rule: if fewer than 1/1000 of the points lie outside
 //!    the component of the highest point, they stay unoriented (flagged).
-//!    Deviation: otherwise the paper restarts Prim's walk from the unreached
+//!    Deviation: each such island is still signed by its own root rule
+//!    ([`Sign::Island`]), flagged all the same, so a consumer that can take
+//!    an island apart may: the 1M dragon's 102-point filament is one, and
+//!    an open reconstruction that dropped it missed the filament by 33
+//!    spacings. Deviation: otherwise the paper restarts Prim's walk from the unreached
 //!    point nearest the reached set, carrying the sign across that gap; here
 //!    each further component (largest first) is rooted at its own highest
 //!    point, until the points left are fewer than 1/1000. Finding the nearest
@@ -83,8 +87,8 @@ pub fn orient_by_forest(
     let comps = uf.into_components();
     let facts = components(store, &comps, normals, flags, progress)?;
     progress.end();
-    let oriented = island_rule(&facts);
-    let unoriented = apply(store, &comps, &oriented, normals, flags, progress)?;
+    let reached = island_rule(&facts);
+    let unoriented = apply(store, &comps, &facts, &reached, normals, flags, progress)?;
     Ok(OrientStats {
         components: facts.iter().filter(|c| c.size > 0).count(),
         unoriented,
@@ -161,8 +165,9 @@ fn tile_components(
     Ok(part)
 }
 
-/// Sign of each component to orient (by label), by the island rule.
-fn island_rule(facts: &[Component]) -> Vec<Option<bool>> {
+/// Whether the island rule orients each component (by label) with the
+/// rest; the others are islands, signed by their own root rule.
+fn island_rule(facts: &[Component]) -> Vec<bool> {
     let total: u64 = facts.iter().map(|c| u64::from(c.size)).sum();
     let mut order: Vec<u32> = (0..facts.len() as u32)
         .filter(|&l| facts[l as usize].size > 0)
@@ -181,17 +186,16 @@ fn island_rule(facts: &[Component]) -> Vec<Option<bool>> {
         let c = &facts[l as usize];
         (Some(l) != first, Reverse(c.size), c.top_id)
     });
-    let mut oriented = vec![None; facts.len()];
+    let mut reached = vec![false; facts.len()];
     let mut left = total;
     for (n, l) in order.into_iter().enumerate() {
         if n > 0 && left * 1000 < total {
             break;
         }
-        let c = &facts[l as usize];
-        oriented[l as usize] = Some(c.sign);
-        left -= u64::from(c.size);
+        reached[l as usize] = true;
+        left -= u64::from(facts[l as usize].size);
     }
-    oriented
+    reached
 }
 
 /// Flips or flags every tile's normals (tiles in parallel: disjoint ranges);
@@ -199,7 +203,8 @@ fn island_rule(facts: &[Component]) -> Vec<Option<bool>> {
 fn apply(
     store: &PointStore,
     comps: &Components,
-    oriented: &[Option<bool>],
+    facts: &[Component],
+    reached: &[bool],
     normals: &Column,
     flags: &Column,
     progress: &dyn Progress,
@@ -211,7 +216,11 @@ fn apply(
         .map(|t| {
             let n = rewrite_signs(t, normals, flags, |i| {
                 let (label, parity) = comps.get(i as u32);
-                oriented[label as usize].map(|sign| parity ^ sign)
+                let c = &facts[label as usize];
+                match reached[label as usize] {
+                    true => Sign::Reached(parity ^ c.sign),
+                    false => Sign::Island(parity ^ c.sign),
+                }
             });
             progress.advance(t.count);
             n
@@ -221,15 +230,35 @@ fn apply(
     Ok(counts.iter().sum())
 }
 
-/// Rewrites tile `t`'s normals and flags in the store: `flip(store index)`
-/// says whether a non-degenerate point's normal flips (`None`: flag it
-/// unoriented). Returns the number flagged. Shared by every orientation
+/// What an orientation says of one point's normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Sign {
+    /// The orientation reached it: flip the normal (`true`) or keep it.
+    Reached(bool),
+    /// An island the paper's rule leaves out: flagged unoriented (its sign
+    /// is not tied to the rest), but signed by its own root rule, so a
+    /// consumer that takes islands apart (an open reconstruction) can.
+    Island(bool),
+    /// Not reached: flagged unoriented, the normal's sign left as it was.
+    Unreached,
+}
+
+impl From<Option<bool>> for Sign {
+    fn from(flip: Option<bool>) -> Self {
+        flip.map_or(Sign::Unreached, Sign::Reached)
+    }
+}
+
+/// Rewrites tile `t`'s normals and flags in the store: `sign(store index)`
+/// says whether a non-degenerate point's normal flips and whether it is
+/// flagged unoriented ([`Sign`]; `Option<bool>` reads `None` as
+/// unreached). Returns the number flagged. Shared by every orientation
 /// mode's final pass.
-pub(super) fn rewrite_signs(
+pub(super) fn rewrite_signs<S: Into<Sign>>(
     t: &TileEntry,
     normals: &Column,
     flags: &Column,
-    mut flip: impl FnMut(u64) -> Option<bool>,
+    mut sign: impl FnMut(u64) -> S,
 ) -> Result<u64, NormalsError> {
     let (mut nrm, mut flg) = (Vec::new(), Vec::new());
     normals.read_f32(t.start, t.count, &mut nrm)?;
@@ -239,13 +268,17 @@ pub(super) fn rewrite_signs(
         if flg[i] & FLAG_DEGENERATE != 0 {
             continue;
         }
-        match flip(t.start + i as u64) {
-            Some(true) => nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v),
-            Some(false) => {}
-            None => {
-                flg[i] |= FLAG_UNORIENTED;
-                unoriented += 1;
-            }
+        let (flip, reached) = match sign(t.start + i as u64).into() {
+            Sign::Reached(flip) => (flip, true),
+            Sign::Island(flip) => (flip, false),
+            Sign::Unreached => (false, false),
+        };
+        if flip {
+            nrm[3 * i..3 * i + 3].iter_mut().for_each(|v| *v = -*v);
+        }
+        if !reached {
+            flg[i] |= FLAG_UNORIENTED;
+            unoriented += 1;
         }
     }
     normals.write_f32(t.start, &nrm)?;
