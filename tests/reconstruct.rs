@@ -341,3 +341,26 @@ fn closed_dragon_patches_do_not_cross_the_mesh() {
     assert_eq!(s.pairs, 0, "{s}");
     assert_eq!(r.quality.non_manifold_edges, 0, "{}", r.quality);
 }
+
+/// A small patch apart from the rest (30 samples, fewer than the 48 an
+/// edge corner asks about) meshes the same tiled and untiled.
+#[test]
+fn a_small_patch_apart_is_the_same_tiled() {
+    let mut points = generate(&Shape::hole_plane(2.0, 0.4), 6_000, 0.0, 9)
+        .expect("generate")
+        .points;
+    // A flat patch: its edge corners ask their 48 nearest samples.
+    let patch = generate(&Shape::hole_plane(0.2, 0.01), 30, 0.0, 10).expect("generate");
+    points.extend(patch.points.iter().map(|p| *p + DVec3::new(3.0, 0.0, 0.0)));
+    let whole = reconstruct(&points, u64::MAX, 2, false);
+    let tiled = reconstruct(&points, 200, 2, false);
+    assert!(
+        tiled.report.run.tiles >= 16,
+        "{} tiles",
+        tiled.report.run.tiles
+    );
+    assert!(
+        canonical(&whole.mesh) == canonical(&tiled.mesh),
+        "tiled mesh differs"
+    );
+}

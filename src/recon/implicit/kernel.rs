@@ -233,10 +233,15 @@ impl ImplicitKernel {
     }
 }
 
-/// The reload request for a tile whose loaded region fell short by `short`.
+/// The reload request for a tile whose loaded region fell short by `short`
+/// (> 0), by the one margin rule: an unbounded shortfall (fewer samples
+/// loaded than a neighbourhood asks for) doubles the margin.
 fn short_by(tile: &TilePoints, short: f64) -> KernelError {
-    KernelError::MarginTooSmall {
-        needed: (tile.margin + short) * 1.0001 + 1e-12,
+    match KernelError::unless_short(short, tile.margin) {
+        Err(reload) => reload,
+        Ok(()) => KernelError::MarginTooSmall {
+            needed: tile.margin,
+        },
     }
 }
 
