@@ -165,11 +165,11 @@ fn plane_with_a_hole_has_two_boundary_loops() {
 
 /// A ball of 50 samples above a plane of 60,000: a component of the
 /// orientation graph under a thousandth of the points, which the paper's
-/// island rule leaves unoriented. An open reconstruction still closes its
+/// island rule leaves unoriented. The reconstruction still closes its
 /// surface (the island is signed by its own top point); a closed one
-/// leaves it out, as it drops small pieces.
+/// drops it as a small piece.
 #[test]
-fn an_island_is_kept_open_and_left_out_closed() {
+fn an_island_is_kept_open_and_dropped_closed() {
     let mut points = generate(&Shape::hole_plane(2.0, 0.4), 60_000, 0.0, 4)
         .expect("generate")
         .points;

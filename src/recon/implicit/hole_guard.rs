@@ -9,7 +9,9 @@
 //! loop that winds over the band's edge in 3-D; its least-area patch over
 //! the loop's own vertices cut through the mesh next to it (1M dragon: 6
 //! self-intersecting pairs, all at patches; the demo's dragon: 176).
-//! The pairs found were all within two rings of the loop.
+//! The pairs found were all within two rings of the loop; once long loops
+//! got more runs ([`tries_for`]), the patch of a filament's 85-edge rim
+//! crossed triangles three rings away (12 pairs), so four rings are kept.
 //!
 //! Left out: a ring that runs into another tile is kept only as far as the
 //! tile that owns the hole's vertex holds it.
@@ -20,10 +22,27 @@ use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 
 /// Rings of mesh triangles around a boundary vertex kept for the check.
-pub const RINGS: usize = 2;
+pub const RINGS: usize = 4;
 
-/// Runs of the least-area programme per hole before it is left open.
-pub const MAX_TRIES: usize = 12;
+/// Runs of the least-area programme a hole of `len` vertices gets before it
+/// is left open: a fixed budget of the programme's work ([`PATCH_WORK`]
+/// triangle evaluations, the programme costing `len^3 / 6` a run), at least
+/// [`MIN_TRIES`] and at most [`MAX_TRIES`].
+///
+/// Why a budget rather than a count: each run bans the triangles that
+/// crossed the mesh, and a hole winding round a thin part needs many
+/// (1M dragon, `--closed`: 23, 69 and 96 runs for loops of 44, 85 and 46
+/// vertices, one of them the rim of a filament no patch covered in 12);
+/// a long loop's run costs as much as hundreds of short ones.
+pub fn tries_for(len: usize) -> usize {
+    let run = (len as f64).powi(3) / 6.0;
+    ((PATCH_WORK / run.max(1.0)) as usize).clamp(MIN_TRIES, MAX_TRIES)
+}
+
+/// See [`tries_for`]: 256 runs of a 100-vertex loop.
+const PATCH_WORK: f64 = 256.0 * 1e6 / 6.0;
+const MIN_TRIES: usize = 12;
+const MAX_TRIES: usize = 256;
 
 /// A triangle by output indices, with its corners.
 pub type Placed = ([u32; 3], [DVec3; 3]);

@@ -24,7 +24,7 @@
 //! vertices is incomplete (a later tile may name it, `super::owners`) or
 //! both are on the boundary.
 
-use super::hole_guard::{placed, NearHoles, MAX_TRIES};
+use super::hole_guard::{placed, tries_for, NearHoles};
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 
@@ -275,14 +275,14 @@ fn start_at_least_position(mut lp: Vec<LoopVertex>) -> Vec<LoopVertex> {
 
 /// The least-area patch of `lp` ([`least_area_triangles`]) whose triangles
 /// cross neither the mesh `near` holds nor each other: a crossing triangle
-/// is banned and the programme run again, [`MAX_TRIES`] times at most.
+/// is banned and the programme run again, [`tries_for`] times at most.
 fn patch_clear_of_mesh(
     lp: &[LoopVertex],
     is_edge: impl Fn(u32, u32) -> bool,
     near: &NearHoles,
 ) -> Option<Vec<super::hole_guard::Placed>> {
     let mut banned = HashSet::new();
-    for _ in 0..MAX_TRIES {
+    for _ in 0..tries_for(lp.len()) {
         let tris = least_area_triangles(lp, &is_edge, &banned)?;
         let patch: Vec<_> = tris.iter().map(|&t| placed(lp, t)).collect();
         let crossing = near.crossing(&patch);

@@ -46,16 +46,16 @@ pub struct ImplicitKernel {
     pub spacing: f64,
     /// Islands take part: samples flagged unoriented because the paper's
     /// island rule left their component apart, signed by its own top point
-    /// (`normals::orient::Sign::Island`).
+    /// (`normals::orient::Sign::Island`); paper 1's own field leaves them
+    /// out, as the paper does.
     ///
-    /// Why for open surfaces: the rule leaves out components under a
-    /// thousandth of the points, so the larger the scan, the larger the
-    /// parts it drops (the 1M dragon's 102-point filament, whose loss set
-    /// every Hausdorff distance: open mode 33.4 -> 11.3 spacings, mean
-    /// 0.054 -> 0.050). A closed surface leaves them out, as it drops
-    /// pieces under a hundredth of the largest: a filament thinner than a
-    /// cube closes into a fin whose rim no patch covers (the 1M dragon
-    /// kept one 85-edge hole there).
+    /// Why: the rule leaves out components under a thousandth of the
+    /// points, so the larger the scan, the larger the parts it drops (the
+    /// 1M dragon's 102-point filament, whose loss set every Hausdorff
+    /// distance: open 33.4 -> 11.3 spacings, `--closed` 33.4 -> 20.3). With
+    /// `--closed`, a stray island closes into a small piece the piece
+    /// filter drops; the filament's rim needed 69 patch runs
+    /// (`hole_guard::tries_for`).
     pub islands: bool,
 }
 
