@@ -10,8 +10,8 @@
 //!    Deviation: each such island is still signed by its own root rule
 //!    ([`Sign::Island`]), flagged all the same, so a consumer that can take
 //!    an island apart may: the 1M dragon's 102-point filament is one, and
-//!    an open reconstruction that dropped it missed the filament by 33
-//!    spacings. Deviation: otherwise the paper restarts Prim's walk from the unreached
+//!    a reconstruction that dropped it missed the filament by 33 spacings.
+//!    Deviation: otherwise the paper restarts Prim's walk from the unreached
 //!    point nearest the reached set, carrying the sign across that gap; here
 //!    each further component (largest first) is rooted at its own highest
 //!    point, until the points left are fewer than 1/1000. Finding the nearest

@@ -1,8 +1,9 @@
 //! The implicit-reconstruction tile kernel (paper 1 sections 2.5-2.6): a
 //! sparse narrow band of lattice cubes near the samples, the signed distance
 //! at their corners, marching cubes on the cubes whose corners are all
-//! defined and not all beyond the data's edge ([`Known::Beyond`]). A tile owns the cubes whose min corner lies in its core box
-//! (half-open), so every cube is polygonised by exactly one tile.
+//! defined and not all beyond the data's edge ([`Known::Beyond`]). A tile
+//! owns the cubes whose min corner lies in its core box (half-open), so
+//! every cube is polygonised by exactly one tile.
 //!
 //! Deviation: the paper marches the whole bounding box; the band here is the
 //! cubes within one cube of a sample's cube. A surface piece farther from
