@@ -1,6 +1,7 @@
-//! Plain geometric value types shared by every layer: the scalar, boxes.
+//! Plain geometric value types shared by every layer: the scalar, boxes,
+//! and the pseudo-angle that orders planar directions without `atan2`.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 /// The scalar of all geometry that must be exact or reproducible.
 pub type Real = f64;
@@ -64,5 +65,23 @@ impl Aabb {
 
     pub(crate) fn intersects(&self, o: &Aabb) -> bool {
         self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
+    }
+}
+
+/// Pseudo-angle of direction `d` in `[0, 4)`: 0 along +x, 1 along +y, 2
+/// along -x, 3 along -y, monotone in the angle in between. The zero vector
+/// gets 0.
+pub fn pseudo_angle(d: DVec2) -> f64 {
+    let s = d.x.abs() + d.y.abs();
+    if s == 0.0 {
+        return 0.0;
+    }
+    let p = d.y / s;
+    if d.x < 0.0 {
+        2.0 - p
+    } else if d.y < 0.0 {
+        4.0 + p
+    } else {
+        p
     }
 }

@@ -19,6 +19,7 @@
 //! is a few spacings past the edge.
 
 use super::sdf::{complete, Samples};
+use crate::geom::pseudo_angle;
 use crate::spatial::{KnnIndex, Neighbour};
 use crate::tiling::TilePoints;
 use glam::{DVec2, DVec3};
@@ -48,12 +49,13 @@ pub fn surrounds(points: &[DVec3], z: DVec3, n: DVec3, nbr: &[Neighbour]) -> boo
         return false;
     }
     let (u, v) = n.any_orthonormal_pair();
-    let mut dirs = [(0.0, DVec2::ZERO); COVER_NEIGHBOURS];
-    let mut len = 0;
-    let mut quadrants = 0u8;
-    for m in nbr.iter().take(COVER_NEIGHBOURS) {
+    let nbr = &nbr[..nbr.len().min(COVER_NEIGHBOURS)];
+    let dir = |m: &Neighbour| {
         let d = points[m.index as usize] - z;
-        let w = DVec2::new(d.dot(u), d.dot(v));
+        DVec2::new(d.dot(u), d.dot(v))
+    };
+    let mut quadrants = 0u8;
+    for w in nbr.iter().map(dir) {
         if w == DVec2::ZERO {
             return true;
         }
@@ -63,41 +65,23 @@ pub fn surrounds(points: &[DVec3], z: DVec3, n: DVec3, nbr: &[Neighbour]) -> boo
                 return true;
             }
         }
-        dirs[len] = (0.0, w);
-        len += 1;
     }
     // Fewer than three directions leave a half-turn empty.
-    if len < 3 {
+    if nbr.len() < 3 {
         return false;
     }
-    let dirs = &mut dirs[..len];
-    for d in dirs.iter_mut() {
-        d.0 = pseudo_angle(d.1);
-    }
+    let mut dirs: Vec<(f64, DVec2)> = nbr.iter().map(dir).map(|w| (pseudo_angle(w), w)).collect();
     dirs.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     let within = dirs
         .windows(2)
         .all(|w| w[0].1.perp_dot(w[1].1) > 0.0 || same_way(w[0].1, w[1].1));
     // The step from the last round to the first: strictly less than a
     // half-turn (equal directions there mean they all point one way).
-    within && dirs[len - 1].1.perp_dot(dirs[0].1) > 0.0
+    within && dirs[dirs.len() - 1].1.perp_dot(dirs[0].1) > 0.0
 }
 
 fn same_way(a: DVec2, b: DVec2) -> bool {
     a.perp_dot(b) == 0.0 && a.dot(b) > 0.0
-}
-
-/// Pseudo-angle of a non-zero direction in `[0, 4)`, monotone in its angle
-/// from +x counter-clockwise.
-fn pseudo_angle(d: DVec2) -> f64 {
-    let p = d.y / (d.x.abs() + d.y.abs());
-    if d.x < 0.0 {
-        2.0 - p
-    } else if d.y < 0.0 {
-        4.0 + p
-    } else {
-        p
-    }
 }
 
 /// Whether `z` is covered, asking its [`COVER_NEIGHBOURS`] nearest samples;

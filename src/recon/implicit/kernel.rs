@@ -45,19 +45,6 @@ pub struct ImplicitKernel {
     pub field: Field,
     /// Mean nearest-neighbour distance of the samples (sizes the index).
     pub spacing: f64,
-    /// Islands take part: samples flagged unoriented because the paper's
-    /// island rule left their component apart, signed by its own top point
-    /// (`normals::orient::Sign::Island`); paper 1's own field leaves them
-    /// out, as the paper does.
-    ///
-    /// Why: the rule leaves out components under a thousandth of the
-    /// points, so the larger the scan, the larger the parts it drops (the
-    /// 1M dragon's 102-point filament, whose loss set every Hausdorff
-    /// distance: open 33.4 -> 11.3 spacings, `--closed` 33.4 -> 20.3). With
-    /// `--closed`, a stray island closes into a small piece the piece
-    /// filter drops; the filament's rim needed 69 patch runs
-    /// (`hole_guard::tries_for`).
-    pub islands: bool,
 }
 
 /// Edge of the signed distance's grid index, in lattice cubes. Its queries
@@ -127,7 +114,7 @@ impl TileKernel for ImplicitKernel {
             return Err(KernelError::MarginTooSmall { needed: band_reach });
         }
         let (points, normals, ids) =
-            usable_samples(tile, self.islands).map_err(KernelError::failed)?;
+            usable_samples(tile, self.takes_islands()).map_err(KernelError::failed)?;
         let index =
             GridIndex::with_cell(&points, &ids, self.index_cell()).map_err(KernelError::failed)?;
         let samples = Samples {
@@ -150,8 +137,9 @@ impl TileKernel for ImplicitKernel {
         if self.field == Field::Mls {
             let refined =
                 refine_vertices(&self.lattice, &samples, tile, &corners, &mut out.triangles)?;
+            // A shortfall asks for a reload by the one margin rule.
             if let Err(short) = refined {
-                return Err(short_by(tile, short));
+                KernelError::unless_short(short, tile.margin)?;
             }
         }
         Ok(out)
@@ -159,6 +147,22 @@ impl TileKernel for ImplicitKernel {
 }
 
 impl ImplicitKernel {
+    /// Whether islands take part: samples flagged unoriented because the
+    /// paper's island rule left their component apart, signed by its own
+    /// top point (`normals::orient::Sign::Island`). The MLS field takes
+    /// them; paper 1's own field leaves them out, as the paper does.
+    ///
+    /// Why: the rule leaves out components under a thousandth of the
+    /// points, so the larger the scan, the larger the parts it drops (the
+    /// 1M dragon's 102-point filament, whose loss set every Hausdorff
+    /// distance: open 33.4 -> 11.3 spacings, `--closed` 33.4 -> 20.3). With
+    /// `--closed`, a stray island closes into a small piece the piece
+    /// filter drops; the filament's rim needed 69 patch runs
+    /// (`hole_guard::tries_for`).
+    fn takes_islands(&self) -> bool {
+        self.field == Field::Mls
+    }
+
     /// Edge of the signed distance's grid index: [`SDF_GRID_CELLS`] cubes
     /// for paper 1's nearest-plane queries, [`MLS_GRID_SPACINGS`] spacings
     /// for the MLS field's [`super::mls::MLS_NEIGHBOURS`]-nearest ones
@@ -216,9 +220,7 @@ impl ImplicitKernel {
             Corner::Short(s) => m.max(*s),
             Corner::Value(_) | Corner::Beyond(_) => m,
         });
-        if short > 0.0 {
-            return Err(short_by(tile, short));
-        }
+        KernelError::unless_short(short, tile.margin)?;
         Ok(corners
             .into_iter()
             .zip(evaluated)
@@ -231,18 +233,6 @@ impl ImplicitKernel {
                 (c, known)
             })
             .collect())
-    }
-}
-
-/// The reload request for a tile whose loaded region fell short by `short`
-/// (> 0), by the one margin rule: an unbounded shortfall (fewer samples
-/// loaded than a neighbourhood asks for) doubles the margin.
-fn short_by(tile: &TilePoints, short: f64) -> KernelError {
-    match KernelError::unless_short(short, tile.margin) {
-        Err(reload) => reload,
-        Ok(()) => KernelError::MarginTooSmall {
-            needed: tile.margin,
-        },
     }
 }
 

@@ -208,7 +208,6 @@ pub fn reconstruct_implicit(
         band,
         field: params.field,
         spacing,
-        islands: params.field == Field::Mls,
     };
     let writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
     let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();

@@ -42,23 +42,7 @@ impl Frame {
     }
 }
 
-/// Pseudo-angle of direction `d` in `[0, 4)`: 0 along +x, 1 along +y, 2
-/// along -x, 3 along -y, monotone in the angle in between. The zero vector
-/// gets 0.
-pub fn pseudo_angle(d: DVec2) -> f64 {
-    let s = d.x.abs() + d.y.abs();
-    if s == 0.0 {
-        return 0.0;
-    }
-    let p = d.y / s;
-    if d.x < 0.0 {
-        2.0 - p
-    } else if d.y < 0.0 {
-        4.0 + p
-    } else {
-        p
-    }
-}
+pub use crate::geom::pseudo_angle;
 
 /// `b - a` measured counter-clockwise, in `[0, 4)`.
 pub fn ccw_from(a: f64, b: f64) -> f64 {
