@@ -167,10 +167,10 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;
     // A resumed run keeps normals it finished (its store outlives it).
-    let kept = s
-        .run
-        .as_ref()
-        .and_then(|r| r.stage::<NormalsReport>("normals"));
+    let kept = match &s.run {
+        Some(r) => r.stage::<NormalsReport>("normals")?,
+        None => None,
+    };
     let report = match kept {
         Some(report) if store.has_column(&NORMALS) => report,
         _ => {

@@ -53,7 +53,7 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     if !a.dir.is_dir() {
         bail!("{}: no such run directory", a.dir.display());
     }
-    let run = RunDir::new(&a.dir)?;
+    let run = RunDir::at(&a.dir)?;
     let Some(id) = run.identity()? else {
         bail!(
             "{}: not a run directory (start the run with --run-dir first)",

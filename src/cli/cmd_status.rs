@@ -17,7 +17,7 @@ pub struct StatusArgs {
 }
 
 pub fn run(a: StatusArgs) -> Result<()> {
-    let run = RunDir::new(&a.dir)?;
+    let run = RunDir::at(&a.dir)?;
     let Some(id) = run.identity()? else {
         bail!("{}: not a run directory", a.dir.display());
     };
@@ -59,8 +59,14 @@ pub fn run(a: StatusArgs) -> Result<()> {
     if let Some(last) = failures.last() {
         println!("  last failure: {last}");
     }
-    match log.iter().rev().find(|l| l.contains(" done run")) {
-        Some(_) => println!("output: written"),
+    match run.done()? {
+        Some(done) if fingerprint(&done.output.path).is_ok_and(|f| f == done.output) => {
+            println!("output: written ({})", done.output.path.display())
+        }
+        Some(done) => println!(
+            "output: {} was written, but is gone or changed since",
+            done.output.path.display()
+        ),
         None => println!("output: not written yet"),
     }
     Ok(())

@@ -186,7 +186,7 @@ impl CommonArgs {
             run: self
                 .run_dir
                 .as_deref()
-                .map(rundir::RunDir::new)
+                .map(rundir::RunDir::at)
                 .transpose()?,
             job: self.job.clone(),
             policy: if self.skip_invalid {
@@ -279,6 +279,11 @@ impl Settings {
         } else {
             run.store_dir()
         };
+        // The run's store appears whole (renamed into place) or not at all:
+        // one there without its manifest was damaged, not left half-built.
+        if store_dir.exists() && !is_store(&store_dir) {
+            run.check_store()?;
+        }
         if !is_store(&store_dir) {
             if tile_job {
                 bail!(

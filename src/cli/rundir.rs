@@ -7,6 +7,13 @@
 //! again resumes; a changed input or command line is refused, or started
 //! afresh with `--restart`. `run-job` does a part of a run (`--emit`
 //! writes the scripts that call it), `status` reads DIR.
+//!
+//! A run directory is recognised by the marker file scanmesh writes when
+//! it takes an empty directory over; `--restart` removes only the entries
+//! scanmesh makes there ([`MADE`]), and a directory without the marker is
+//! refused, never emptied: `--run-dir .` once deleted the input beside it.
+//! The small files (`run.json`, `done.json`, `stages/`) are sealed with a
+//! CRC-32 of their content, so a damaged one is refused, not misread.
 
 use super::Command;
 use anyhow::{anyhow, bail, Context, Result};
@@ -20,6 +27,25 @@ use std::path::{Path, PathBuf};
 const RUN_FILE: &str = "run.json";
 const DONE_FILE: &str = "done.json";
 const LOG_FILE: &str = "log.txt";
+const MARKER_FILE: &str = ".scanmesh-run";
+const MARKER_TEXT: &str =
+    "scanmesh run directory (scanmesh --restart removes only what it made here)\n";
+const STORE_DIR: &str = "store";
+const TILES_DIR: &str = "tiles";
+const STAGES_DIR: &str = "stages";
+
+/// Every entry scanmesh makes in a run directory: all that `--restart`
+/// may remove (with the temporaries of their atomic writes).
+const MADE: [&str; 8] = [
+    RUN_FILE,
+    DONE_FILE,
+    LOG_FILE,
+    STORE_DIR,
+    "store.partial",
+    TILES_DIR,
+    STAGES_DIR,
+    MARKER_FILE,
+];
 
 /// Options that vary between the processes of one run without changing
 /// its result, with whether each takes a value: left out of the
@@ -66,7 +92,9 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
         .ok_or_else(|| {
             anyhow!("--run-dir is for normals, neighbors, reconstruct, curvature and features")
         })?;
-    let run = RunDir::new(&dir)?;
+    // Before the directory is made: a missing input leaves nothing behind.
+    std::fs::metadata(&input).with_context(|| format!("reading {}", input.display()))?;
+    let run = RunDir::create(&dir)?;
     let job = common.job.clone();
     if job == Job::Whole {
         let id = RunIdentity {
@@ -85,7 +113,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
             );
             return Ok(());
         }
-        if let Some(summary) = run.finished(&output) {
+        if let Some(summary) = run.finished(&output, &input)? {
             super::report::summary(format!(
                 "nothing to do: {} is complete ({})",
                 output.display(),
@@ -154,12 +182,14 @@ pub struct Fingerprint {
     pub sampled_hash: String,
 }
 
-/// What a finished run wrote.
+/// What a finished run wrote: the output as it was then (a file replaced
+/// or touched since is written again, not taken as done).
 #[derive(Clone, Debug, Serialize, Deserialize)]
-struct Done {
-    output: PathBuf,
-    output_bytes: u64,
-    summary: Option<String>,
+pub struct Done {
+    /// The output's size, time and sampled hash when the run finished.
+    pub output: Fingerprint,
+    /// The run's summary line.
+    pub summary: Option<String>,
 }
 
 /// The parts of `args` that decide a run's result.
@@ -226,39 +256,53 @@ pub struct RunDir {
 }
 
 impl RunDir {
-    pub fn new(dir: &Path) -> Result<Self> {
+    /// The run directory `dir`, made when it does not exist yet.
+    pub fn create(dir: &Path) -> Result<Self> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("--run-dir {}: cannot create it", dir.display()))?;
+        Self::at(dir)
+    }
+
+    /// The run directory `dir`, as it is (nothing is made).
+    pub fn at(dir: &Path) -> Result<Self> {
         Ok(RunDir {
             dir: std::path::absolute(dir)?,
         })
     }
 
     pub fn store_dir(&self) -> PathBuf {
-        self.dir.join("store")
+        self.dir.join(STORE_DIR)
     }
 
     pub fn tiles_dir(&self) -> PathBuf {
-        self.dir.join("tiles")
+        self.dir.join(TILES_DIR)
+    }
+
+    /// Whether scanmesh made this directory a run directory.
+    pub fn is_marked(&self) -> bool {
+        std::fs::read(self.dir.join(MARKER_FILE)).is_ok_and(|b| b == MARKER_TEXT.as_bytes())
     }
 
     /// Starts or resumes the run `id` here: a directory of another run
     /// (other command line, changed input, other version) is refused, or
-    /// emptied first with `restart`.
+    /// cleared of what scanmesh made first with `restart`; a directory
+    /// scanmesh did not make is refused unless it is empty.
     pub fn begin(&self, id: &RunIdentity, restart: bool) -> Result<()> {
-        if restart {
+        if !self.is_marked() {
+            if let Some(entry) = std::fs::read_dir(&self.dir)?.flatten().next() {
+                bail!(
+                    "--run-dir {}: not empty and not a scanmesh run directory (it holds {} and no {MARKER_FILE}); scanmesh deletes only what it made, so give an empty or new directory",
+                    self.dir.display(),
+                    entry.file_name().to_string_lossy()
+                );
+            }
+            write_atomic(&self.dir.join(MARKER_FILE), MARKER_TEXT.as_bytes())?;
+        } else if restart {
             self.clear()?;
+            write_atomic(&self.dir.join(MARKER_FILE), MARKER_TEXT.as_bytes())?;
         }
         match self.identity()? {
-            None => {
-                if std::fs::read_dir(&self.dir)?.next().is_some() {
-                    bail!(
-                        "--run-dir {}: not empty and not a scanmesh run directory (give an empty or new directory)",
-                        self.dir.display()
-                    );
-                }
-                write_atomic(&self.dir.join(RUN_FILE), &serde_json::to_vec_pretty(id)?)
-            }
+            None => write_atomic(&self.dir.join(RUN_FILE), &seal(id)?),
             Some(old) if old == *id => Ok(()),
             Some(old) => bail!(
                 "--run-dir {}: {}; to start this run afresh there, add --restart",
@@ -270,55 +314,84 @@ impl RunDir {
 
     /// The identity recorded in this directory.
     pub fn identity(&self) -> Result<Option<RunIdentity>> {
-        let path = self.dir.join(RUN_FILE);
-        match std::fs::read(&path) {
-            Ok(bytes) => Ok(Some(serde_json::from_slice(&bytes).with_context(|| {
-                format!("{}: not a scanmesh run file", path.display())
-            })?)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
-        }
+        read_sealed(&self.dir.join(RUN_FILE))
     }
 
+    /// Removes what scanmesh made here, and nothing else.
     fn clear(&self) -> Result<()> {
         for entry in std::fs::read_dir(&self.dir)? {
-            let path = entry?.path();
-            if path.is_dir() {
-                std::fs::remove_dir_all(&path)
-            } else {
-                std::fs::remove_file(&path)
+            let entry = entry?;
+            if !made_by_scanmesh(&entry.file_name().to_string_lossy()) {
+                continue;
             }
-            .with_context(|| format!("--restart: removing {}", path.display()))?;
+            let path = entry.path();
+            let removed = match entry.file_type()?.is_dir() {
+                true => std::fs::remove_dir_all(&path),
+                false => std::fs::remove_file(&path),
+            };
+            removed.with_context(|| format!("--restart: removing {}", path.display()))?;
         }
         Ok(())
     }
 
-    /// The summary of a finished run whose output is still there, whole.
-    pub fn finished(&self, output: &Path) -> Option<String> {
-        let done: Done =
-            serde_json::from_slice(&std::fs::read(self.dir.join(DONE_FILE)).ok()?).ok()?;
-        let bytes = std::fs::metadata(output).ok()?.len();
-        let same = std::path::absolute(output).ok()? == done.output && bytes == done.output_bytes;
-        same.then(|| done.summary.unwrap_or_default())
+    /// The summary of a finished run whose output is still there as it was
+    /// written and whose store is whole; `None` when the run must go on
+    /// (the output is gone or was changed since). A run directory damaged
+    /// behind the run's back (its store without a manifest, a column that
+    /// fails its checksum) is an error, not "nothing to do".
+    pub fn finished(&self, output: &Path, input: &Path) -> Result<Option<String>> {
+        let Some(done) = read_sealed::<Done>(&self.dir.join(DONE_FILE))? else {
+            return Ok(None);
+        };
+        if !scanmesh::store::is_store(input) {
+            self.check_store()?;
+        }
+        let now = fingerprint(output).ok();
+        Ok((now.as_ref() == Some(&done.output)).then(|| done.summary.unwrap_or_default()))
+    }
+
+    /// Checks the run's store, when it has one, opening it as a run would:
+    /// the manifest, the column sizes and every checksum.
+    pub fn check_store(&self) -> Result<()> {
+        let store = self.store_dir();
+        if !store.exists() {
+            return Ok(());
+        }
+        if !scanmesh::store::is_store(&store) {
+            bail!(
+                "{}: the run's store has no {} (damaged or removed): start the run afresh with --restart",
+                store.display(),
+                scanmesh::store::manifest::MANIFEST_FILE
+            );
+        }
+        scanmesh::store::PointStore::open_shared(&store)
+            .map(drop)
+            .with_context(|| {
+                format!(
+                    "{}: start the run afresh with --restart",
+                    self.dir.display()
+                )
+            })
     }
 
     /// Records that the run wrote `output`.
     pub fn finish(&self, output: &Path, summary: Option<String>) -> Result<()> {
         let done = Done {
-            output: std::path::absolute(output)?,
-            output_bytes: std::fs::metadata(output)?.len(),
+            output: fingerprint(output)?,
             summary,
         };
-        write_atomic(
-            &self.dir.join(DONE_FILE),
-            &serde_json::to_vec_pretty(&done)?,
-        )
+        write_atomic(&self.dir.join(DONE_FILE), &seal(&done)?)
     }
 
-    /// The saved result of the global stage `name`, if it finished.
-    pub fn stage<T: DeserializeOwned>(&self, name: &str) -> Option<T> {
-        let bytes = std::fs::read(self.stage_path(name)).ok()?;
-        serde_json::from_slice(&bytes).ok()
+    /// What the finished run recorded, if it finished.
+    pub fn done(&self) -> Result<Option<Done>> {
+        read_sealed(&self.dir.join(DONE_FILE))
+    }
+
+    /// The saved result of the global stage `name`, if it finished; a
+    /// damaged one is an error.
+    pub fn stage<T: Serialize + DeserializeOwned>(&self, name: &str) -> Result<Option<T>> {
+        read_sealed(&self.stage_path(name))
     }
 
     /// Saves the result of the global stage `name`: it is not redone.
@@ -327,11 +400,11 @@ impl RunDir {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir)?;
         }
-        write_atomic(&path, &serde_json::to_vec_pretty(value)?)
+        write_atomic(&path, &seal(value)?)
     }
 
     fn stage_path(&self, name: &str) -> PathBuf {
-        self.dir.join("stages").join(format!("{name}.json"))
+        self.dir.join(STAGES_DIR).join(format!("{name}.json"))
     }
 
     /// Appends a line to the run log (best effort: the log is for people).
@@ -352,6 +425,53 @@ impl RunDir {
         std::fs::read_to_string(self.dir.join(LOG_FILE))
             .map(|t| t.lines().map(str::to_string).collect())
             .unwrap_or_default()
+    }
+}
+
+/// Whether `name` is an entry scanmesh makes in a run directory (or the
+/// temporary of one, `.NAME.partial-PID`).
+fn made_by_scanmesh(name: &str) -> bool {
+    MADE.contains(&name)
+        || MADE.iter().any(|m| {
+            name.strip_prefix('.')
+                .and_then(|n| n.strip_prefix(m))
+                .is_some_and(|rest| rest.starts_with(".partial-"))
+        })
+}
+
+/// A small file's content and the CRC-32 of its canonical JSON.
+#[derive(Serialize, Deserialize)]
+struct Sealed<T> {
+    crc32: u32,
+    value: T,
+}
+
+/// `value` as sealed JSON.
+fn seal<T: Serialize>(value: &T) -> Result<Vec<u8>> {
+    let crc32 = crc32fast::hash(&serde_json::to_vec(value)?);
+    Ok(serde_json::to_vec_pretty(&Sealed { crc32, value })?)
+}
+
+/// The sealed value in `path`; `None` when there is no such file, an error
+/// naming the file when it is not whole.
+fn read_sealed<T: Serialize + DeserializeOwned>(path: &Path) -> Result<Option<T>> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    let damaged = || {
+        anyhow!(
+            "{}: damaged (not the file scanmesh wrote): start the run afresh with --restart",
+            path.display()
+        )
+    };
+    let sealed: Sealed<T> = serde_json::from_slice(&bytes).map_err(|_| damaged())?;
+    // Floats and maps serialise canonically, so the value's own JSON is
+    // the JSON that was sealed.
+    match crc32fast::hash(&serde_json::to_vec(&sealed.value)?) == sealed.crc32 {
+        true => Ok(Some(sealed.value)),
+        false => Err(damaged()),
     }
 }
 

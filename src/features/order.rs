@@ -8,21 +8,21 @@
 //! window in all). The same scheme as `store::reorder`, over opaque records.
 
 use crate::io::scratch::ScratchFile;
-use crate::io::IoError;
 use crate::store::{PointStore, StoreError, TileEntry};
-use std::io::Write;
 
 const SCRATCH_FILE: &str = ".features.order";
 
-/// Writes one record of `record` bytes per point of `store` to `out`, in
-/// input order. `fill(tile, ids, buf)` appends the records of a tile's
-/// points in store order (`ids` their input indices). `window` is the
-/// number of records held in memory at once.
+/// Hands one record of `record` bytes per point of `store` to `emit`, in
+/// input order, a window at a time: `emit(first, records)` gets the
+/// records of input ids `first..` (whole records). `fill(tile, ids, buf)`
+/// appends the records of a tile's points in store order (`ids` their
+/// input indices). `window` is the number of records held in memory at
+/// once.
 pub fn write_in_input_order(
     store: &PointStore,
     record: usize,
     window: u64,
-    out: &mut dyn Write,
+    mut emit: impl FnMut(u64, &[u8]) -> Result<(), StoreError>,
     mut fill: impl FnMut(&TileEntry, &[u64], &mut Vec<u8>) -> Result<(), StoreError>,
 ) -> Result<(), StoreError> {
     let n = store.len();
@@ -81,8 +81,7 @@ pub fn write_in_input_order(
             let slot = u32::from_le_bytes([r[0], r[1], r[2], r[3]]) as usize;
             placed[slot * record..(slot + 1) * record].copy_from_slice(&r[4..]);
         }
-        out.write_all(&placed)
-            .map_err(|e| StoreError::from(IoError::os(&path, e)))?;
+        emit(first, &placed)?;
     }
     Ok(())
 }

@@ -1,19 +1,21 @@
 //! Building a store from any point source in streaming passes whose memory
 //! does not grow with the number of points:
 //! 1. read: parse the input once, validate, accumulate the bounding box,
-//!    spill f64 points to a scratch file unless the input can be read again
-//!    as cheaply (`super::replay`);
+//!    keep the exact coordinates and the attributes in input order
+//!    (`super::ingest`), which the later passes read back;
 //! 2. histogram: count points per coarse grid cell;
 //! 3. plan: kd-split the histogram into tiles of at most the target size;
 //! 4. scatter: write each point into its tile's slot range, through small
 //!    per-tile buffers;
 //! 5. sort: order each tile along a Morton curve, count exact duplicates,
-//!    record block bounds.
+//!    record block bounds;
+//! 6. seal: checksum every column (`super::integrity`).
 
 use super::attributes::AttributeSink;
 use super::cells::CellCounts;
+use super::exact::{for_each_exact, Coordinates, ExactSink, EXACT_FILE};
+use super::ingest::first_pass;
 use super::manifest::{GridSpec, Manifest, STORE_VERSION};
-use super::replay::{first_pass, Replay};
 use super::tile_plan::{plan_tiles, CellCount, TilePlan};
 use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
@@ -24,9 +26,7 @@ use crate::progress::Progress;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-pub use super::replay::MAX_POINTS;
-
-const SPILL_FILE: &str = ".ingest.spill";
+pub use super::ingest::MAX_POINTS;
 
 /// How to lay out a new store: tile size and the memory of the ingest passes.
 #[derive(Clone, Debug)]
@@ -98,37 +98,55 @@ pub fn build_store(
 ) -> Result<PointStore, StoreError> {
     std::fs::create_dir_all(dir).map_err(|e| StoreError::os(dir, e))?;
     let source = reader.info().path.clone();
-    let spill_path = dir.join(SPILL_FILE);
-    let result = build_with_spill(reader, dir, &spill_path, opts, progress);
-    let _ = std::fs::remove_file(&spill_path);
-    let mut manifest = result?;
+    let mut manifest = build_columns(reader, dir, opts, progress)?;
     manifest.source = source.display().to_string();
+    seal(dir, &mut manifest)?;
     save_manifest(dir, &manifest)?;
-    PointStore::open(dir)
+    PointStore::open_fresh(dir)
 }
 
-fn build_with_spill(
+/// Checksums every column of a new store's `manifest`.
+fn seal(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
+    let mut columns = vec![
+        (XYZ_FILE.to_string(), 12),
+        (INDEX_FILE.to_string(), 8),
+        (BLOCKS_FILE.to_string(), 24),
+        (EXACT_FILE.to_string(), manifest.coordinates.item_bytes()),
+    ];
+    for a in &manifest.attributes {
+        columns.push((super::attributes::column_file(*a), a.item_bytes()));
+    }
+    for (name, bytes) in columns {
+        let sums = super::integrity::sums_in(dir, manifest, &name, bytes)?;
+        manifest.checksums.insert(name, sums);
+    }
+    Ok(())
+}
+
+fn build_columns(
     reader: &mut dyn PointReader,
     dir: &Path,
-    spill_path: &Path,
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Manifest, StoreError> {
     let attributes = reader.info().attributes;
+    let coordinates = Coordinates::for_input(reader.info().las_transform);
     let mut sink = AttributeSink::create(dir, attributes)?;
-    let (count, bounds, again) = first_pass(reader, spill_path, &mut sink, progress)?;
+    let mut exact = ExactSink::create(dir, coordinates)?;
+    let (count, bounds) = first_pass(reader, &mut exact, &mut sink, progress)?;
     sink.finish()?;
+    exact.finish()?;
     if count == 0 {
         return Err(StoreError::Empty {
             path: reader.info().path.clone(),
         });
     }
-    // Checked once the count is known, before the input is read again.
+    // Checked once the count is known, before the points are read again.
     let target = opts.tiles.points(count)?;
     let fine = grid_for(&bounds, count);
     let points = Points {
-        reader,
-        again: &again,
+        dir,
+        coordinates,
         count,
     };
     let (cells, grid) = histogram(&points, &fine, opts.histogram_cells, progress)?;
@@ -143,6 +161,7 @@ fn build_with_spill(
         skipped_invalid: reader.skipped(),
         duplicates,
         origin: origin.to_array(),
+        coordinates,
         bounds_min: bounds.min.to_array(),
         bounds_max: bounds.max.to_array(),
         spacing: None,
@@ -154,13 +173,15 @@ fn build_with_spill(
         source_has_normals: reader.info().has_normals,
         sampling: None,
         provenance: Default::default(),
+        checksums: Default::default(),
+        crc32: None,
     })
 }
 
-/// The input's points for the passes after the first.
+/// The input's points for the passes after the first: its exact column.
 struct Points<'a> {
-    reader: &'a dyn PointReader,
-    again: &'a Replay,
+    dir: &'a Path,
+    coordinates: Coordinates,
     count: u64,
 }
 
@@ -169,7 +190,8 @@ impl Points<'_> {
         &self,
         f: impl FnMut(u64, &[DVec3]) -> Result<(), StoreError>,
     ) -> Result<(), StoreError> {
-        self.again.for_each(self.reader, self.count, f)
+        let chunk = crate::io::DEFAULT_CHUNK as u64;
+        for_each_exact(self.dir, self.coordinates, self.count, chunk, f)
     }
 }
 

@@ -115,22 +115,26 @@ impl PointStore {
     }
 
     /// Creates (or resets) the column `spec`, zero-filled, and lists it in
-    /// the manifest without a provenance until [`Self::finish_column`].
+    /// the manifest without a provenance or checksums until
+    /// [`Self::finish_column`]. The manifest forgets the old column before
+    /// its file is reset, so a run killed in between leaves a column that
+    /// is recomputed, never one that fails its old checksums.
     pub fn create_column(&mut self, spec: &ColumnSpec) -> Result<Column, StoreError> {
-        let col = Column::create(&self.dir.join(spec.name), spec.bytes(), self.manifest.count)?;
         let was_known = self.manifest.provenance.remove(spec.name).is_some();
+        let was_sealed = self.manifest.checksums.remove(spec.name).is_some();
         let is_new = !self.has_column(spec);
         if is_new {
             self.manifest.columns.push(spec.name.to_string());
         }
-        if was_known || is_new {
+        if was_known || was_sealed || is_new {
             self.save_manifest()?;
         }
-        Ok(col)
+        Column::create(&self.dir.join(spec.name), spec.bytes(), self.manifest.count)
     }
 
     /// Records that `made_by` produced the column `spec` (once it is
-    /// written): later passes may reuse it when they would make the same.
+    /// written) with its checksums: later passes may reuse it when they
+    /// would make the same, and a later open checks it is unchanged.
     pub fn finish_column(
         &mut self,
         spec: &ColumnSpec,
@@ -138,6 +142,7 @@ impl PointStore {
         made_by: Provenance,
     ) -> Result<(), StoreError> {
         self.sync_column(column)?;
+        self.seal_column(spec.name, spec.bytes())?;
         self.manifest
             .provenance
             .insert(spec.name.to_string(), made_by);

@@ -1,8 +1,12 @@
 //! Writing a store's points (and normals, flags) in input order to any point
-//! format. Tiles are in spatial order, the output is in input order: the
-//! export fills windows of consecutive input indices, each by one pass over
-//! the tiles, so memory is one window plus one tile per thread whatever the
-//! store size.
+//! format. Coordinates and attributes are the input's own, exactly as read
+//! (`super::exact`), read from their input-order columns a window at a
+//! time; only the computed columns (normals, flags) are in tile order.
+//! Tiles are in spatial order, the output is in input order: the export
+//! fills windows of consecutive input indices, each by one pass over the
+//! tiles, so memory is one window plus one tile per thread whatever the
+//! store size. A LAS output of a LAS input keeps the input's scale and
+//! offset, so it holds the input's integers.
 //!
 //! A window is split into one id range per thread; each thread passes over
 //! the tiles and places the points of its range. The placement is a random
@@ -45,6 +49,9 @@ pub fn export_points(
         },
     };
     let mut spec = spec.clone();
+    if spec.las_transform.is_none() {
+        spec.las_transform = store.coordinates().las_transform();
+    }
     if spec.bounds.is_none() {
         spec.bounds = Some(crate::geom::Aabb::new(
             DVec3::from_array(store.manifest.bounds_min),
@@ -56,7 +63,7 @@ pub fn export_points(
     // Two windows of half the size: one filled while the other is written.
     let window = (attribute_window(window_points, spec.attributes) / 2).clamp(1, n.max(1));
     progress.begin("write", n);
-    let buckets = if window < n {
+    let buckets = if window < n && cols.any() {
         Some(Reorder::build(store, &cols, window)?)
     } else {
         None
@@ -133,8 +140,7 @@ fn fill_windows(
         let len = ((w0 + window).min(n) - w0) as usize;
         let chunk = &mut win.chunk;
         chunk.first_index = w0;
-        chunk.xyz.clear();
-        chunk.xyz.resize(len, DVec3::ZERO);
+        store.read_exact(w0, len as u64, &mut chunk.xyz)?;
         match (&cols.normals, &mut chunk.normals) {
             (Some(_), Some(ns)) => {
                 ns.clear();
@@ -148,15 +154,16 @@ fn fill_windows(
             .resize(if cols.flags.is_some() { len } else { 0 }, 0);
         let slots = Slots {
             first: w0,
-            xyz: &mut chunk.xyz,
+            len,
             normals: chunk.normals.as_deref_mut(),
             flags: cols.flags.as_ref().map(|_| win.flags.as_mut_slice()),
         };
-        match buckets {
-            Some(b) => b.fill(store.origin(), slots)?,
-            None => fill_window(store, cols, slots)?,
+        match (buckets, cols.any()) {
+            (_, false) => {}
+            (Some(b), true) => b.fill(slots)?,
+            (None, true) => fill_window(store, cols, slots)?,
         }
-        // Attribute columns are in input order already: read, not placed.
+        // Input-order columns are in input order already: read, not placed.
         store.read_attributes(w0, len as u64, fill.attributes, &mut chunk.attrs)?;
         if full.send(win).is_err() {
             return Err(writer_gone());
@@ -200,6 +207,11 @@ pub(super) struct Columns {
 }
 
 impl Columns {
+    /// Whether the output carries a computed column (else nothing is placed).
+    pub(super) fn any(&self) -> bool {
+        self.normals.is_some() || self.flags.is_some()
+    }
+
     /// Reads tile `t`'s normals and flags, those the output carries.
     pub(super) fn read(
         &self,
@@ -217,10 +229,11 @@ impl Columns {
     }
 }
 
-/// Output slots for the consecutive input ids from `first`.
+/// Output slots of the computed columns for the consecutive input ids
+/// from `first`.
 pub(super) struct Slots<'a> {
     pub(super) first: u64,
-    pub(super) xyz: &'a mut [DVec3],
+    pub(super) len: usize,
     pub(super) normals: Option<&'a mut [Vec3]>,
     pub(super) flags: Option<&'a mut [u8]>,
 }
@@ -228,21 +241,13 @@ pub(super) struct Slots<'a> {
 impl<'a> Slots<'a> {
     /// Input ids of the slots.
     pub(super) fn range(&self) -> std::ops::Range<u64> {
-        self.first..self.first + self.xyz.len() as u64
+        self.first..self.first + self.len as u64
     }
 
-    /// Fills slot `slot` (an offset from `first`) from a point's stored
-    /// coordinates (f32, relative to `origin`), normal and flags.
+    /// Fills slot `slot` (an offset from `first`) with a point's normal
+    /// and flags.
     #[inline]
-    pub(super) fn place(
-        &mut self,
-        slot: usize,
-        origin: DVec3,
-        xyz: &[f32],
-        normal: &[f32],
-        flags: u8,
-    ) {
-        self.xyz[slot] = origin + DVec3::new(xyz[0] as f64, xyz[1] as f64, xyz[2] as f64);
+    pub(super) fn place(&mut self, slot: usize, normal: &[f32], flags: u8) {
         if let Some(ns) = &mut self.normals {
             ns[slot] = Vec3::new(normal[0], normal[1], normal[2]);
         }
@@ -253,15 +258,13 @@ impl<'a> Slots<'a> {
 
     /// Splits into `parts` consecutive id ranges (the last may be shorter).
     pub(super) fn split(self, parts: usize) -> Vec<Slots<'a>> {
-        let per = self.xyz.len().div_ceil(parts.max(1)).max(1);
+        let per = self.len.div_ceil(parts.max(1)).max(1);
         let mut normals = self.normals.map(|s| s.chunks_mut(per));
         let mut flags = self.flags.map(|s| s.chunks_mut(per));
-        self.xyz
-            .chunks_mut(per)
-            .enumerate()
-            .map(|(k, xyz)| Slots {
+        (0..self.len.div_ceil(per))
+            .map(|k| Slots {
                 first: self.first + (k * per) as u64,
-                xyz,
+                len: per.min(self.len - k * per),
                 normals: normals.as_mut().and_then(|it| it.next()),
                 flags: flags.as_mut().and_then(|it| it.next()),
             })
@@ -280,14 +283,12 @@ fn fill_window(store: &PointStore, cols: &Columns, slots: Slots) -> Result<(), S
 /// Places the points whose input ids fall in `part`, passing over all tiles.
 fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), StoreError> {
     let range = part.range();
-    let origin = store.origin();
-    let (mut ids, mut xyz, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
     for t in store.tiles() {
         store.read_indices(t.start, t.count, &mut ids)?;
         if !ids.iter().any(|i| range.contains(i)) {
             continue;
         }
-        store.read_coords(t.start, t.count, &mut xyz)?;
         cols.read(t, &mut nrm, &mut flg)?;
         for (k, &id) in ids.iter().enumerate() {
             if !range.contains(&id) {
@@ -296,7 +297,7 @@ fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), 
             let normal = nrm.get(3 * k..3 * k + 3).unwrap_or(&[0.0; 3]);
             let f = flg.get(k).copied().unwrap_or(0);
             let slot = (id - range.start) as usize;
-            part.place(slot, origin, &xyz[3 * k..3 * k + 3], normal, f);
+            part.place(slot, normal, f);
         }
     }
     Ok(())
@@ -338,7 +339,6 @@ mod tests {
             normals.write_f32(t.start, &n).unwrap();
             flags.write_bytes(t.start, &f).unwrap();
         }
-        let origin = store.origin();
         let spec = WriterSpec {
             with_normals: true,
             with_flags: true,
@@ -360,15 +360,8 @@ mod tests {
             let n = r.read_chunk(&mut chunk, 1 << 20).unwrap();
             assert_eq!(n, pts.len(), "threads {threads}, window {window}");
             for (i, p) in pts.iter().enumerate() {
-                let rel = *p - origin;
-                let want = origin
-                    + DVec3::new(
-                        rel.x as f32 as f64,
-                        rel.y as f32 as f64,
-                        rel.z as f32 as f64,
-                    );
                 assert_eq!(
-                    chunk.xyz[i], want,
+                    chunk.xyz[i], *p,
                     "threads {threads}, window {window}, point {i}"
                 );
                 let got = chunk.normals.as_ref().unwrap()[i].to_array();

@@ -4,7 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped whenever the on-disk layout changes incompatibly.
-pub(crate) const STORE_VERSION: u32 = 1;
+/// (2: the input's exact coordinates, `xyz.input`, and checksums.)
+pub(crate) const STORE_VERSION: u32 = 2;
 
 /// File name of the manifest in a store directory.
 pub const MANIFEST_FILE: &str = "manifest.json";
@@ -22,6 +23,9 @@ pub struct Manifest {
     pub duplicates: u64,
     /// Coordinates are stored as f32 relative to this f64 origin.
     pub origin: [f64; 3],
+    /// How the input's exact coordinates are kept (`xyz.input`, input
+    /// order): what outputs write.
+    pub coordinates: super::exact::Coordinates,
     /// Tight bounds of the input points (absolute, f64).
     pub bounds_min: [f64; 3],
     /// Upper corner of the input points' tight bounds (absolute, f64).
@@ -51,6 +55,14 @@ pub struct Manifest {
     /// columns are recomputed once.
     #[serde(default, rename = "made_by")]
     pub provenance: std::collections::BTreeMap<String, super::columns::Provenance>,
+    /// CRC-32 of each column file's segments (its tiles, or for an
+    /// input-order column its runs of `integrity::INPUT_SEGMENT` points),
+    /// by file name; checked when the store is opened.
+    #[serde(default)]
+    pub checksums: std::collections::BTreeMap<String, Vec<u32>>,
+    /// CRC-32 of this manifest's JSON without this field (set when saved).
+    #[serde(default)]
+    pub crc32: Option<u32>,
 }
 
 /// The coarse histogram grid the planner split; tile cores are integer boxes

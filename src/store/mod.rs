@@ -6,8 +6,10 @@
 //! `BLOCK` consecutive points of a tile, to find margin points without
 //! reading whole neighbour tiles), and attribute columns later passes add
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
-//! The input's own attributes (intensity, colour, ...) are kept in input
-//! order beside them (`intensity.input`, ...; see `attributes`).
+//! The input's own attributes (intensity, colour, ...) and its exact
+//! coordinates are kept in input order beside them (`intensity.input`,
+//! ..., `xyz.input`; see `attributes` and `exact`). Every column carries
+//! checksums, checked on open (`integrity`).
 
 mod attributes;
 pub mod build;
@@ -15,11 +17,13 @@ mod cells;
 pub mod checkpoint;
 mod column;
 pub(crate) mod columns;
+mod exact;
 pub(crate) mod export;
+mod ingest;
+mod integrity;
 mod lock;
 pub mod manifest;
 mod reorder;
-mod replay;
 pub(crate) mod sampling;
 mod sort;
 mod source;
@@ -31,6 +35,7 @@ pub use build::{build_store, BuildOptions, TileTarget};
 pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
+pub use exact::Coordinates;
 pub use export::export_points;
 pub use manifest::{GridSpec, Manifest, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
@@ -99,6 +104,14 @@ pub enum StoreError {
     /// The memory budget cannot hold what the plan needs.
     #[error(transparent)]
     Budget(#[from] crate::memory::BudgetError),
+    /// A column or the manifest no longer holds what was written to it.
+    #[error("{path}: damaged: {what} fails its checksum (changed since scanmesh wrote it, or corrupted on disk); rebuild the store (`scanmesh tile`) or start the run afresh (--restart)")]
+    Damaged {
+        /// The file concerned.
+        path: PathBuf,
+        /// Which part of it (a tile, a range of input points).
+        what: String,
+    },
     /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
     Busy {
@@ -138,32 +151,39 @@ impl PointStore {
     /// Opens the store at `dir` for a run that may add or rewrite columns:
     /// no other process may have it open meanwhile ([`StoreError::Busy`]).
     pub fn open(dir: &Path) -> Result<Self, StoreError> {
+        let store = Self::open_locked(dir, lock::StoreLock::exclusive(dir)?)?;
+        store.verify()?;
+        Ok(store)
+    }
+
+    /// Opens a store this process has just built: its checksums were
+    /// computed from the bytes it wrote, so they are not read back.
+    pub(crate) fn open_fresh(dir: &Path) -> Result<Self, StoreError> {
         Self::open_locked(dir, lock::StoreLock::exclusive(dir)?)
     }
 
     /// Opens the store at `dir` to read it only: other readers may have it
     /// open, a run that writes may not.
     pub fn open_shared(dir: &Path) -> Result<Self, StoreError> {
-        Self::open_locked(dir, lock::StoreLock::shared(dir)?)
+        let store = Self::open_locked(dir, lock::StoreLock::shared(dir)?)?;
+        store.verify()?;
+        Ok(store)
     }
 
     fn open_locked(dir: &Path, lock: lock::StoreLock) -> Result<Self, StoreError> {
         let mpath = dir.join(manifest::MANIFEST_FILE);
-        let text = std::fs::read_to_string(&mpath).map_err(|e| StoreError::os(&mpath, e))?;
-        let manifest: Manifest = serde_json::from_str(&text).map_err(|e| StoreError::Corrupt {
-            path: mpath.clone(),
-            reason: e.to_string(),
-        })?;
+        let manifest = read_manifest(dir)?;
         if manifest.version != manifest::STORE_VERSION {
             return Err(StoreError::Corrupt {
                 path: mpath,
                 reason: format!(
-                    "store version {} (this scanmesh reads {})",
+                    "store version {} (this scanmesh reads {}): build it again with `scanmesh tile`",
                     manifest.version,
                     manifest::STORE_VERSION
                 ),
             });
         }
+        let exact = Column::open(&dir.join(exact::EXACT_FILE), 1, false)?;
         let store = PointStore {
             xyz: Column::open(&dir.join(XYZ_FILE), 12, false)?,
             index: Column::open(&dir.join(INDEX_FILE), 8, false)?,
@@ -176,6 +196,16 @@ impl PointStore {
         };
         store.validate()?;
         store.check_attribute_columns()?;
+        let exact_bytes = store.manifest.coordinates.item_bytes() as u64;
+        if exact.items()? != store.manifest.count * exact_bytes {
+            return Err(store.corrupt(format!(
+                "{} holds {} bytes, {} points need {}",
+                exact.path().display(),
+                exact.items()?,
+                store.manifest.count,
+                store.manifest.count * exact_bytes
+            )));
+        }
         // Later passes size their state by the count: it must be the data's.
         for column in [&store.xyz, &store.index] {
             if column.items()? != store.manifest.count {
@@ -348,14 +378,42 @@ impl PointStore {
     }
 }
 
-/// Writes the manifest atomically (temp + rename): a store whose manifest
-/// exists is complete.
+/// Reads and checks the manifest of the store at `dir`: JSON of this
+/// layout whose checksum matches (a damaged number, an origin moved by one
+/// digit, is refused, not taken).
+pub fn read_manifest(dir: &Path) -> Result<Manifest, StoreError> {
+    let path = dir.join(manifest::MANIFEST_FILE);
+    let text = std::fs::read_to_string(&path).map_err(|e| StoreError::os(&path, e))?;
+    let corrupt = |reason: String| StoreError::Corrupt {
+        path: path.clone(),
+        reason,
+    };
+    let manifest: Manifest = serde_json::from_str(&text).map_err(|e| corrupt(e.to_string()))?;
+    if manifest.version != manifest::STORE_VERSION {
+        return Ok(manifest);
+    }
+    let sum = integrity::manifest_sum(&manifest).map_err(|e| corrupt(e.to_string()))?;
+    match manifest.crc32 {
+        Some(c) if c == sum => Ok(manifest),
+        Some(_) => Err(StoreError::Damaged {
+            path,
+            what: "the manifest".into(),
+        }),
+        None => Err(corrupt("the manifest has no checksum".into())),
+    }
+}
+
+/// Writes the manifest atomically (temp + rename) with its checksum: a
+/// store whose manifest exists is complete.
 pub(crate) fn save_manifest(dir: &Path, manifest: &Manifest) -> Result<(), StoreError> {
     let path = dir.join(manifest::MANIFEST_FILE);
-    let text = serde_json::to_string_pretty(manifest).map_err(|e| StoreError::Corrupt {
+    let json = |e: serde_json::Error| StoreError::Corrupt {
         path: path.clone(),
         reason: e.to_string(),
-    })?;
+    };
+    let mut sealed = manifest.clone();
+    sealed.crc32 = Some(integrity::manifest_sum(manifest).map_err(json)?);
+    let text = serde_json::to_string_pretty(&sealed).map_err(json)?;
     let tmp = dir.join(format!(".{}.tmp", manifest::MANIFEST_FILE));
     std::fs::write(&tmp, text).map_err(|e| StoreError::os(&tmp, e))?;
     std::fs::rename(&tmp, &path).map_err(|e| StoreError::os(&path, e))

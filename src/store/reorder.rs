@@ -5,16 +5,16 @@
 //! the number of windows; a pass over all tiles per window read the whole
 //! store once per window (15 times for 10M points in 256 MiB).
 //!
-//! Record: the point's offset in its window (u32), its stored coordinates
-//! (3 x f32), then its normal (3 x f32) and flags byte if the output carries
-//! them; little-endian. Within a region records land in whatever order the
+//! Record: the point's offset in its window (u32), then its normal (3 x
+//! f32) and flags byte if the output carries them; little-endian. The
+//! coordinates are not carried: the export reads the input's own, in input
+//! order. Within a region records land in whatever order the
 //! threads flush them; each one names its slot, so the output does not
 //! depend on that order.
 
 use super::export::{Columns, Slots};
 use super::{PointStore, StoreError, TileEntry};
 use crate::io::scratch::ScratchFile;
-use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -39,7 +39,7 @@ struct Layout {
 
 impl Layout {
     fn bytes(&self) -> usize {
-        16 + if self.normals { 12 } else { 0 } + usize::from(self.flags)
+        4 + if self.normals { 12 } else { 0 } + usize::from(self.flags)
     }
 }
 
@@ -88,10 +88,9 @@ impl Reorder {
     ) -> Result<(), StoreError> {
         let rec = self.layout.bytes();
         let mut buckets: Vec<Vec<u8>> = (0..cursors.len()).map(|_| Vec::new()).collect();
-        let (mut ids, mut xyz, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
         for t in tiles {
             store.read_indices(t.start, t.count, &mut ids)?;
-            store.read_coords(t.start, t.count, &mut xyz)?;
             cols.read(t, &mut nrm, &mut flg)?;
             for (k, &id) in ids.iter().enumerate() {
                 if id >= self.count {
@@ -103,9 +102,6 @@ impl Reorder {
                     b.reserve_exact(cap * rec);
                 }
                 b.extend_from_slice(&((id % self.window) as u32).to_le_bytes());
-                xyz[3 * k..3 * k + 3]
-                    .iter()
-                    .for_each(|v| b.extend_from_slice(&v.to_le_bytes()));
                 if self.layout.normals {
                     nrm[3 * k..3 * k + 3]
                         .iter()
@@ -150,9 +146,9 @@ impl Reorder {
     /// Fills the slots of one window (starting at a multiple of the window)
     /// from its region, read once: each block of records is placed by all
     /// threads at once, each into the slots of its own id range.
-    pub(super) fn fill(&self, origin: DVec3, slots: Slots) -> Result<(), StoreError> {
+    pub(super) fn fill(&self, slots: Slots) -> Result<(), StoreError> {
         let first = slots.first;
-        let len = slots.xyz.len() as u64;
+        let len = slots.len as u64;
         if !first.is_multiple_of(self.window) || first + len > self.count {
             return Err(self.corrupt(format!("window at {first} of {len} points")));
         }
@@ -167,7 +163,7 @@ impl Reorder {
             let records = &buf[..n * rec];
             parts
                 .par_iter_mut()
-                .for_each(|part| self.place(origin, first, records, part));
+                .for_each(|part| self.place(first, records, part));
             done += n as u64;
         }
         Ok(())
@@ -175,7 +171,7 @@ impl Reorder {
 
     /// Places those of `records` (of the window starting at `first`) whose
     /// slots fall in `part`.
-    fn place(&self, origin: DVec3, first: u64, records: &[u8], part: &mut Slots) {
+    fn place(&self, first: u64, records: &[u8], part: &mut Slots) {
         let rec = self.layout.bytes();
         let range = part.range();
         let mut normal = [0f32; 3];
@@ -185,12 +181,11 @@ impl Reorder {
                 continue;
             }
             let f32_at = |o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]);
-            let xyz = [f32_at(4), f32_at(8), f32_at(12)];
             if self.layout.normals {
-                normal = [f32_at(16), f32_at(20), f32_at(24)];
+                normal = [f32_at(4), f32_at(8), f32_at(12)];
             }
             let flags = if self.layout.flags { r[rec - 1] } else { 0 };
-            part.place((id - range.start) as usize, origin, &xyz, &normal, flags);
+            part.place((id - range.start) as usize, &normal, flags);
         }
     }
 
