@@ -370,3 +370,79 @@ fn a_run_directory_changed_behind_the_runs_back_is_not_done() {
     ok(&[&args[..], &["--restart"]].concat());
     assert!(std::fs::read(&out).expect("output") == first);
 }
+
+/// SIGKILL (the OOM killer, a scheduler's limit) runs no cleanup: the
+/// scratch store stays; the next run in that place reclaims it, and never
+/// touches the scratch of a run that is alive.
+#[test]
+fn scratch_a_killed_run_left_is_reclaimed_by_the_next() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = dir.path().join("big.xyz");
+    write_xyz(&input, &utm_points(400_000, 5));
+    let small = dir.path().join("small.xyz");
+    write_xyz(&small, &utm_points(3000, 6));
+    let out = dir.path().join("n.ply");
+    let scratch = |dir: &Path| -> Vec<String> {
+        names(dir)
+            .into_iter()
+            .filter(|n| n.starts_with(".n.ply.") || n.starts_with(".m.ply."))
+            .collect()
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args(["normals", s(&input), "-o", s(&out), "-q", "--threads", "1"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let started = std::time::Instant::now();
+    // Killed once its build has begun (its scratch store holds a column).
+    let building = || {
+        scratch(dir.path())
+            .iter()
+            .any(|n| dir.path().join(n).join("xyz.input").exists())
+    };
+    while !building() && started.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    // A second run in the same place, alive while the first is killed
+    // (its own reclaiming, before it made its scratch, found a live run).
+    let live_out = dir.path().join("m.ply");
+    let mut live = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args([
+            "normals",
+            s(&input),
+            "-o",
+            s(&live_out),
+            "-q",
+            "--threads",
+            "1",
+        ])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    while !scratch(dir.path()).iter().any(|n| n.starts_with(".m.ply.")) {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "the live run made no scratch"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().expect("kill -9");
+    child.wait().expect("wait");
+    let left = scratch(dir.path());
+    assert!(
+        left.iter().any(|n| n.starts_with(".n.ply.store-")),
+        "{left:?}"
+    );
+    let o = scanmesh(&["normals", s(&small), "-o", s(&dir.path().join("x.ply"))]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    assert!(said.contains("killed runs left"), "{said}");
+    let now = scratch(dir.path());
+    assert!(
+        !now.iter().any(|n| n.starts_with(".n.ply.")),
+        "left: {now:?}"
+    );
+    assert!(live.wait().expect("wait").success(), "the live run failed");
+    assert!(live_out.is_file());
+    assert!(scratch(dir.path()).is_empty(), "{:?}", scratch(dir.path()));
+}

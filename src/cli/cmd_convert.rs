@@ -21,6 +21,7 @@ pub struct ConvertArgs {
 pub fn run(a: ConvertArgs) -> Result<()> {
     let s = a.common.settings()?;
     super::check_distinct(&a.input, &a.output)?;
+    s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let stats = convert(&a.input, &a.output, s.read_options(), progress.as_ref())?;

@@ -329,6 +329,7 @@ impl Settings {
             None => place::directory_of(output),
         };
         place::check_writable_dir(&scratch_dir, "scratch")?;
+        self.reclaim(&[&scratch_dir, &place::directory_of(output)]);
         let count = if is_store(input) {
             Some(PointStore::open(input)?.len())
         } else {
@@ -350,6 +351,28 @@ impl Settings {
             .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
         }
         Ok(scratch_dir)
+    }
+
+    /// Removes what killed runs left in `dirs` (their scratch stores and
+    /// partial outputs), saying so.
+    pub fn reclaim(&self, dirs: &[&Path]) {
+        let mut seen: Vec<PathBuf> = Vec::new();
+        for dir in dirs {
+            let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+            if seen.contains(&dir) {
+                continue;
+            }
+            let removed = scanmesh::io::reclaim::reclaim_scratch(&dir);
+            if !removed.is_empty() && !self.quiet {
+                let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+                eprintln!(
+                    "removed {} scratch entries that killed runs left: {}",
+                    removed.len(),
+                    names.join(", ")
+                );
+            }
+            seen.push(dir);
+        }
     }
 
     /// The plan and run options for an open store.

@@ -18,7 +18,7 @@
 use super::Command;
 use anyhow::{anyhow, bail, Context, Result};
 use scanmesh::io::atomic::AtomicFile;
-use scanmesh::store::{checkpoint, Checkpoints, Job};
+use scanmesh::store::{Checkpoints, Job};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -76,6 +76,14 @@ fn stopped_at() -> Option<String> {
     w.as_ref()?.stopped_at().map(str::to_string)
 }
 
+/// The tile files the job found damaged (and recomputed).
+fn damaged_tiles() -> Vec<PathBuf> {
+    let Ok(w) = WATCHED.lock() else {
+        return Vec::new();
+    };
+    w.as_ref().map(|c| c.damaged()).unwrap_or_default()
+}
+
 /// Runs `command` (given as `args`), in its run directory when it has one:
 /// starts or resumes the run there, or prints its job script (`--emit`),
 /// or says there is nothing left to do.
@@ -128,6 +136,14 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
     let what = job_text(&job);
     run.log(&format!("start {what}"));
     let outcome = super::dispatch(command);
+    for tile in damaged_tiles() {
+        let line = format!(
+            "damaged tile file {} removed, its tile recomputed",
+            tile.display()
+        );
+        eprintln!("{line}");
+        run.log(&line);
+    }
     let outcome = match (outcome, stopped_at(), &job) {
         (Err(_), Some(stage), _) => {
             run.log(&format!("done {what} (stopped at {stage}), peak {}", super::peak()));
@@ -225,28 +241,26 @@ pub fn fingerprint(input: &Path) -> Result<Fingerprint> {
         path: std::path::absolute(input)?,
         bytes: meta.len(),
         modified_ns,
-        sampled_hash: format!("{:016x}", sampled_hash(&file, meta.len())?),
+        sampled_hash: format!("{:08x}", sampled_hash(&file, meta.len())?),
     })
 }
 
-/// FNV-1a over the first and last 64 KiB and 16 blocks of 4 KiB spread
+/// CRC-32 over the first and last 64 KiB and 16 blocks of 4 KiB spread
 /// between: catches a rewritten file whose size and time were kept.
-fn sampled_hash(path: &Path, len: u64) -> Result<u64> {
+fn sampled_hash(path: &Path, len: u64) -> Result<u32> {
     let mut f = std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
     let mut offsets = vec![(0, 65_536)];
     offsets.extend((1..=16).map(|i| (len / 17 * i, 4096)));
     offsets.push((len.saturating_sub(65_536), 65_536));
-    let mut h = checkpoint::FNV_SEED;
+    let mut h = crc32fast::Hasher::new();
     let mut buf = Vec::new();
     for (at, n) in offsets {
         buf.clear();
         f.seek(SeekFrom::Start(at.min(len)))?;
         (&mut f).take(n).read_to_end(&mut buf)?;
-        h = buf
-            .iter()
-            .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3));
+        h.update(&buf);
     }
-    Ok(h)
+    Ok(h.finalize())
 }
 
 /// A run directory.

@@ -3,7 +3,9 @@
 //! Everything is written to a temporary sibling (`.name.partial-<pid>`); only
 //! [`AtomicFile::commit`] renames it into place. Dropping an uncommitted file
 //! (an error, a panic) removes the temporary, so an interrupted run never
-//! leaves a truncated file that looks whole.
+//! leaves a truncated file that looks whole. The temporary is locked while
+//! its writer lives, so the next run can tell one a killed run left
+//! ([`super::reclaim`]).
 
 use super::IoError;
 use std::fs::File;
@@ -39,6 +41,7 @@ impl AtomicFile {
             .truncate(true)
             .open(&temp_path)
             .map_err(|e| IoError::os(path, e))?;
+        super::reclaim::hold(&file);
         Ok(AtomicFile {
             final_path: path.to_path_buf(),
             _cleanup: super::cleanup::register(&temp_path),

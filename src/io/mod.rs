@@ -21,6 +21,7 @@ pub(crate) mod pcd;
 pub mod place;
 pub(crate) mod ply;
 mod policy;
+pub mod reclaim;
 pub(crate) mod scratch;
 mod source;
 mod text;

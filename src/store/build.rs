@@ -97,12 +97,15 @@ pub fn build_store(
     progress: &dyn Progress,
 ) -> Result<PointStore, StoreError> {
     std::fs::create_dir_all(dir).map_err(|e| StoreError::os(dir, e))?;
+    // Held from the start, so a run that finds this store half-built knows
+    // its builder lives (`io::reclaim`).
+    let lock = super::lock::StoreLock::exclusive(dir)?;
     let source = reader.info().path.clone();
     let mut manifest = build_columns(reader, dir, opts, progress)?;
     manifest.source = source.display().to_string();
     seal(dir, &mut manifest)?;
     save_manifest(dir, &manifest)?;
-    PointStore::open_fresh(dir)
+    PointStore::open_fresh(dir, lock)
 }
 
 /// Checksums every column of a new store's `manifest`.

@@ -7,16 +7,18 @@
 //!
 //! A tile file appears whole or not at all: it is written under a
 //! temporary name, forced to disk and renamed. It starts with a magic, the
-//! payload length and an FNV-1a checksum of the payload, so a file cut or
-//! damaged on disk is found, removed and its tile recomputed.
+//! payload length and a CRC-32 of the payload, so a file cut or damaged on
+//! disk is found, removed and its tile recomputed (a tile is a pure
+//! function of the store, itself checked, so nothing wrong reaches the
+//! output), and the run is told which ([`Checkpoints::damaged`]).
 
 use super::StoreError;
 use crate::io::atomic::AtomicFile;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
-const MAGIC: &[u8; 8] = b"SMTILE1\0";
+const MAGIC: &[u8; 8] = b"SMTILE2\0";
 const HEADER: usize = 24;
 
 /// Which part of the run a process does.
@@ -89,6 +91,8 @@ pub struct Checkpoints {
     /// The stage where the job stopped as asked, shared by the clones (the
     /// application learns it there rather than from an error chain).
     stopped: Arc<OnceLock<String>>,
+    /// Tile files found damaged (and removed, to be recomputed).
+    damaged: Arc<Mutex<Vec<PathBuf>>>,
 }
 
 impl Checkpoints {
@@ -98,6 +102,7 @@ impl Checkpoints {
             dir: dir.into(),
             job,
             stopped: Arc::default(),
+            damaged: Arc::default(),
         }
     }
 
@@ -140,9 +145,18 @@ impl Checkpoints {
             Some(p) => Ok(Some(p.to_vec())),
             None => {
                 std::fs::remove_file(&path).map_err(|e| StoreError::os(&path, e))?;
+                if let Ok(mut d) = self.damaged.lock() {
+                    d.push(path);
+                }
                 Ok(None)
             }
         }
+    }
+
+    /// The tile files this process found damaged and removed (their tiles
+    /// were recomputed).
+    pub fn damaged(&self) -> Vec<PathBuf> {
+        self.damaged.lock().map(|d| d.clone()).unwrap_or_default()
     }
 
     /// Whether `tile` has a saved result (not checked: [`Self::load`] does).
@@ -159,7 +173,7 @@ impl Checkpoints {
         let header = [
             *MAGIC,
             (payload.len() as u64).to_le_bytes(),
-            fnv1a(FNV_SEED, payload).to_le_bytes(),
+            u64::from(crc32fast::hash(payload)).to_le_bytes(),
         ];
         let write = |f: &mut std::fs::File| -> std::io::Result<()> {
             header.iter().try_for_each(|h| f.write_all(h))?;
@@ -213,19 +227,7 @@ fn payload(bytes: &[u8]) -> Option<&[u8]> {
     let len = u64::from_le_bytes(bytes[8..16].try_into().ok()?);
     let sum = u64::from_le_bytes(bytes[16..24].try_into().ok()?);
     let body = &bytes[HEADER..];
-    (body.len() as u64 == len && fnv1a(FNV_SEED, body) == sum).then_some(body)
-}
-
-/// The FNV-1a offset basis: the hash of no bytes.
-pub const FNV_SEED: u64 = 0xcbf2_9ce4_8422_2325;
-
-/// FNV-1a, 64 bits, continuing from `h` (start at [`FNV_SEED`]): a
-/// checksum against torn and damaged files, not an adversary (a run
-/// directory is the user's own).
-pub(crate) fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
-    bytes
-        .iter()
-        .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+    (body.len() as u64 == len && u64::from(crc32fast::hash(body)) == sum).then_some(body)
 }
 
 #[cfg(test)]
@@ -250,6 +252,7 @@ mod tests {
         std::fs::write(&path, &bytes).unwrap();
         assert_eq!(cp.load("marching cubes", 3).unwrap(), None);
         assert!(!path.exists(), "a damaged tile file stays");
+        assert_eq!(cp.damaged(), vec![path.clone()]);
         std::fs::write(dir.path().join("marching-cubes/0000004.tmp-9"), b"x").unwrap();
         assert_eq!(cp.remove_leftovers().unwrap(), 1);
     }

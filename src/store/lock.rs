@@ -14,16 +14,16 @@ use std::path::Path;
 const LOCK_FILE: &str = ".lock";
 
 #[derive(Debug)]
-pub(super) struct StoreLock {
+pub(crate) struct StoreLock {
     _file: File,
 }
 
 impl StoreLock {
-    pub(super) fn exclusive(dir: &Path) -> Result<Self, StoreError> {
+    pub(crate) fn exclusive(dir: &Path) -> Result<Self, StoreError> {
         Self::take(dir, FlockOperation::NonBlockingLockExclusive)
     }
 
-    pub(super) fn shared(dir: &Path) -> Result<Self, StoreError> {
+    pub(crate) fn shared(dir: &Path) -> Result<Self, StoreError> {
         Self::take(dir, FlockOperation::NonBlockingLockShared)
     }
 

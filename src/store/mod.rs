@@ -21,7 +21,7 @@ mod exact;
 pub(crate) mod export;
 mod ingest;
 mod integrity;
-mod lock;
+pub(crate) mod lock;
 pub mod manifest;
 mod reorder;
 pub(crate) mod sampling;
@@ -158,8 +158,8 @@ impl PointStore {
 
     /// Opens a store this process has just built: its checksums were
     /// computed from the bytes it wrote, so they are not read back.
-    pub(crate) fn open_fresh(dir: &Path) -> Result<Self, StoreError> {
-        Self::open_locked(dir, lock::StoreLock::exclusive(dir)?)
+    pub(crate) fn open_fresh(dir: &Path, lock: lock::StoreLock) -> Result<Self, StoreError> {
+        Self::open_locked(dir, lock)
     }
 
     /// Opens the store at `dir` to read it only: other readers may have it
