@@ -16,8 +16,11 @@ static ALLOCATOR: tikv_jemallocator::Jemalloc = tikv_jemallocator::Jemalloc;
 
 fn main() -> ExitCode {
     on_interrupt_clean_up_and_exit();
+    exit_quietly_when_stdout_closes();
     match cli::run() {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader stopped early (`| head`): its choice, not a failure.
+        Err(err) if cli::stdout_closed(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err}");
             for cause in err.chain().skip(1) {
@@ -26,6 +29,29 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The commands write through `cli::stdout`, which turns a closed pipe
+/// into an error that ends the process quietly; a `println!` left
+/// elsewhere (the run directory's script and "nothing to do" lines) panics
+/// on one instead, and that panic ends it the same way, not with a panic
+/// message for a reader that has gone.
+fn exit_quietly_when_stdout_closes() {
+    let closed_pipe = format!("(os error {})", rustix::io::Errno::PIPE.raw_os_error());
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let text = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if text.starts_with("failed printing to stdout") && text.ends_with(&closed_pipe) {
+            scanmesh::io::cleanup::remove_registered();
+            std::process::exit(0);
+        }
+        default(info);
+    }));
 }
 
 /// SIGINT and SIGTERM end the run at once with the conventional code (130,

@@ -484,6 +484,32 @@ echo 'Submitted batch job 17'
     }
 }
 
+/// A reader that stops early (`scanmesh status DIR | head -1`) ends the
+/// command quietly and successfully, whichever command prints.
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    let c = Case::new();
+    let run = c.path("run");
+    let emit = c.reconstruct("out.ply", &["--run-dir", &run, "--emit", "slurm"]);
+    ok(&strs(&emit));
+    for args in [
+        vec!["status".to_string(), run.clone()],
+        vec!["info".to_string(), c.input.clone()],
+        emit,
+    ] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+            .args(&args)
+            .stdout(writer)
+            .output()
+            .expect("run scanmesh");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {:?} {err}", o.status);
+        assert!(err.is_empty(), "{args:?} said: {err}");
+    }
+}
+
 /// SIGINT during the tile stage: exit 130, nothing temporary left beside
 /// the output (the run directory keeps its finished tiles), and the rerun
 /// resumes to the plain run's bytes.

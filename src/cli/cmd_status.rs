@@ -4,6 +4,7 @@
 //! It only reads, so it works while jobs run.
 
 use super::rundir::{fingerprint, RunDir};
+use super::stdout::outln;
 use anyhow::{bail, Result};
 use clap::Args;
 use scanmesh::store::manifest::{Manifest, MANIFEST_FILE};
@@ -21,13 +22,13 @@ pub fn run(a: StatusArgs) -> Result<()> {
     let Some(id) = run.identity()? else {
         bail!("{}: not a run directory", a.dir.display());
     };
-    println!(
+    outln!(
         "run: scanmesh {} (in {})",
         id.args.join(" "),
         id.cwd.display()
-    );
+    )?;
     let unchanged = fingerprint(&id.input.path).is_ok_and(|f| f == id.input);
-    println!(
+    outln!(
         "input: {} ({})",
         id.input.path.display(),
         if unchanged {
@@ -35,33 +36,33 @@ pub fn run(a: StatusArgs) -> Result<()> {
         } else {
             "CHANGED or gone: the run cannot go on"
         }
-    );
+    )?;
     let tiles = match store_manifest(&run.store_dir()) {
         Some(m) => {
-            println!("store: {} points in {} tiles", m.count, m.tiles.len());
+            outln!("store: {} points in {} tiles", m.count, m.tiles.len())?;
             m.tiles.len()
         }
         None => {
-            println!("store: not built yet");
+            outln!("store: not built yet")?;
             0
         }
     };
     for (stage, times) in stages(&run.tiles_dir()) {
-        println!("stage {stage}: {}", progress(times, tiles));
+        outln!("stage {stage}: {}", progress(times, tiles))?;
     }
     let log = run.log_lines();
     let failures: Vec<&String> = log.iter().filter(|l| l.contains(" failed ")).collect();
     let started = log.iter().filter(|l| l.contains(" start ")).count();
-    println!(
+    outln!(
         "log: {started} processes started, {} failed",
         failures.len()
-    );
+    )?;
     if let Some(last) = failures.last() {
-        println!("  last failure: {last}");
+        outln!("  last failure: {last}")?;
     }
     match log.iter().rev().find(|l| l.contains(" done run")) {
-        Some(_) => println!("output: written"),
-        None => println!("output: not written yet"),
+        Some(_) => outln!("output: written")?,
+        None => outln!("output: not written yet")?,
     }
     Ok(())
 }

@@ -22,6 +22,9 @@ mod hints;
 mod progress;
 mod report;
 mod rundir;
+mod stdout;
+
+pub use stdout::closed as stdout_closed;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
