@@ -484,6 +484,72 @@ echo 'Submitted batch job 17'
     }
 }
 
+/// `status` of a run whose process died says so, with no time left, and
+/// the output line checks the file the run wrote.
+#[test]
+fn status_names_a_dead_process_and_a_lost_output() {
+    let c = Case::new();
+    let run = c.path("run");
+    let args = |extra: &[&str]| -> Vec<String> {
+        let mut a = vec![
+            "normals".to_string(),
+            c.input.clone(),
+            "-o".into(),
+            c.path("n.ply"),
+            "--tile-points".into(),
+            "1000".into(),
+            "-q".into(),
+            "--run-dir".into(),
+            run.clone(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    ok(&strs(&args(&["--emit", "parallel"])));
+    ok(&["run-job", &run, "--until", "normals", "-q"]);
+    ok(&[
+        "run-job", &run, "--stage", "normals", "--share", "0/2", "-q",
+    ]);
+    // A process that started the other half, then was killed.
+    let mut child = Command::new("sleep").arg("60").spawn().expect("sleep");
+    let pid = child.id();
+    let log = Path::new(&run).join("log.txt");
+    let mut text = std::fs::read_to_string(&log).expect("log");
+    text += &format!("1 pid {pid} start job --stage normals --share 1/2\n");
+    std::fs::write(&log, text).expect("write log");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains(&format!("running (process {pid})")),
+        "{status}"
+    );
+    child.kill().expect("kill");
+    child.wait().expect("wait");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains(&format!("stopped (process {pid} is gone)")),
+        "{status}"
+    );
+    assert!(
+        !status.contains(" left"),
+        "a time left for a stopped run: {status}"
+    );
+    // The rerun takes its work over, and writes the output.
+    ok(&strs(&args(&[])));
+    let status = ok(&["status", &run]);
+    assert!(status.contains("state: finished"), "{status}");
+    assert!(status.contains("output: written"), "{status}");
+    std::fs::remove_file(c.path("n.ply")).expect("rm");
+    let status = ok(&["status", &run]);
+    assert!(!status.contains("output: written"), "{status}");
+    assert!(status.contains("is gone"), "{status}");
+    std::fs::write(c.path("n.ply"), b"not the run's").expect("write");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains("changed since the run wrote it"),
+        "{status}"
+    );
+}
+
 /// A reader that stops early (`scanmesh status DIR | head -1`) ends the
 /// command quietly and successfully, whichever command prints.
 #[test]

@@ -19,6 +19,7 @@ mod cmd_status;
 mod cmd_tile;
 mod emit;
 mod hints;
+mod liveness;
 mod progress;
 mod report;
 mod rundir;
@@ -344,6 +345,9 @@ impl Settings {
         cost: KernelCost,
         progress: &dyn Progress,
     ) -> Result<Prepared> {
+        // Before the ingest, which may take hours: `status` tells this
+        // process apart from a dead one by its record.
+        liveness::record(&run.dir);
         let tile_job = matches!(self.job, Job::Tiles { .. });
         let store_dir = if is_store(input) {
             input.to_path_buf()
@@ -466,6 +470,7 @@ pub fn run() -> Result<()> {
             command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
         })
         .map_err(hints::with_flag_hints);
+    liveness::forget();
     if let Some(path) = &report {
         report::write(path, &start, &outcome)?;
     }
