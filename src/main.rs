@@ -18,6 +18,8 @@ fn main() -> ExitCode {
     on_interrupt_clean_up_and_exit();
     match cli::run() {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader stopped early (`| head`): its choice, not a failure.
+        Err(err) if cli::stdout_closed(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err}");
             for cause in err.chain().skip(1) {

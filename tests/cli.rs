@@ -353,3 +353,39 @@ fn delaunay_on_one_repeated_point_fails_naming_the_input() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("all one point"));
     assert!(!out.exists());
 }
+
+#[test]
+fn threads_and_memory_beyond_the_machine_are_refused() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "ok.xyz", GOOD_XYZ);
+    let out = dir.path().join("o.ply");
+    let run = dir.path().join("run");
+    for (flag, value, says) in [
+        ("--threads", "100000", "8 x the"),
+        ("--mem", "100TiB", "more than this machine can give (RAM"),
+    ] {
+        let started = std::time::Instant::now();
+        let o = scanmesh(&[
+            "normals",
+            &input,
+            "-o",
+            out.to_str().unwrap_or(""),
+            "--run-dir",
+            run.to_str().unwrap_or(""),
+            flag,
+            value,
+            "-q",
+        ]);
+        assert_fails_naming(&o, &format!("{flag} "));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(says), "{flag} {value}: {err}");
+        assert!(
+            started.elapsed().as_secs() < 30,
+            "{flag} {value}: refused late"
+        );
+        assert!(!out.exists());
+        // Refused before the run directory is made: the corrected command
+        // line then starts afresh, not against a recorded one.
+        assert!(!run.exists(), "{flag} {value}: a run directory was made");
+    }
+}

@@ -37,11 +37,21 @@ struct Case {
     input: String,
 }
 
+/// A directory name that breaks a shell script quoting paths carelessly:
+/// blanks, a quote, `$`, GNU parallel's `{}` and Slurm's `%`.
+const ODD: &str = "odd dir's $HOME {} 100%";
+
 impl Case {
     /// A 20,000-point sphere with a bump (so the tiles differ), as XYZ.
     fn new() -> Case {
+        Case::under("")
+    }
+
+    /// The case with its input, outputs and run directories in `sub`.
+    fn under(sub: &str) -> Case {
         let dir = tempfile::tempdir().expect("tmp");
-        let root = dir.path().to_path_buf();
+        let root = dir.path().join(sub);
+        std::fs::create_dir_all(&root).expect("mkdir");
         let pts = fibonacci_sphere(DVec3::ZERO, 1.0, 20_000);
         let text: String = pts
             .iter()
@@ -274,9 +284,11 @@ fn normals_and_neighbours_resume_to_the_same_bytes() {
 
 /// The script `--emit parallel` prints, run by GNU parallel (CI installs
 /// it; elsewhere the test says it was skipped unless
-/// `SCANMESH_REQUIRE_PARALLEL=1` makes it required).
+/// `SCANMESH_REQUIRE_PARALLEL=1` makes it required), on paths a careless
+/// script splits, with no `SCANMESH` and no scanmesh on PATH: it runs the
+/// binary that wrote it.
 #[test]
-fn the_gnu_parallel_script_writes_the_plain_runs_bytes() {
+fn the_gnu_parallel_script_writes_the_plain_runs_bytes_on_odd_paths() {
     let have = Command::new("parallel").arg("--version").output().is_ok();
     if !have {
         assert!(
@@ -286,23 +298,282 @@ fn the_gnu_parallel_script_writes_the_plain_runs_bytes() {
         eprintln!("skipped: GNU parallel is not installed");
         return;
     }
-    let c = Case::new();
+    let c = Case::under(ODD);
     ok(&strs(&c.reconstruct("plain.ply", &[])));
-    let run = c.path("par");
+    let run = c.path("par run");
     let script = ok(&strs(&c.reconstruct(
-        "par.ply",
+        "par out.ply",
         &["--run-dir", &run, "--emit", "parallel", "--tasks", "4"],
     )));
+    assert!(script.contains(&default_binary_line()), "{script}");
     let path = c.path("job.sh");
     std::fs::write(&path, script).expect("write script");
     let o = Command::new("sh")
         .arg(&path)
-        .env("SCANMESH", env!("CARGO_BIN_EXE_scanmesh"))
+        .env_remove("SCANMESH")
+        .env("PATH", "/usr/local/bin:/usr/bin:/bin")
         .env("JOBS", "2")
         .output()
         .expect("run sh");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    same_file(&c.path("plain.ply"), &c.path("par.ply"));
+    same_file(&c.path("plain.ply"), &c.path("par out.ply"));
+}
+
+/// The line of an emitted script that makes the emitting binary the
+/// default `SCANMESH`.
+fn default_binary_line() -> String {
+    let exe = std::fs::canonicalize(env!("CARGO_BIN_EXE_scanmesh")).expect("binary");
+    format!("SCANMESH=${{SCANMESH:-'{}'}}", exe.display())
+}
+
+/// A fake `sbatch` on PATH: each job runs at once, in submission order,
+/// as Slurm runs it (the `--wrap` text as a sh script, once per array task
+/// with `SLURM_ARRAY_TASK_ID`, its output to `--output` with `%A`, `%a` and
+/// `%%` expanded); a job after a failed one does not run. Prints its job
+/// id as `--parsable` does on a named cluster (`ID;CLUSTER`).
+const FAKE_SBATCH: &str = r#"#!/bin/bash
+set -u
+state=${FAKE_SLURM_STATE:?}
+wrap='' array='' output='' dep=''
+for a in "$@"; do
+  case $a in
+    --wrap=*) wrap=${a#--wrap=} ;;
+    --array=*) array=${a#--array=} ;;
+    --output=*) output=${a#--output=} ;;
+    --dependency=afterok:*) dep=${a#--dependency=afterok:} ;;
+  esac
+done
+id=$(( $(cat "$state/next" 2>/dev/null || echo 100) + 1 ))
+echo "$id" > "$state/next"
+if [ -n "$dep" ] && [ -e "$state/failed-$dep" ]; then
+  touch "$state/failed-$id"
+else
+  printf '#!/bin/sh
+%s
+' "$wrap" > "$state/job-$id.sh"
+  tasks=4294967294
+  if [ -n "$array" ]; then tasks=$(seq "${array%-*}" "${array#*-}"); fi
+  for t in $tasks; do
+    o=${output//'%%'/$''}; o=${o//'%A'/$id}; o=${o//'%a'/$t}; o=${o//$''/%}
+    SLURM_ARRAY_TASK_ID=$t sh "$state/job-$id.sh" > "$o" 2>&1 || touch "$state/failed-$id"
+  done
+fi
+echo "$id;local"
+"#;
+
+/// A directory holding an executable `sbatch` with `body`, for PATH.
+fn fake_sbatch(c: &Case, name: &str, body: &str) -> String {
+    use std::os::unix::fs::PermissionsExt;
+    let bin = c.path(name);
+    std::fs::create_dir_all(&bin).expect("mkdir");
+    let sbatch = Path::new(&bin).join("sbatch");
+    std::fs::write(&sbatch, body).expect("write sbatch");
+    std::fs::set_permissions(&sbatch, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    format!("{bin}:{}", std::env::var("PATH").unwrap_or_default())
+}
+
+/// The script `--emit slurm` prints, submitted to a fake `sbatch` that
+/// runs the jobs as Slurm would, on odd paths, with `SCANMESH` naming the
+/// binary by an odd path too: each `--wrap` text survives being parsed
+/// again by sh, each job writes its log where `--output` says, and the
+/// result is the plain run's bytes.
+#[test]
+fn the_slurm_script_writes_the_plain_runs_bytes_on_odd_paths() {
+    let c = Case::under(ODD);
+    let normals = |out: &str, extra: &[&str]| -> Vec<String> {
+        let mut a = vec![
+            "normals".to_string(),
+            c.input.clone(),
+            "-o".into(),
+            c.path(out),
+            "--tile-points".into(),
+            "2500".into(),
+            "-q".into(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    ok(&strs(&normals("plain.ply", &[])));
+    let run = c.path("slurm run");
+    let script = ok(&strs(&normals(
+        "slurm out.ply",
+        &["--run-dir", &run, "--emit", "slurm", "--tasks", "3"],
+    )));
+    assert!(script.contains(&default_binary_line()), "{script}");
+    let path = c.path("job.sh");
+    std::fs::write(&path, script).expect("write script");
+    let state = c.path("slurm state");
+    std::fs::create_dir(&state).expect("mkdir");
+    // The binary by another odd name, through SCANMESH.
+    let bin_dir = c.path("bin's dir");
+    std::fs::create_dir(&bin_dir).expect("mkdir");
+    let binary = Path::new(&bin_dir).join("scan mesh");
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_scanmesh"), &binary).expect("symlink");
+    let o = Command::new("bash")
+        .arg(&path)
+        .env("PATH", fake_sbatch(&c, "fake bin", FAKE_SBATCH))
+        .env("FAKE_SLURM_STATE", &state)
+        .env("SCANMESH", &binary)
+        .output()
+        .expect("run bash");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    // The last job's id: 1 single job, 1 array, 1 single job.
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "103", "{err}");
+    let failed: Vec<String> = std::fs::read_dir(&state)
+        .expect("list")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("failed-"))
+        .collect();
+    assert!(failed.is_empty(), "jobs failed: {failed:?}");
+    for log in [
+        "slurm-101_4294967294.out",
+        "slurm-102_2.out",
+        "slurm-103_4294967294.out",
+    ] {
+        assert!(Path::new(&run).join(log).exists(), "no {log} in {run}");
+    }
+    same_file(&c.path("plain.ply"), &c.path("slurm out.ply"));
+}
+
+/// A submission that fails, or gives no job id, stops the Slurm script
+/// with an error: the jobs after it would run without the work they need.
+#[test]
+fn a_failed_submission_fails_the_slurm_script() {
+    let c = Case::new();
+    let run = c.path("run");
+    let script = ok(&strs(&c.reconstruct(
+        "out.ply",
+        &["--run-dir", &run, "--emit", "slurm", "--tasks", "2"],
+    )));
+    let path = c.path("job.sh");
+    std::fs::write(&path, script).expect("write script");
+    for (name, sbatch, says) in [
+        (
+            "refusing",
+            "#!/bin/sh
+echo 'sbatch: error: invalid partition' >&2
+exit 1
+",
+            "sbatch failed",
+        ),
+        (
+            "chatty",
+            "#!/bin/sh
+echo 'Submitted batch job 17'
+",
+            "gave no job id",
+        ),
+        (
+            "silent",
+            "#!/bin/sh
+",
+            "gave no job id",
+        ),
+    ] {
+        let o = Command::new("bash")
+            .arg(&path)
+            .env("PATH", fake_sbatch(&c, name, sbatch))
+            .output()
+            .expect("run bash");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} sbatch: the script succeeded");
+        assert!(err.contains(says), "{name} sbatch: {err}");
+        assert!(o.stdout.is_empty(), "{name} sbatch: printed a job id");
+    }
+}
+
+/// `status` of a run whose process died says so, with no time left, and
+/// the output line checks the file the run wrote.
+#[test]
+fn status_names_a_dead_process_and_a_lost_output() {
+    let c = Case::new();
+    let run = c.path("run");
+    let args = |extra: &[&str]| -> Vec<String> {
+        let mut a = vec![
+            "normals".to_string(),
+            c.input.clone(),
+            "-o".into(),
+            c.path("n.ply"),
+            "--tile-points".into(),
+            "1000".into(),
+            "-q".into(),
+            "--run-dir".into(),
+            run.clone(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    ok(&strs(&args(&["--emit", "parallel"])));
+    ok(&["run-job", &run, "--until", "normals", "-q"]);
+    ok(&[
+        "run-job", &run, "--stage", "normals", "--share", "0/2", "-q",
+    ]);
+    // A process that started the other half, then was killed.
+    let mut child = Command::new("sleep").arg("60").spawn().expect("sleep");
+    let pid = child.id();
+    let log = Path::new(&run).join("log.txt");
+    let mut text = std::fs::read_to_string(&log).expect("log");
+    text += &format!("1 pid {pid} start job --stage normals --share 1/2\n");
+    std::fs::write(&log, text).expect("write log");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains(&format!("running (process {pid})")),
+        "{status}"
+    );
+    child.kill().expect("kill");
+    child.wait().expect("wait");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains(&format!("stopped (process {pid} is gone)")),
+        "{status}"
+    );
+    assert!(
+        !status.contains(" left"),
+        "a time left for a stopped run: {status}"
+    );
+    // The rerun takes its work over, and writes the output.
+    ok(&strs(&args(&[])));
+    let status = ok(&["status", &run]);
+    assert!(status.contains("state: finished"), "{status}");
+    assert!(status.contains("output: written"), "{status}");
+    std::fs::remove_file(c.path("n.ply")).expect("rm");
+    let status = ok(&["status", &run]);
+    assert!(!status.contains("output: written"), "{status}");
+    assert!(status.contains("is gone"), "{status}");
+    std::fs::write(c.path("n.ply"), b"not the run's").expect("write");
+    let status = ok(&["status", &run]);
+    assert!(
+        status.contains("changed since the run wrote it"),
+        "{status}"
+    );
+}
+
+/// A reader that stops early (`scanmesh status DIR | head -1`) ends the
+/// command quietly and successfully, whichever command prints.
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    let c = Case::new();
+    let run = c.path("run");
+    let emit = c.reconstruct("out.ply", &["--run-dir", &run, "--emit", "slurm"]);
+    ok(&strs(&emit));
+    for args in [
+        vec!["status".to_string(), run.clone()],
+        vec!["info".to_string(), c.input.clone()],
+        emit,
+    ] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+            .args(&args)
+            .stdout(writer)
+            .output()
+            .expect("run scanmesh");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {:?} {err}", o.status);
+        assert!(err.is_empty(), "{args:?} said: {err}");
+    }
 }
 
 /// SIGINT during the tile stage: exit 130, nothing temporary left beside

@@ -3,6 +3,7 @@
 //! way; or, with `--method projection`, paper 2's triangulation of the
 //! points themselves), then checked against the dragon's own triangles.
 
+use super::stdout::outln;
 use anyhow::Result;
 use clap::Args;
 use scanmesh::demo::dragon_scan;
@@ -50,12 +51,12 @@ pub fn run(a: DemoArgs) -> Result<()> {
     s.init_threads();
     let t0 = Instant::now();
     let (scan, dragon, spacing) = dragon_scan(a.n, 0.1, 1)?;
-    println!(
+    outln!(
         "demo: {} points sampled from the embedded Stanford dragon ({} triangles), noise 0.1 x spacing ({:.3e})",
         scan.len(),
         dragon.faces.len(),
         spacing
-    );
+    )?;
     let progress = super::progress::progress(s.quiet);
     // The dragon is a closed object: the watertight mode is its best mesh.
     let params = ImplicitParams {
@@ -107,17 +108,17 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 &a.output,
             );
             let acc = accuracy(&normals_in_input_order(&store)?, &scan.normals);
-            println!(
+            outln!(
                 "demo: normals vs the dragon's faces: median angle {:.2} deg, {:.2} % oriented outward",
                 acc.median_angle_deg,
                 100.0 * acc.oriented_fraction
-            );
+            )?;
         }
         let (v, t) = scanmesh::io::read_mesh_any(&a.output)?;
         let mesh = Mesh::new(v, t);
-        println!("{}", quality(&mesh));
-        println!("{}", angle_report(&mesh));
-        println!("{}", self_intersections(&mesh));
+        outln!("{}", quality(&mesh))?;
+        outln!("{}", angle_report(&mesh))?;
+        outln!("{}", self_intersections(&mesh))?;
         picture(&mesh, &a.picture)?;
         let truth = Mesh::new(dragon.vertices.clone(), dragon.faces.clone());
         let d = compare(&mesh, Reference::Mesh(&truth));
@@ -129,13 +130,13 @@ pub fn run(a: DemoArgs) -> Result<()> {
             d.reference_to_mesh.absolute,
             d.hausdorff,
         ) {
-            println!(
+            outln!(
                 "demo: distance to the dragon in sp (the sample's mean nearest-neighbour distance, {spacing:.3e}): mean {:.3} sp (mesh to dragon {:.3}, dragon to mesh {:.3}), Hausdorff {:.2} sp",
                 0.5 * (there.mean + back.mean) / spacing,
                 there.mean / spacing,
                 back.mean / spacing,
                 h / spacing
-            );
+            )?;
         }
         Ok(())
     })();
@@ -162,6 +163,6 @@ fn picture(mesh: &Mesh, path: &std::path::Path) -> Result<()> {
         .draw(&style)
         .ok_or_else(|| anyhow::anyhow!("the demo mesh has nothing to draw"))?;
     canvas.write_png(path)?;
-    println!("demo: picture of the mesh -> {}", path.display());
+    outln!("demo: picture of the mesh -> {}", path.display())?;
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! `scanmesh eval`: quality of a mesh, and its distance to a reference.
 
+use super::stdout::outln;
 use anyhow::Result;
 use clap::Args;
 use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
@@ -32,7 +33,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
         None => None,
     };
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&json!({
                 "quality": q,
@@ -40,13 +41,13 @@ pub fn run(a: EvalArgs) -> Result<()> {
                 "self_intersections": crossings,
                 "distance": d
             }))?
-        );
+        )?;
     } else {
-        println!("{q}");
-        println!("{angles}");
-        println!("{crossings}");
+        outln!("{q}")?;
+        outln!("{angles}")?;
+        outln!("{crossings}")?;
         if let Some(d) = d {
-            println!("{d}");
+            outln!("{d}")?;
         }
     }
     Ok(())

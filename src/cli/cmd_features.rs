@@ -1,5 +1,6 @@
 //! `scanmesh features`: valley-ridge feature lines (paper 5) as polylines.
 
+use super::stdout::outln;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use scanmesh::features::extract::{extract_lines, FeaturesReport};
@@ -137,10 +138,10 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
         .with_context(|| format!("writing {}", a.output.display()))?;
     let secs = t0.elapsed().as_secs_f64();
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&summary(&report, secs, &a.output))?
-        );
+        )?;
     } else {
         print_summary(&report, secs, &a.output);
     }

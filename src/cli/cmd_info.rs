@@ -1,5 +1,6 @@
 //! `scanmesh info`: what a file or a store holds.
 
+use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::e57::is_e57_magic;
@@ -89,9 +90,9 @@ pub fn run(a: InfoArgs) -> Result<()> {
         })
     };
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print_text(&report);
+        print_text(&report)?;
     }
     Ok(())
 }
@@ -150,11 +151,11 @@ fn scans_json(scans: &[ScanInspection]) -> serde_json::Value {
         .collect()
 }
 
-fn print_text(v: &serde_json::Value) {
+fn print_text(v: &serde_json::Value) -> Result<()> {
     if let Some(map) = v.as_object() {
         for (k, val) in map {
             if !val.is_null() && k != "scans" {
-                println!("{:>18}: {}", k, val);
+                outln!("{:>18}: {}", k, val)?;
             }
         }
     }
@@ -164,7 +165,7 @@ fn print_text(v: &serde_json::Value) {
             (Some(true), _) => "cartesian",
             _ => "spherical",
         };
-        println!(
+        outln!(
             "  scan {} {}: {} records, {} points, {} invalid; pose rotation (w,x,y,z) {} translation {}; {}; attributes {}",
             s["index"],
             s["name"],
@@ -175,8 +176,9 @@ fn print_text(v: &serde_json::Value) {
             s["translation"],
             coords,
             s["attributes"]
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// The plan of a run over `a.input` (points from the store, the header,
@@ -210,20 +212,20 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     let budget = MemoryBudget::new(mem, threads);
     let minimum = MemoryPlan::minimum_budget(threads, points, &cost);
     let plan = MemoryPlan::new(budget, points, &cost)?;
-    println!(
+    outln!(
         "plan for {} points, --mem {}, {} threads:",
         points,
         human_bytes(mem),
         threads
-    );
-    println!("  smallest budget that plans: {}", human_bytes(minimum));
-    println!(
+    )?;
+    outln!("  smallest budget that plans: {}", human_bytes(minimum))?;
+    outln!(
         "  tiles: at most {} core points each (at least {MIN_TILE_POINTS}), about {} tiles; {} in flight, margins up to {:.1}x the core",
         plan.tile_points,
         points.div_ceil(plan.tile_points),
         cost.in_flight(threads),
         cost.loaded_per_core(plan.tile_points)
-    );
+    )?;
     let global = if cost.global_per_point == 0 {
         "none".to_string()
     } else if plan.global_in_memory {
@@ -231,19 +233,19 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     } else {
         format!("external (about {} contracted boundary nodes)", plan.nodes)
     };
-    println!("  global pass: {global}");
+    outln!("  global pass: {global}")?;
     if cost.resident_per_point > 0.0 {
-        println!(
+        outln!(
             "  small-piece filter: about {} beside the marching-cubes tiles",
             human_bytes((points as f64 * cost.resident_per_point) as u64)
-        );
+        )?;
     }
     for (stage, bytes) in plan.stages(&cost) {
-        println!("  {stage:>14}: {}", human_bytes(bytes));
+        outln!("  {stage:>14}: {}", human_bytes(bytes))?;
     }
-    println!(
+    outln!(
         "  fixed costs: {}",
         human_bytes(scanmesh::memory::plan::BASE_BYTES)
-    );
+    )?;
     Ok(())
 }

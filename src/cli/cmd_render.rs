@@ -1,6 +1,7 @@
 //! `scanmesh render`: a PNG of points, feature lines and a mesh, drawn by
 //! the project's own rasteriser (orthographic, depth-buffered).
 
+use super::stdout::outln;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::DVec3;
@@ -83,6 +84,6 @@ pub fn run(a: RenderArgs) -> Result<()> {
         bail!("nothing finite to draw, or the view and up directions are parallel");
     };
     canvas.write_png(&a.output)?;
-    println!("render: {}x{} -> {}", a.width, a.height, a.output.display());
+    outln!("render: {}x{} -> {}", a.width, a.height, a.output.display())?;
     Ok(())
 }

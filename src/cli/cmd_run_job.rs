@@ -28,7 +28,7 @@ pub struct RunJobArgs {
     /// Do what comes before this tile stage, then stop.
     #[arg(long, conflicts_with = "stage")]
     until: Option<String>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 8 x the cores).
     #[arg(long)]
     threads: Option<usize>,
     /// No progress bars.
@@ -92,6 +92,9 @@ pub fn run(a: RunJobArgs) -> Result<()> {
         bail!("{}: the recorded command keeps no run", a.dir.display());
     };
     common.job = a.job();
+    // Refused here, before the job is logged as started: --threads from
+    // the script, --mem from the recorded command, against this node.
+    common.mem_and_threads()?;
     super::rundir::run_in_dir(command, args[1..].to_vec())
 }
 

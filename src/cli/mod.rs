@@ -19,9 +19,13 @@ mod cmd_status;
 mod cmd_tile;
 mod emit;
 mod hints;
+mod liveness;
 mod progress;
 mod report;
 mod rundir;
+mod stdout;
+
+pub use stdout::closed as stdout_closed;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -84,10 +88,11 @@ enum Command {
 /// Options every processing command takes.
 #[derive(Args, Clone, Debug)]
 pub struct CommonArgs {
-    /// Peak memory (RSS) promise, e.g. 256MiB, 2GiB.
+    /// Peak memory (RSS) promise, e.g. 256MiB, 2GiB; at most the
+    /// machine's RAM or its cgroup limit, whichever is smaller.
     #[arg(long, default_value = "1GiB")]
     mem: String,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 8 x the cores).
     #[arg(long)]
     threads: Option<usize>,
     /// Force tiles of at most this many points (tests, benches).
@@ -164,15 +169,82 @@ pub struct Settings {
     pub job: Job,
 }
 
+/// Threads beyond this many per core only take turns: a slip of the
+/// keyboard (`--threads 100000`) spent minutes spawning threads.
+const MAX_THREADS_PER_CORE: usize = 8;
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Why `threads` is too many for this machine, if it is.
+fn too_many_threads(threads: usize) -> Option<String> {
+    let cores = cores();
+    let most = MAX_THREADS_PER_CORE * cores;
+    (threads > most).then(|| {
+        format!(
+            "--threads {threads} is more than {MAX_THREADS_PER_CORE} x the {cores} cores here: give at most {most}"
+        )
+    })
+}
+
+/// Why `mem` is more than this machine can give, if it is: the plan would
+/// size tiles for memory that is not there.
+fn too_much_memory(mem: u64) -> Option<String> {
+    let machine = scanmesh::memory::MachineMemory::of_this_process();
+    let limit = machine.limit().filter(|&l| mem > l)?;
+    let ram = machine
+        .ram
+        .map_or("unknown".to_string(), scanmesh::units::human_bytes);
+    let cgroup = machine
+        .cgroup
+        .map_or("none".to_string(), scanmesh::units::human_bytes);
+    Some(format!(
+        "--mem {} is more than this machine can give (RAM {ram}, cgroup limit {cgroup}): give at most {}MiB",
+        scanmesh::units::human_bytes(mem),
+        limit >> 20
+    ))
+}
+
 impl CommonArgs {
-    fn settings(&self) -> Result<Settings> {
+    /// `--mem` and `--threads` as numbers, refused beyond this machine.
+    /// With `--emit` the jobs run where the script sends them (a compute
+    /// node may be larger than the login node), so they are only parsed
+    /// here: [`CommonArgs::check_against_this_machine`] warns, and each
+    /// job refuses them where it runs.
+    fn mem_and_threads(&self) -> Result<(u64, usize)> {
         let mem = scanmesh::units::parse_size(&self.mem)
             .with_context(|| format!("--mem {}", self.mem))?;
         let threads = match self.threads {
             Some(0) => bail!("--threads must be at least 1"),
             Some(t) => t,
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            None => cores(),
         };
+        if self.emit.is_none() {
+            if let Some(why) = too_many_threads(threads).or_else(|| too_much_memory(mem)) {
+                bail!(why);
+            }
+        }
+        Ok((mem, threads))
+    }
+
+    /// `--mem` and `--threads` checked against this machine: refused
+    /// beyond it, or with `--emit` a warning on stderr for each.
+    fn check_against_this_machine(&self) -> Result<()> {
+        let (mem, threads) = self.mem_and_threads()?;
+        if self.emit.is_some() {
+            for why in [too_many_threads(threads), too_much_memory(mem)]
+                .into_iter()
+                .flatten()
+            {
+                eprintln!("warning: {why} (--emit: each job checks it again where it runs)");
+            }
+        }
+        Ok(())
+    }
+
+    fn settings(&self) -> Result<Settings> {
+        let (mem, threads) = self.mem_and_threads()?;
         if self.tile_points == Some(0) {
             bail!("--tile-points must be at least 1");
         }
@@ -273,6 +345,9 @@ impl Settings {
         cost: KernelCost,
         progress: &dyn Progress,
     ) -> Result<Prepared> {
+        // Before the ingest, which may take hours: `status` tells this
+        // process apart from a dead one by its record.
+        liveness::record(&run.dir);
         let tile_job = matches!(self.job, Job::Tiles { .. });
         let store_dir = if is_store(input) {
             input.to_path_buf()
@@ -410,12 +485,20 @@ pub fn run() -> Result<()> {
     if let Some(path) = &report {
         place::check_output(path)?;
     }
-    let outcome = match cli.command {
-        Command::RunJob(a) => cmd_run_job::run(a),
-        Command::Status(a) => cmd_status::run(a),
-        command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
-    }
-    .map_err(hints::with_flag_hints);
+    // Before a run directory is made or written: a refused --mem must not
+    // leave a run behind that the corrected command line then differs from.
+    let checked = cli
+        .command
+        .common()
+        .map_or(Ok(()), CommonArgs::check_against_this_machine);
+    let outcome = checked
+        .and_then(|()| match cli.command {
+            Command::RunJob(a) => cmd_run_job::run(a),
+            Command::Status(a) => cmd_status::run(a),
+            command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
+        })
+        .map_err(hints::with_flag_hints);
+    liveness::forget();
     if let Some(path) = &report {
         report::write(path, &start, &outcome)?;
     }

@@ -36,7 +36,8 @@ const STAGES_DIR: &str = "stages";
 
 /// Every entry scanmesh makes in a run directory: all that `--restart`
 /// may remove (with the temporaries of their atomic writes).
-const MADE: [&str; 8] = [
+const MADE: [&str; 9] = [
+    super::liveness::PROCS_DIR,
     RUN_FILE,
     DONE_FILE,
     LOG_FILE,
@@ -115,11 +116,8 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
         if let Some(kind) = common.emit {
             let stages = command.tile_stages()?;
             let settings = common.settings()?;
-            print!(
-                "{}",
-                super::emit::script(kind, &run, &stages, common.tasks, &settings)
-            );
-            return Ok(());
+            let script = super::emit::script(kind, &run, &stages, common.tasks, &settings);
+            return super::stdout::write(format_args!("{script}"));
         }
         if let Some(summary) = run.finished(&output, &input)? {
             super::report::summary(format!(
@@ -128,7 +126,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
                 run.dir.display()
             ));
             if !summary.is_empty() && !common.quiet {
-                println!("  {summary}");
+                super::stdout::outln!("  {summary}")?;
             }
             return Ok(());
         }

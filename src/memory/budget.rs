@@ -11,6 +11,7 @@ pub struct MemoryBudget {
 }
 
 use super::plan::BASE_BYTES;
+use std::path::Path;
 
 impl MemoryBudget {
     /// A budget of `bytes` for `threads` workers (0 threads counts as 1).
@@ -54,6 +55,88 @@ pub fn peak_rss_bytes() -> Option<u64> {
     Some(kib * 1024)
 }
 
+/// What memory this process can have: the machine's RAM and its control
+/// group's limit, each when known (Linux; elsewhere both are `None`). A
+/// `--mem` beyond the smaller is a promise the machine cannot keep: the
+/// plan would size tiles for memory that is not there, and the run would
+/// swap or be killed by the out-of-memory killer hours in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MachineMemory {
+    /// Total RAM (`MemTotal` in `/proc/meminfo`), in bytes.
+    pub ram: Option<u64>,
+    /// The smallest memory limit of this process's control group and its
+    /// ancestors (cgroup v2 `memory.max`, v1 `memory.limit_in_bytes`), in
+    /// bytes; `None` when there is none. A cluster's job gets one.
+    pub cgroup: Option<u64>,
+}
+
+impl MachineMemory {
+    /// The RAM and control group limit of this process, read from `/proc`
+    /// and `/sys/fs/cgroup`.
+    pub fn of_this_process() -> Self {
+        MachineMemory {
+            ram: std::fs::read_to_string("/proc/meminfo")
+                .ok()
+                .and_then(|t| mem_total(&t)),
+            cgroup: std::fs::read_to_string("/proc/self/cgroup")
+                .ok()
+                .and_then(|t| cgroup_limit(&t, Path::new("/sys/fs/cgroup"))),
+        }
+    }
+
+    /// The most this process can hold: the smaller of the two, if either
+    /// is known.
+    pub fn limit(&self) -> Option<u64> {
+        match (self.ram, self.cgroup) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
+/// `MemTotal` of a `/proc/meminfo` text, in bytes.
+fn mem_total(meminfo: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// The smallest memory limit on the way from the control group that
+/// `proc_cgroup` (a `/proc/self/cgroup` text) names up to the root of the
+/// hierarchy mounted under `root`. A directory that is not there (a
+/// container sees its own group as the root) is passed over.
+fn cgroup_limit(proc_cgroup: &str, root: &Path) -> Option<u64> {
+    let mut limits = Vec::new();
+    for line in proc_cgroup.lines() {
+        let mut fields = line.splitn(3, ':');
+        let (Some(id), Some(controllers), Some(path)) =
+            (fields.next(), fields.next(), fields.next())
+        else {
+            continue;
+        };
+        let (mount, file) = if id == "0" && controllers.is_empty() {
+            (root.to_path_buf(), "memory.max")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            (root.join("memory"), "memory.limit_in_bytes")
+        } else {
+            continue;
+        };
+        let leaf = mount.join(path.trim_start_matches('/'));
+        for dir in leaf.ancestors().take_while(|d| d.starts_with(&mount)) {
+            let value = std::fs::read_to_string(dir.join(file)).ok();
+            limits.extend(value.as_deref().and_then(limit_value));
+        }
+    }
+    limits.into_iter().min()
+}
+
+/// A control group limit file's value in bytes; `None` for no limit
+/// (v2 writes `max`, v1 a number near 2^63 rounded down to a page).
+fn limit_value(text: &str) -> Option<u64> {
+    let bytes: u64 = text.trim().parse().ok()?;
+    (bytes < 1 << 62).then_some(bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -65,5 +148,44 @@ mod tests {
         let c = MemoryBudget::new(256 << 20, 4).tile_points(400, 1.3, 0, 5);
         assert!(a > b && b > c, "{a} {b} {c}");
         assert!(b * 3 * 400 * 13 / 10 <= (256 << 20) - BASE_BYTES);
+    }
+
+    #[test]
+    fn machine_memory_from_proc_and_cgroup_files() {
+        let meminfo = "MemTotal:       24576000 kB\nMemFree:  1 kB\n";
+        assert_eq!(mem_total(meminfo), Some(24_576_000 * 1024));
+        assert_eq!(limit_value("max\n"), None);
+        assert_eq!(limit_value("9223372036854771712\n"), None);
+        assert_eq!(limit_value("8589934592\n"), Some(8 << 30));
+
+        let root = tempfile::tempdir().expect("tmp");
+        let r = root.path();
+        // v2: the job's group (4 GiB) below a user slice (6 GiB).
+        std::fs::create_dir_all(r.join("user.slice/job")).expect("mkdir");
+        std::fs::write(r.join("user.slice/memory.max"), "6442450944\n").expect("w");
+        std::fs::write(r.join("user.slice/job/memory.max"), "4294967296\n").expect("w");
+        assert_eq!(cgroup_limit("0::/user.slice/job\n", r), Some(4 << 30));
+        // v1: the memory controller's own hierarchy; "unlimited" is none.
+        std::fs::create_dir_all(r.join("memory/slurm/uid_0/job_7")).expect("mkdir");
+        std::fs::write(
+            r.join("memory/memory.limit_in_bytes"),
+            "9223372036854771712",
+        )
+        .expect("w");
+        std::fs::write(
+            r.join("memory/slurm/uid_0/job_7/memory.limit_in_bytes"),
+            "1073741824",
+        )
+        .expect("w");
+        let v1 = "12:cpu,cpuacct:/slurm\n4:memory:/slurm/uid_0/job_7\n0::/\n";
+        assert_eq!(cgroup_limit(v1, r), Some(1 << 30));
+        // A group the container does not see: its own root answers.
+        assert_eq!(cgroup_limit("4:memory:/elsewhere/x\n", r), None);
+        let m = MachineMemory {
+            ram: Some(16 << 30),
+            cgroup: Some(4 << 30),
+        };
+        assert_eq!(m.limit(), Some(4 << 30));
+        assert_eq!(MachineMemory { cgroup: None, ..m }.limit(), Some(16 << 30));
     }
 }

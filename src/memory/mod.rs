@@ -6,5 +6,5 @@
 mod budget;
 pub mod plan;
 
-pub use budget::{peak_rss_bytes, MemoryBudget};
+pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget};
 pub use plan::{BudgetError, KernelCost, MemoryPlan};
