@@ -304,8 +304,9 @@ fn rng_height(seed: u64) -> f64 {
 }
 
 /// A closed surface with stray points keeps >= 99 % of its own normals
-/// outward, in memory and external, untiled and in 16 or more tiles (which
-/// agree bit for bit): no one point decides the sign of a component.
+/// outward, in memory and external, untiled and in 16 or more tiles, on 1
+/// and 2 threads (which all agree bit for bit): no one point decides the
+/// sign of a component.
 fn strays_keep_the_surface_outward(shape: &Shape, inside: DVec3) {
     let n = 20_000;
     for seed in 0..3 {
@@ -326,6 +327,7 @@ fn strays_keep_the_surface_outward(shape: &Shape, inside: DVec3) {
             let tight = RunOptions::new(2).within(MemoryBudget::new(0, 2));
             let runs = [
                 ("in memory, tiled", normals_of(&pts, 400, 2, &params)),
+                ("1 thread, tiled", normals_of(&pts, 400, 1, &params)),
                 ("external", normals_with(&pts, u64::MAX, tight, &params)),
                 ("external, tiled", normals_with(&pts, 400, tight, &params)),
             ];
