@@ -102,6 +102,44 @@ fn closed_torus_is_watertight_with_euler_zero() {
     );
 }
 
+/// Six times the signed volume of a mesh: positive when its faces wind
+/// outward.
+fn six_volume(m: &Mesh) -> f64 {
+    let at = |i: u32| m.vertices[i as usize];
+    m.triangles
+        .iter()
+        .map(|t| at(t[0]).dot(at(t[1]).cross(at(t[2]))))
+        .sum()
+}
+
+/// One stray point above a closed torus signed the torus inward (its
+/// garbage normal rooted the orientation), and `--closed` wrote a mesh of
+/// negative volume that called itself watertight. Now the surface faces
+/// out, and the run checks it did.
+#[test]
+fn a_stray_point_above_does_not_turn_a_closed_torus_inside_out() {
+    let scan = generate(&Shape::torus(1.0, 0.3), 60_000, 0.0, 4).expect("generate");
+    let truth = 2.0 * std::f64::consts::PI.powi(2) * 1.0 * 0.3 * 0.3;
+    let strays = [
+        DVec3::new(0.26, 0.64, 1.6),
+        DVec3::new(0.0, 0.0, 3.0),
+        DVec3::new(-0.8, 0.3, 0.9),
+    ];
+    for (k, stray) in strays.into_iter().enumerate() {
+        let mut points = scan.points.clone();
+        points.push(stray);
+        let tiles = [u64::MAX, 20_000][k % 2];
+        let r = reconstruct(&points, tiles, 2, true);
+        let volume = six_volume(&r.mesh) / 6.0;
+        assert!(
+            (volume - truth).abs() < 0.03 * truth,
+            "stray at {stray}: volume {volume}, torus {truth}"
+        );
+        assert!(r.quality.watertight, "{}", r.quality);
+        assert_eq!(r.report.pieces.pieces_outward, 1, "stray at {stray}");
+    }
+}
+
 #[test]
 fn closed_scan_drops_a_stray_cluster_but_keeps_it_when_asked() {
     let mut points = generate(&Shape::torus(1.0, 0.3), 60_000, 0.0, 4)
@@ -166,7 +204,7 @@ fn plane_with_a_hole_has_two_boundary_loops() {
 /// A ball of 50 samples above a plane of 60,000: a component of the
 /// orientation graph under a thousandth of the points, which the paper's
 /// island rule leaves unoriented. The reconstruction still closes its
-/// surface (the island is signed by its own top point); a closed one
+/// surface (the island is signed by its own highest points); a closed one
 /// drops it as a small piece.
 #[test]
 fn an_island_is_kept_open_and_dropped_closed() {

@@ -199,8 +199,8 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
     ));
 }
 
-/// " (N holes closed, M left open; P small pieces dropped)", the parts
-/// that apply.
+/// " (N holes closed, M left open, P small pieces dropped, Q closed pieces
+/// outward)", the parts that apply.
 fn changes_summary(r: &ImplicitReport) -> String {
     let (h, p) = (r.holes, r.pieces);
     let mut parts = Vec::new();
@@ -217,6 +217,21 @@ fn changes_summary(r: &ImplicitReport) -> String {
         parts.push(format!(
             "{} small pieces dropped ({} triangles)",
             p.pieces_dropped, p.triangles_dropped
+        ));
+    }
+    // `--closed` fails when a piece is inside out, so a count here is a
+    // check that passed.
+    if p.pieces_outward > 0 {
+        let n = p.pieces_outward;
+        let pieces = if n == 1 { "piece" } else { "pieces" };
+        parts.push(format!(
+            "outward check passed: {n} closed {pieces} of positive signed volume"
+        ));
+    }
+    if p.pieces_open > 0 {
+        parts.push(format!(
+            "{} pieces with open holes not checked for volume",
+            p.pieces_open
         ));
     }
     if parts.is_empty() {

@@ -60,6 +60,19 @@ pub enum MeshError {
         /// Vertices written.
         vertex_count: u64,
     },
+    /// Pieces of a mesh that must enclose a volume enclose a negative one
+    /// (their faces are wound inward): the output was not completed.
+    #[error("{path}: {inward} of {pieces} closed pieces enclose a negative signed volume (down to {volume:.4e}): the surface is inside out (normals oriented inward), so no mesh was written")]
+    InwardPieces {
+        /// The output file (not written).
+        path: PathBuf,
+        /// Pieces whose signed volume is not positive.
+        inward: u64,
+        /// Pieces checked.
+        pieces: u64,
+        /// The most negative signed volume among them.
+        volume: f64,
+    },
     /// The output file could not be written.
     #[error(transparent)]
     Io(#[from] IoError),

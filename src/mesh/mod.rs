@@ -33,7 +33,7 @@ pub use distance::{
     compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
 };
 pub use error::MeshError;
-pub use pieces::{PieceFilter, PieceReport};
+pub use pieces::{PieceFilter, PieceReport, PlacedTriangle};
 pub use quality::{quality, ComponentQuality, QualityReport};
 pub use self_intersect::{self_intersections, SelfIntersectionReport};
 pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions};

@@ -17,7 +17,7 @@ use super::pca::fit_plane;
 use super::{EdgeCost, NormalParams, Orientation, FLAG_DEGENERATE};
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::Neighbour;
-use crate::store::sampling::SamplingHistograms;
+use crate::store::sampling::{SamplingHistograms, ZERO_SLOT};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 
@@ -32,6 +32,11 @@ pub struct NormalsTile {
     pub forest: Vec<Edge>,
     /// Nearest-neighbour distances and fit residuals of the core points.
     pub sampling: SamplingHistograms,
+    /// Each core point's nearest-neighbour distance as the slot the
+    /// sampling histogram counted it in (spanning tree only, else empty):
+    /// the orientation leaves the isolated ones out of its decisions, by a
+    /// cut only the whole cloud's histogram gives (`orient::isolated`).
+    pub nn_slots: Vec<u16>,
 }
 
 pub struct NormalsKernel {
@@ -120,8 +125,13 @@ impl TileKernel for NormalsKernel {
                 .collect(),
             forest: Vec::new(),
             sampling: sampling(&fits, self.histogram_scale),
+            nn_slots: Vec::new(),
         };
         if self.params.orientation == Orientation::SpanningTree {
+            out.nn_slots = fits
+                .iter()
+                .map(|f| f.nn.map_or(ZERO_SLOT, |nn| out.sampling.nn.slot(nn)))
+                .collect();
             let mut normals: Vec<Option<DVec3>> = vec![None; tile.points.len()];
             for (n, f) in normals.iter_mut().zip(&fits) {
                 *n = f.fitted.map(|f| f.n);

@@ -39,7 +39,7 @@ pub(crate) const EXPORT_BYTES_PER_POINT: u64 = 48;
 pub const FLAG_DEGENERATE: u8 = 1;
 /// The point has a normal but the orientation could not reach it (an island
 /// dropped by the paper's 1/1000 rule). With the spanning tree, the normal
-/// is still signed by its island's own top point, not tied to the rest.
+/// is still signed by its island's own highest points, not tied to the rest.
 pub const FLAG_UNORIENTED: u8 = 2;
 
 /// How normals get their sign.
@@ -202,8 +202,9 @@ impl NormalParams {
             resident_per_point: 0.0,
             window_bytes_per_point: EXPORT_BYTES_PER_POINT,
             // The store (20), normals and flags (13), forest runs (24),
-            // external labels (8) and the export's reorder file (29).
-            scratch_per_point: 94,
+            // the orientation's nearest-neighbour slots (2), external
+            // labels (8) and the export's reorder file (29).
+            scratch_per_point: 96,
             // x y z as double, normals as float, flags.
             output_per_point: 37,
             parallel_in_tile: false,
@@ -336,6 +337,10 @@ fn normals_into(
     };
     let mut sampling = SamplingHistograms::new(scale);
     let mut runs = EdgeRuns::create(&store.dir().join(".forest.edges"))?;
+    let by_tree = params.orientation == Orientation::SpanningTree;
+    let mut isolated = by_tree
+        .then(|| orient::Isolated::create(store))
+        .transpose()?;
     let mut report = NormalsReport {
         points: store.len(),
         tiles: store.tiles().len(),
@@ -351,6 +356,9 @@ fn normals_into(
             .iter()
             .filter(|f| **f & FLAG_DEGENERATE != 0)
             .count() as u64;
+        if let Some(isolated) = &isolated {
+            isolated.write(start, &out.nn_slots)?;
+        }
         let tile = &store.tiles()[t];
         runs.push_tile_run(&out.forest, tile.start..tile.start + tile.count)?;
         sampling.merge(&out.sampling);
@@ -358,11 +366,17 @@ fn normals_into(
     })?;
     report.sampling = sampling.stats();
     report.forest_edges = runs.edges();
-    if params.orientation == Orientation::SpanningTree {
+    if let Some(isolated) = &mut isolated {
+        isolated.settle(&sampling.nn, sampling.isolation_limit());
+        let columns = orient::Columns {
+            normals,
+            flags,
+            isolated,
+        };
         let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
-            orient::orient_by_forest(store, runs, normals, flags, progress)?
+            orient::orient_by_forest(store, runs, columns, progress)?
         } else {
-            orient::orient_external(store, runs, normals, flags, progress)?
+            orient::orient_external(store, runs, columns, progress)?
         };
         report.unoriented = stats.unoriented;
         report.components = stats.components;

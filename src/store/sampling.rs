@@ -12,6 +12,10 @@ const OCTAVES: i32 = 24;
 const BINS: usize = (2 * OCTAVES) as usize * PER_OCTAVE as usize;
 /// Fixed-point units per `scale` of the exact sum.
 const SUM_UNIT: f64 = (1u64 << 40) as f64;
+/// [`LogHistogram::slot`] of a zero (or negative, or NaN) value.
+pub const ZERO_SLOT: u16 = 0;
+/// [`LogHistogram::slot`] of a value beyond the bins.
+pub const ABOVE_SLOT: u16 = BINS as u16 + 1;
 
 /// Histogram of positive values on a log2 scale around `scale`, with 1.1 %
 /// wide bins; zeros and values outside the range are counted apart.
@@ -45,20 +49,36 @@ impl LogHistogram {
     }
 
     pub fn add(&mut self, v: f64) {
-        if v.is_nan() || v <= 0.0 {
-            self.zeros += 1;
-            return;
+        let slot = self.slot(v);
+        match slot {
+            ZERO_SLOT => {
+                self.zeros += 1;
+                return;
+            }
+            ABOVE_SLOT => self.above += 1,
+            s => self.bins[usize::from(s) - 1] += 1,
         }
         self.max = self.max.max(v);
         // Saturating: an absurd outlier must not wrap the sum.
         self.sum += (v / self.scale * SUM_UNIT).round().min(1e30) as u128;
+    }
+
+    /// Where [`Self::add`] counts `v`: [`ZERO_SLOT`] (zero, negative or
+    /// NaN), `1 + bin`, or [`ABOVE_SLOT`] (beyond the bins). A value kept as
+    /// its slot can be judged later against a cut that only the merged
+    /// histogram knows ([`Self::outliers_from`]), exactly as the histogram
+    /// counted it.
+    pub fn slot(&self, v: f64) -> u16 {
+        if v.is_nan() || v <= 0.0 {
+            return ZERO_SLOT;
+        }
         let b = ((v / self.scale).log2() + OCTAVES as f64) * PER_OCTAVE;
         if b < 0.0 {
-            self.bins[0] += 1;
+            1
         } else if b >= BINS as f64 {
-            self.above += 1;
+            ABOVE_SLOT
         } else {
-            self.bins[b as usize] += 1;
+            1 + b as u16
         }
     }
 
@@ -114,22 +134,33 @@ impl LogHistogram {
         None
     }
 
-    /// Largest value not above `limit`, and how many values exceed it.
+    /// Largest value not above `limit`, and how many values exceed it
+    /// (those counted at [`Self::outliers_from`] or later).
     pub fn max_below(&self, limit: f64) -> (f64, u64) {
+        let from = self.outliers_from(limit);
         let mut best = 0.0;
         let mut over = self.above;
         for (i, c) in self.bins.iter().enumerate() {
             if *c == 0 {
                 continue;
             }
-            let edge = self.upper_edge(i).min(self.max);
-            if edge <= limit * (1.0 + 1.0 / PER_OCTAVE) {
-                best = edge;
+            if i + 1 < usize::from(from) {
+                best = self.upper_edge(i).min(self.max);
             } else {
                 over += c;
             }
         }
         (best, over)
+    }
+
+    /// The first slot ([`Self::slot`]) whose values lie beyond `limit`:
+    /// the first bin whose upper edge (at most the largest value) exceeds
+    /// it by more than a bin's width, else [`ABOVE_SLOT`]. Bins grow with
+    /// their slot, so every later slot lies beyond too.
+    pub fn outliers_from(&self, limit: f64) -> u16 {
+        (0..BINS)
+            .find(|&i| self.upper_edge(i).min(self.max) > limit * (1.0 + 1.0 / PER_OCTAVE))
+            .map_or(ABOVE_SLOT, |i| 1 + i as u16)
     }
 }
 
@@ -172,8 +203,14 @@ impl SamplingHistograms {
         self.residual.merge(&o.residual);
     }
 
+    /// Beyond what nearest-neighbour distance a point is an isolated
+    /// outlier: 3x the 99th percentile.
+    pub fn isolation_limit(&self) -> f64 {
+        3.0 * self.nn.quantile(0.99)
+    }
+
     pub fn stats(&self) -> SamplingStats {
-        let (rho, rho_outliers) = self.nn.max_below(3.0 * self.nn.quantile(0.99));
+        let (rho, rho_outliers) = self.nn.max_below(self.isolation_limit());
         SamplingStats {
             rho,
             rho_outliers,
@@ -212,6 +249,26 @@ mod tests {
         assert!(st.rho < 2.05 && st.rho > 1.95, "{st:?}");
         assert_eq!(st.rho_outliers, 2);
         assert!((st.noise - 0.2).abs() < 0.01);
+    }
+
+    #[test]
+    fn slots_judge_points_as_the_histogram_counted_them() {
+        let mut s = SamplingHistograms::new(1.0);
+        let values: Vec<f64> = (0..10_000)
+            .map(|i| 1.0 + (i % 100) as f64 / 100.0)
+            .chain([0.0, 50.0, 80.0, 1e12])
+            .collect();
+        values.iter().for_each(|&v| s.nn.add(v));
+        let from = s.nn.outliers_from(s.isolation_limit());
+        let isolated: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|&v| s.nn.slot(v) >= from)
+            .collect();
+        assert_eq!(isolated, vec![50.0, 80.0, 1e12]);
+        assert_eq!(s.stats().rho_outliers, 3);
+        assert_eq!(s.nn.slot(0.0), ZERO_SLOT);
+        assert_eq!(s.nn.slot(1e12), ABOVE_SLOT);
     }
 
     #[test]

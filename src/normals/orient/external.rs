@@ -2,33 +2,35 @@
 //! fit the memory budget: the same flips as [`super::orient_by_forest`], from
 //! the labels [`ForestLabels`] leaves on disk.
 //!
-//! The paper's root and island rules need, per component, its size and its
-//! highest point. A component labelled by a store index lies in one tile,
-//! so its facts are complete once that tile is read and nothing about it is
-//! kept: the passes below recompute them per tile. Only node components
-//! (which may span tiles) keep their facts in memory, one entry each. The
+//! The sign vote and the island rule need, per component, its size, its
+//! highest point and its highest voters. A component labelled by a store
+//! index lies in one tile, so its facts are complete once that tile is read
+//! and nothing about it is kept: the passes below recompute them per tile
+//! and settle its sign there. Only node components (which may span tiles)
+//! keep their facts in memory, one entry each, with up to 64 voters while
+//! the census gathers them (12 bytes each), settled to a sign after it. The
 //! island rule (orient the component of the highest point, then the others
 //! by size while at least 1/1000 of the points are left) needs only the
 //! census of sizes, and, when the cut falls inside one size class, which
 //! members of that class come first (by smallest top id).
 
-use super::{rewrite_signs, tile_components, Component, OrientStats, Sign};
+use super::{rewrite_signs, tile_components, Columns, Component, Gathered, OrientStats, Sign};
 use crate::normals::labels::ForestLabels;
 use crate::normals::runs::EdgeRuns;
 use crate::normals::NormalsError;
 use crate::pipeline::Progress;
-use crate::store::{Column, PointStore, TileEntry};
+use crate::store::{PointStore, TileEntry};
 use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap};
+use std::sync::Mutex;
 
 /// Orients the store's normals by the merged tile forests in `runs`, with
 /// memory that does not grow with the points.
 pub fn orient_external(
     store: &PointStore,
     mut runs: EdgeRuns,
-    normals: &Column,
-    flags: &Column,
+    columns: Columns,
     progress: &dyn Progress,
 ) -> Result<OrientStats, NormalsError> {
     let labels = ForestLabels::solve(store, &mut runs, &[], progress)?;
@@ -36,9 +38,9 @@ pub fn orient_external(
     let facts = TileFacts {
         store,
         labels: &labels,
-        normals,
-        flags,
+        columns,
     };
+    let (normals, flags) = (columns.normals, columns.flags);
     progress.begin("orient: components", store.len());
     let census = Census::take(&facts, progress)?;
     progress.end();
@@ -48,7 +50,7 @@ pub fn orient_external(
         .tiles()
         .par_iter()
         .map(|t| {
-            let local = facts.of(t)?;
+            let local = facts.settled(t)?;
             let mut read = Vec::new();
             labels.read_tile(t, &mut read)?;
             let n = rewrite_signs(t, normals, flags, |i| {
@@ -82,20 +84,33 @@ fn split(word: u64) -> (u64, bool) {
 struct TileFacts<'a> {
     store: &'a PointStore,
     labels: &'a ForestLabels,
-    normals: &'a Column,
-    flags: &'a Column,
+    columns: Columns<'a>,
 }
 
+/// A tile's component facts: the node components' shares (to be merged
+/// over tiles) and its own components' settled facts, each by label,
+/// sorted.
+type TileShare = (Vec<(u64, Gathered)>, Vec<(u64, Component)>);
+
 impl TileFacts<'_> {
-    /// Tile `t`'s component facts, by label, sorted by label.
-    fn of(&self, t: &TileEntry) -> Result<Vec<(u64, Component)>, NormalsError> {
+    /// Tile `t`'s component facts, split as [`TileShare`].
+    fn of(&self, t: &TileEntry) -> Result<TileShare, NormalsError> {
         let mut read = Vec::new();
         self.labels.read_tile(t, &mut read)?;
-        let mut part = tile_components(self.store, t, self.normals, self.flags, |i| {
+        let mut part = tile_components(self.store, t, self.columns, |i| {
             split(read[(i - t.start) as usize])
         })?;
         part.sort_unstable_by_key(|p| p.0);
-        Ok(part)
+        let (nodes, own): (Vec<_>, Vec<_>) = part
+            .into_iter()
+            .partition(|(label, _)| self.labels.node_component(*label).is_some());
+        let own = own.into_iter().map(|(l, c)| (l, c.settle())).collect();
+        Ok((nodes, own))
+    }
+
+    /// The settled facts of the components that lie in tile `t` alone.
+    fn settled(&self, t: &TileEntry) -> Result<Vec<(u64, Component)>, NormalsError> {
+        Ok(self.of(t)?.1)
     }
 }
 
@@ -109,6 +124,7 @@ fn find(part: &[(u64, Component)], label: u64) -> Component {
 struct Census {
     /// Components by size (the first one excluded once known).
     sizes: BTreeMap<u32, u64>,
+    /// The node components' settled facts, by number.
     spanning: Vec<Component>,
     /// Label and facts of the component of the highest point.
     first: Option<(u64, Component)>,
@@ -119,31 +135,35 @@ struct Census {
 impl Census {
     fn take(facts: &TileFacts, progress: &dyn Progress) -> Result<Self, NormalsError> {
         let (store, labels) = (facts.store, facts.labels);
-        let mut census = Census {
+        let census = Census {
             sizes: BTreeMap::new(),
-            spanning: vec![Component::default(); labels.node_components],
+            spanning: Vec::new(),
             first: None,
             total: 0,
             components: 0,
         };
-        // Tiles in parallel, folded in tile order: a component's facts are
-        // order-free, so the fold order only has to be fixed, not special.
-        let per_tile: Vec<Vec<(u64, Component)>> = store
-            .tiles()
-            .par_iter()
-            .map(|t| {
-                let part = facts.of(t);
-                progress.advance(t.count);
-                part
-            })
-            .collect::<Result<_, _>>()?;
-        for (label, c) in per_tile.into_iter().flatten() {
-            match labels.node_component(label) {
-                Some(k) => census.spanning[k].absorb(&c),
-                None => census.add(label, c),
+        // Tiles in parallel, each folded in as it comes: a component's
+        // facts are order-free (sums, maxima under total orders, the
+        // highest voters), so no tile's share waits for the others.
+        let spanning = vec![Gathered::default(); labels.node_components];
+        let folded = Mutex::new((census, spanning));
+        store.tiles().par_iter().try_for_each(|t| {
+            let (nodes, own) = facts.of(t)?;
+            let mut guard = folded.lock().unwrap_or_else(|e| e.into_inner());
+            let (census, spanning) = &mut *guard;
+            for (label, c) in nodes {
+                if let Some(k) = labels.node_component(label) {
+                    spanning[k].absorb(&c);
+                }
             }
-        }
-        let spanning = std::mem::take(&mut census.spanning);
+            for (label, c) in own {
+                census.add(label, c);
+            }
+            progress.advance(t.count);
+            Ok::<_, NormalsError>(())
+        })?;
+        let (mut census, spanning) = folded.into_inner().unwrap_or_else(|e| e.into_inner());
+        let spanning: Vec<Component> = spanning.iter().map(Gathered::settle).collect();
         for (k, c) in spanning.iter().enumerate() {
             census.add(store.len() + k as u64, *c);
         }
@@ -163,8 +183,7 @@ impl Census {
         *self.sizes.entry(c.size).or_default() += 1;
         self.total += u64::from(c.size);
         self.components += 1;
-        let higher = |o: &Component| (c.top_z, Reverse(c.top_id)) > (o.top_z, Reverse(o.top_id));
-        if self.first.as_ref().is_none_or(|(_, f)| higher(f)) {
+        if self.first.as_ref().is_none_or(|(_, f)| c.top > f.top) {
             self.first = Some((label, c));
         }
     }
@@ -218,13 +237,13 @@ impl Census {
         let spanning = self.spanning.iter().enumerate();
         for (label, c) in spanning.map(|(i, c)| (store.len() + i as u64, *c)) {
             if c.size == size && label != first {
-                keep.offer(c.top_id);
+                keep.offer(c.top.id());
             }
         }
         for t in store.tiles() {
-            for (label, c) in facts.of(t)? {
-                if label < store.len() && c.size == size && label != first {
-                    keep.offer(c.top_id);
+            for (label, c) in facts.settled(t)? {
+                if c.size == size && label != first {
+                    keep.offer(c.top.id());
                 }
             }
         }
@@ -297,6 +316,6 @@ impl Cut {
     fn orients(&self, label: u64, c: &Component) -> bool {
         label == self.first
             || c.size > self.size
-            || (c.size == self.size && self.last_id.is_some_and(|id| c.top_id <= id))
+            || (c.size == self.size && self.last_id.is_some_and(|id| c.top.id() <= id))
     }
 }

@@ -27,7 +27,7 @@
 //!   nearest points beyond `r`. A part farther than that from every
 //!   adjusted point (no pair at all) is oriented like a model of its own:
 //!   its extreme point along the first source direction faces that way,
-//!   as the spanning-tree pass roots each component at its highest point.
+//!   as the spanning-tree pass signs each component by its highest points.
 //! - `w` may subtract the pair's tangent-plane offset ([`super::pairs`]).
 
 use super::graph::Graph;

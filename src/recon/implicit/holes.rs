@@ -24,7 +24,7 @@
 //! vertices is incomplete (a later tile may name it, `super::owners`) or
 //! both are on the boundary.
 
-use super::hole_guard::{placed, tries_for, NearHoles};
+use super::hole_guard::{placed, tries_for, NearHoles, Placed};
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 
@@ -148,8 +148,9 @@ impl BoundaryEdges {
     }
 
     /// Chains the boundary edges into loops and triangulates each loop that
-    /// can be; returns the new triangles (wound like the mesh) and counts.
-    pub(crate) fn fill(self) -> (Vec<[u32; 3]>, HoleReport) {
+    /// can be; returns the new triangles (wound like the mesh, with their
+    /// corners), the counts, and a vertex of each loop left open.
+    pub(crate) fn fill(self) -> (Vec<Placed>, HoleReport, Vec<u32>) {
         let mut edges = self.settled;
         edges.extend(
             self.waiting
@@ -161,23 +162,27 @@ impl BoundaryEdges {
         edges.sort_unstable_by_key(|[a, b]| (a.0, b.0));
         let mut report = HoleReport::default();
         let mut triangles = Vec::new();
+        let mut open = Vec::new();
         let is_edge = |a: u32, b: u32| self.edges_near_holes.contains_key(&(a.min(b), a.max(b)));
         let mut near = self.near;
         let turns = pinch_turns(&edges, &near);
-        for lp in chain_loops(edges, &turns) {
+        for (start, lp) in chain_loops(edges, &turns) {
             let patch = lp
                 .filter(|l| l.len() <= MAX_FILLED_LOOP)
                 .and_then(|l| patch_clear_of_mesh(&l, is_edge, &near));
             match patch {
                 Some(p) => {
                     near.add_patch(&p);
-                    triangles.extend(p.iter().map(|t| t.0));
+                    triangles.extend_from_slice(&p);
                     report.filled += 1;
                 }
-                None => report.left_open += 1,
+                None => {
+                    report.left_open += 1;
+                    open.push(start);
+                }
             }
         }
-        (triangles, report)
+        (triangles, report, open)
     }
 }
 
@@ -186,11 +191,12 @@ impl BoundaryEdges {
 /// at a vertex with two edges out the walk takes the turn `turns` gives
 /// ([`super::pinch`]); `None` for a loop that passes a vertex twice, or a
 /// pinch vertex without a turn (the walk cannot tell which way to go
-/// there, so it is left open).
+/// there, so it is left open). Each loop comes with the vertex its walk
+/// started from.
 fn chain_loops(
     edges: Vec<[LoopVertex; 2]>,
     turns: &HashMap<(u32, u32), u32>,
-) -> Vec<Option<Vec<LoopVertex>>> {
+) -> Vec<(u32, Option<Vec<LoopVertex>>)> {
     let mut next: HashMap<u32, Vec<LoopVertex>> = HashMap::new();
     let mut starts: Vec<LoopVertex> = Vec::new();
     for [a, b] in edges {
@@ -238,7 +244,7 @@ fn chain_loops(
             };
             (prev, step) = (step.0, outs.remove(i));
         }
-        loops.push((closed && ok).then(|| start_at_least_position(lp)));
+        loops.push((start.0, (closed && ok).then(|| start_at_least_position(lp))));
     }
     loops
 }
@@ -280,7 +286,7 @@ fn patch_clear_of_mesh(
     lp: &[LoopVertex],
     is_edge: impl Fn(u32, u32) -> bool,
     near: &NearHoles,
-) -> Option<Vec<super::hole_guard::Placed>> {
+) -> Option<Vec<Placed>> {
     let mut banned = HashSet::new();
     for _ in 0..tries_for(lp.len()) {
         let tris = least_area_triangles(lp, &is_edge, &banned)?;
@@ -422,7 +428,7 @@ mod tests {
         let mut edges = BoundaryEdges::default();
         edges.add_tile(&stitched(first, seam));
         edges.add_tile(&stitched(second, seam));
-        let (patch, report) = edges.fill();
+        let (patch, report, open) = edges.fill();
         assert_eq!(
             report,
             HoleReport {
@@ -431,12 +437,13 @@ mod tests {
             }
         );
         assert_eq!(patch.len(), 2);
+        assert!(open.is_empty());
         let mut vertices = vec![DVec3::ZERO; 8];
         for x in tris.iter().flatten() {
             vertices[x.0 as usize] = x.1;
         }
         let mut faces: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|x| x.0)).collect();
-        faces.extend(patch);
+        faces.extend(patch.iter().map(|p| p.0));
         let q = quality(&Mesh::new(vertices, faces));
         assert!(q.watertight, "{q:?}");
         assert!(q.consistently_oriented);
@@ -499,7 +506,7 @@ mod tests {
         );
         let edges = vec![e(o, a), e(a, b), e(b, o), e(o, c), e(c, d), e(d, o)];
         let loops = chain_loops(edges.clone(), &HashMap::new());
-        assert!(loops.iter().all(Option::is_none), "{loops:?}");
+        assert!(loops.iter().all(|l| l.1.is_none()), "{loops:?}");
         // Turning into the other wedge (the mesh's wedges at 0 run from
         // ray 2 to ray 3 and from 4 to 1): two loops, each through 0 once.
         let turns = HashMap::from([((2, 0), 1), ((4, 0), 3)]);
@@ -510,12 +517,12 @@ mod tests {
             ids
         };
         let loops = chain_loops(edges.clone(), &turns);
-        let mut loops: Vec<Vec<u32>> = loops.iter().map(ids).collect();
+        let mut loops: Vec<Vec<u32>> = loops.iter().map(|l| ids(&l.1)).collect();
         loops.sort();
         assert_eq!(loops, vec![vec![0, 1, 2], vec![0, 3, 4]]);
         // Turning into the same wedge walks one loop through 0 twice.
         let turns = HashMap::from([((2, 0), 3), ((4, 0), 1)]);
         let loops = chain_loops(edges, &turns);
-        assert!(loops.iter().all(Option::is_none), "{loops:?}");
+        assert!(loops.iter().all(|l| l.1.is_none()), "{loops:?}");
     }
 }

@@ -149,7 +149,7 @@ impl TileKernel for ImplicitKernel {
 impl ImplicitKernel {
     /// Whether islands take part: samples flagged unoriented because the
     /// paper's island rule left their component apart, signed by its own
-    /// top point (`normals::orient::Sign::Island`). The MLS field takes
+    /// highest points (`normals::orient::Sign::Island`). The MLS field takes
     /// them; paper 1's own field leaves them out, as the paper does.
     ///
     /// Why: the rule leaves out components under a thousandth of the

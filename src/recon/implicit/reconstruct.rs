@@ -209,7 +209,12 @@ pub fn reconstruct_implicit(
         field: params.field,
         spacing,
     };
-    let writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
+    let mut writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
+    if params.closed {
+        // A closed surface encloses a volume: its pieces must face out
+        // (positive signed volume), or the run fails without a mesh.
+        writer = writer.requiring_outward()?;
+    }
     let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
     let mut stitcher = Stitcher::new(writer, store.origin(), cores);
     if params.closed {

@@ -15,7 +15,7 @@ use super::lattice::{edge_from_key, Lattice};
 use super::owners::TileOwners;
 use super::polygonize::CubeVertex;
 use crate::geom::Aabb;
-use crate::mesh::{MeshError, PieceFilter, PieceReport};
+use crate::mesh::{MeshError, PieceFilter, PieceReport, PlacedTriangle};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -85,7 +85,8 @@ impl Stitcher {
         let around = self.owners.around(tile, lattice.cell);
         self.private.clear();
         let mut new_vertices = Vec::new();
-        let mut faces = Vec::with_capacity(tris.len());
+        // Corners in the store's frame, where the volume check sums them.
+        let mut faces: Vec<PlacedTriangle> = Vec::with_capacity(tris.len());
         let mut stitched = Vec::new();
         for t in tris {
             let mut face = [0u32; 3];
@@ -117,7 +118,7 @@ impl Stitcher {
                     last,
                 });
             }
-            faces.push(face);
+            faces.push((face, t.map(|v| v.pos)));
         }
         if let Some(holes) = &mut self.holes {
             holes.add_tile(&stitched);
@@ -139,9 +140,15 @@ impl Stitcher {
         };
         if let Some(holes) = self.holes.take() {
             report.seam_left += holes.unneeded();
-            let patches;
-            (patches, report.holes) = holes.fill();
-            self.writer.add_triangles(&patches)?;
+            let (patches, holes, open) = holes.fill();
+            report.holes = holes;
+            self.writer.open_at(&open);
+            let origin = self.origin;
+            let relative: Vec<PlacedTriangle> = patches
+                .into_iter()
+                .map(|(face, corners)| (face, corners.map(|p| p - origin)))
+                .collect();
+            self.writer.add_triangles(&relative)?;
         }
         (report.vertices, report.triangles, report.pieces) = self.writer.finish()?;
         Ok(report)
