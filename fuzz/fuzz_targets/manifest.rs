@@ -1,10 +1,13 @@
 //! A store whose manifest is arbitrary text beside small, valid columns:
 //! opening it and reading every tile must end in data or an error, never a
-//! panic or an allocation sized by the manifest's counts.
+//! panic or an allocation sized by the manifest's counts. The manifest is
+//! resealed (its checksum, and its columns', made right for the bytes
+//! there), so mutations reach the checks behind the checksums; that the
+//! checksums catch damage is the `store` target's part.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use scanmesh::store::PointStore;
+use scanmesh::store::{integrity, PointStore};
 
 fuzz_target!(|data: &[u8]| {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -13,7 +16,9 @@ fuzz_target!(|data: &[u8]| {
     std::fs::write(dir.path().join("xyz.f32"), vec![0u8; 720]).expect("xyz");
     std::fs::write(dir.path().join("index.u64"), vec![0u8; 480]).expect("index");
     std::fs::write(dir.path().join("blocks.f32"), vec![0u8; 24]).expect("blocks");
+    std::fs::write(dir.path().join("xyz.input"), vec![0u8; 1440]).expect("exact");
     std::fs::write(dir.path().join("manifest.json"), data).expect("manifest");
+    let _ = integrity::reseal(dir.path(), true);
     let Ok(store) = PointStore::open_shared(dir.path()) else {
         return;
     };

@@ -20,7 +20,7 @@ pub(crate) mod columns;
 mod exact;
 pub(crate) mod export;
 mod ingest;
-mod integrity;
+pub mod integrity;
 pub(crate) mod lock;
 pub mod manifest;
 mod reorder;
