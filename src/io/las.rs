@@ -88,6 +88,20 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
     let raw =
         las::raw::Header::read_from(BufReader::new(&mut file)).map_err(|e| las_error(path, e))?;
     file.seek(SeekFrom::Start(0)).map_err(os)?;
+    // `las` works out where the points end without checked arithmetic (a
+    // panic with overflow checks, a wrapped offset without): a count whose
+    // records no file could hold is refused first.
+    let start = u64::from(raw.offset_to_point_data);
+    let record = u64::from(raw.point_data_record_length);
+    let count = raw_count(&raw);
+    if count
+        .checked_mul(record)
+        .and_then(|b| b.checked_add(start))
+        .is_none()
+    {
+        let found = file_len.saturating_sub(start) / record.max(1);
+        return Err(truncated(path, count, found));
+    }
     let reader = match Reader::new(BufReader::with_capacity(BUF_CAPACITY, file)) {
         Ok(r) => r,
         Err(e) if ends_early(&e) => return Err(truncated(path, raw_count(&raw), 0)),
@@ -97,7 +111,6 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
     let declared = header.number_of_points();
     let compressed = header.point_format().is_compressed;
     if !compressed {
-        let start = u64::from(raw.offset_to_point_data);
         let record = u64::from(header.point_format().len()).max(1);
         let found = file_len.saturating_sub(start) / record;
         if found < declared {
@@ -316,11 +329,13 @@ fn ends_early(e: &las::Error) -> bool {
     io.kind() == std::io::ErrorKind::UnexpectedEof
 }
 
-/// Point count of a raw header (LAS 1.4 keeps large counts elsewhere).
+/// Point count of a raw header, as `las` takes it: the legacy 32-bit count
+/// unless it is 0, then LAS 1.4's 64-bit one (LAS 1.4 R15 asks readers to
+/// prefer a non-zero legacy count).
 fn raw_count(raw: &las::raw::Header) -> u64 {
-    match &raw.large_file {
-        Some(l) if l.number_of_point_records > 0 => l.number_of_point_records,
-        _ => u64::from(raw.number_of_point_records),
+    match (raw.number_of_point_records, &raw.large_file) {
+        (0, Some(l)) => l.number_of_point_records,
+        (legacy, _) => u64::from(legacy),
     }
 }
 
@@ -463,5 +478,34 @@ mod tests {
         // LAS 1.3 waveform packets after the points.
         raw.start_of_waveform_data_packet_record = Some(1000);
         assert_eq!(end_of_point_region(&raw, 1000, 1500), 1000);
+    }
+
+    #[test]
+    fn a_count_no_file_can_hold_is_truncated_not_a_panic() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("huge.las");
+        let raw = las::raw::Header {
+            version: las::Version::new(1, 4),
+            header_size: 375,
+            offset_to_point_data: 375,
+            point_data_record_length: 20,
+            large_file: Some(las::raw::header::LargeFile {
+                number_of_point_records: u64::MAX / 4,
+                number_of_points_by_return: [0; 15],
+            }),
+            evlr: Some(Default::default()),
+            ..Default::default()
+        };
+        let mut bytes = Vec::new();
+        raw.write_to(&mut bytes).unwrap();
+        bytes.resize(375 + 40, 7);
+        std::fs::write(&path, bytes).unwrap();
+        match LasReader::open(&path, InvalidPolicy::Reject) {
+            Err(IoError::Truncated {
+                declared, found: 2, ..
+            }) => assert_eq!(declared, u64::MAX / 4),
+            Err(e) => panic!("{e:?}"),
+            Ok(_) => panic!("opened"),
+        }
     }
 }
