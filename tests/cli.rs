@@ -389,3 +389,105 @@ fn threads_and_memory_beyond_the_machine_are_refused() {
         assert!(!run.exists(), "{flag} {value}: a run directory was made");
     }
 }
+
+/// GOOD_XYZ with one record that has no finite coordinates.
+fn nan_xyz() -> Vec<u8> {
+    let mut body = GOOD_XYZ.to_vec();
+    body.extend_from_slice(b"nan 0 0\n");
+    body
+}
+
+fn stdout(o: &Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+const SKIP_NOTE: &str = "1 record skipped (non-finite coordinates";
+
+#[test]
+fn skipped_records_are_counted_in_every_summary_and_the_report() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "nan.xyz", &nan_xyz());
+    let report = dir.path().join("run.json");
+    let r = report.to_str().unwrap_or("");
+    let out = dir.path().join("n.ply").display().to_string();
+    let o = scanmesh(&[
+        "normals",
+        &input,
+        "-o",
+        &out,
+        "-q",
+        "--k",
+        "6",
+        "--skip-invalid",
+        "--report",
+        r,
+    ]);
+    let said = stdout(&o);
+    assert!(said.starts_with("normals: 15 points"), "{said}");
+    assert!(
+        said.contains(SKIP_NOTE) && said.contains("nan.xyz"),
+        "{said}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("json");
+    assert_eq!(json["skipped_invalid"], 1, "{json}");
+    assert!(json["summary"].as_str().unwrap_or("").contains(SKIP_NOTE));
+    // convert, tile, and a command run on the store tile built.
+    let xyz = dir.path().join("o.xyz").display().to_string();
+    let said = stdout(&scanmesh(&[
+        "convert",
+        &input,
+        &xyz,
+        "--skip-invalid",
+        "-q",
+    ]));
+    assert!(said.contains(SKIP_NOTE), "convert: {said}");
+    let store = dir.path().join("s").display().to_string();
+    let said = stdout(&scanmesh(&[
+        "tile",
+        &input,
+        "-o",
+        &store,
+        "--skip-invalid",
+        "-q",
+    ]));
+    assert!(said.contains(SKIP_NOTE), "tile: {said}");
+    let said = stdout(&scanmesh(&[
+        "normals", &store, "-o", &out, "-q", "--k", "6",
+    ]));
+    assert!(said.contains(SKIP_NOTE), "normals on the store: {said}");
+    // A last line cut short is dropped and counted the same way.
+    let cut = write(dir.path(), "cut.xyz", &[GOOD_XYZ, b"7 8 9.2"].concat());
+    let said = stdout(&scanmesh(&["convert", &cut, &xyz, "--skip-invalid", "-q"]));
+    assert!(
+        said.contains("15 points") && said.contains("1 record skipped"),
+        "{said}"
+    );
+    // Nothing skipped: nothing said, and the report counts 0.
+    let good = write(dir.path(), "good.xyz", GOOD_XYZ);
+    let o = scanmesh(&[
+        "normals", &good, "-o", &out, "-q", "--k", "6", "--report", r,
+    ]);
+    assert!(!stdout(&o).contains("skipped"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("json");
+    assert_eq!(json["skipped_invalid"], 0, "{json}");
+}
+
+#[test]
+fn info_accepts_skip_invalid_and_counts_what_it_would_skip() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "nan.xyz", &nan_xyz());
+    // The error names the flag, and the flag is accepted.
+    let o = scanmesh(&["info", &input, "-q"]);
+    assert_fails_naming(&o, "--skip-invalid");
+    let o = scanmesh(&["info", &input, "-q", "--json", "--skip-invalid"]);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(
+        (json["points"].as_u64(), json["skipped_invalid"].as_u64()),
+        (Some(15), Some(1))
+    );
+    let o = scanmesh(&["info", &input, "-q", "--plan", "--skip-invalid"]);
+    assert!(stdout(&o).contains("plan for 15 points"));
+}

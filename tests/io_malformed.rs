@@ -103,10 +103,14 @@ fn truncated_and_short_ascii() {
         } => assert_names_file(&e, &p),
         other => panic!("{other:?}"),
     }
-    // Cut in the middle of a line: the last record lacks values.
+    // Cut in the middle of a line: the last line has no end of line.
     let p = write(d.path(), "cut.ply", &ascii_ply(3, "1 2 3\n4 5 6\n7 8"));
     match read_err(&p) {
-        e @ IoError::BadRecord { record: 2, .. } => {
+        e @ IoError::CutShort {
+            record: 2,
+            line: 10,
+            ..
+        } => {
             assert_names_file(&e, &p);
             assert!(e.to_string().contains("line 10"), "{e}");
         }
@@ -128,7 +132,7 @@ fn ascii_trailing_garbage() {
     // More lines than declared when `vertex` is the last element.
     let p = write(d.path(), "more.ply", &ascii_ply(1, "1 2 3\n4 5 6\n\n"));
     match read_err(&p) {
-        e @ IoError::BadRecord { .. } => {
+        e @ IoError::TrailingData { declared: 1, .. } => {
             assert!(e.to_string().contains("line 9"), "{e}");
             assert_names_file(&e, &p);
         }
@@ -548,6 +552,371 @@ fn truncated_las_and_laz() {
                 }
             ),
             "{e:?}"
+        );
+    }
+}
+
+// ---- more data than declared, cut lines, damaged first lines --------------
+
+/// A binary PLY of x, y, z doubles in either byte order; `after` is written
+/// after the vertex records (the bodies of later elements, or extra data).
+fn binary_ply_order(
+    big_endian: bool,
+    n_declared: u64,
+    records: &[[f64; 3]],
+    faces: Option<u64>,
+) -> Vec<u8> {
+    let order = if big_endian { "big" } else { "little" };
+    let mut b = format!(
+        "ply\nformat binary_{order}_endian 1.0\nelement vertex {n_declared}\n\
+         property double x\nproperty double y\nproperty double z\n"
+    );
+    if let Some(f) = faces {
+        b += &format!("element face {f}\nproperty list uchar int vertex_indices\n");
+    }
+    b += "end_header\n";
+    let mut b = b.into_bytes();
+    for r in records {
+        for v in r {
+            b.extend_from_slice(&if big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            });
+        }
+    }
+    b
+}
+
+/// One triangle (0, 1, 2) of the face element above.
+fn face(big_endian: bool) -> Vec<u8> {
+    let mut b = vec![3u8];
+    for i in 0i32..3 {
+        b.extend_from_slice(&if big_endian {
+            i.to_be_bytes()
+        } else {
+            i.to_le_bytes()
+        });
+    }
+    b
+}
+
+fn read_ok(path: &Path, policy: InvalidPolicy) -> (Vec<DVec3>, u64) {
+    let mut r = open_reader(path, policy).unwrap();
+    let mut chunk = PointChunk::default();
+    let mut all = Vec::new();
+    while r.read_chunk(&mut chunk, 3).unwrap() > 0 {
+        all.extend_from_slice(&chunk.xyz);
+    }
+    (all, r.skipped())
+}
+
+#[test]
+fn binary_ply_with_more_records_than_declared_is_an_error() {
+    let d = tmp();
+    for big_endian in [false, true] {
+        let e = if big_endian { "be" } else { "le" };
+        // Ten records, eight declared: the last two were silently dropped.
+        let p = write(
+            d.path(),
+            &format!("more_{e}.ply"),
+            &binary_ply_order(big_endian, 8, &pts(10), None),
+        );
+        for max in [1, 5, 100] {
+            let r = open_reader(&p, InvalidPolicy::Reject).unwrap();
+            match drain(r, max) {
+                Err(
+                    e @ IoError::TrailingData {
+                        declared: 8,
+                        extra_bytes: Some(48),
+                        ..
+                    },
+                ) => {
+                    assert_names_file(&e, &p);
+                    assert!(e.to_string().contains("2 whole records of 24 bytes"), "{e}");
+                }
+                other => panic!("{} max {max}: {other:?}", p.display()),
+            }
+        }
+        // Faces legitimately follow the vertices; bytes after them do not.
+        let mut bytes = binary_ply_order(big_endian, 10, &pts(10), Some(2));
+        bytes.extend(face(big_endian).repeat(2));
+        let p = write(d.path(), &format!("faces_{e}.ply"), &bytes);
+        assert_eq!(read_ok(&p, InvalidPolicy::Reject).0.len(), 10);
+        bytes.extend_from_slice(&7.5f64.to_le_bytes());
+        let p = write(d.path(), &format!("faces_more_{e}.ply"), &bytes);
+        match read_err(&p) {
+            e @ IoError::TrailingData {
+                declared: 10,
+                extra_bytes: Some(8),
+                ..
+            } => assert_names_file(&e, &p),
+            other => panic!("{other:?}"),
+        }
+        // Zero bytes after the data are padding, not points.
+        let mut bytes = binary_ply_order(big_endian, 10, &pts(10), None);
+        bytes.extend([0u8; 100]);
+        let p = write(d.path(), &format!("padded_{e}.ply"), &bytes);
+        assert_eq!(read_ok(&p, InvalidPolicy::Reject).0, want_pts(10));
+    }
+}
+
+fn want_pts(n: usize) -> Vec<DVec3> {
+    pts(n).iter().map(|p| DVec3::from_array(*p)).collect()
+}
+
+fn binary_pcd(n_declared: u64, records: &[[f64; 3]]) -> Vec<u8> {
+    let mut b = format!(
+        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n\
+         TYPE F F F\nCOUNT 1 1 1\nWIDTH {n_declared}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n\
+         POINTS {n_declared}\nDATA binary\n"
+    )
+    .into_bytes();
+    for r in records {
+        r.iter()
+            .for_each(|v| b.extend_from_slice(&(*v as f32).to_le_bytes()));
+    }
+    b
+}
+
+#[test]
+fn binary_pcd_with_more_records_than_declared_is_an_error() {
+    let d = tmp();
+    let p = write(d.path(), "more.pcd", &binary_pcd(7, &pts(10)));
+    for max in [1, 7, 100] {
+        let r = open_reader(&p, InvalidPolicy::Reject).unwrap();
+        match drain(r, max) {
+            Err(
+                e @ IoError::TrailingData {
+                    declared: 7,
+                    extra_bytes: Some(36),
+                    ..
+                },
+            ) => {
+                assert_names_file(&e, &p);
+                assert!(e.to_string().contains("3 whole records of 12 bytes"), "{e}");
+            }
+            other => panic!("max {max}: {other:?}"),
+        }
+    }
+    // PCL pads its binary files with zeros: not points, not an error.
+    let mut bytes = binary_pcd(10, &pts(10));
+    bytes.extend([0u8; 3000]);
+    let p = write(d.path(), "padded.pcd", &bytes);
+    assert_eq!(read_ok(&p, InvalidPolicy::Reject).0, want_pts(10));
+}
+
+/// A LAS file of `n` points by the project's own writer.
+fn las_file(d: &Path, name: &str, format: Format, n: usize) -> PathBuf {
+    let p = d.join(name);
+    let mut s = spec(format);
+    s.bounds = Some(Aabb::new(
+        DVec3::new(0.0, 0.0, -1.0),
+        DVec3::new(n as f64, 1.0, 0.0),
+    ));
+    let mut w = create_writer(&p, &s).unwrap();
+    w.write_chunk(&point_chunk(n), None).unwrap();
+    w.finish().unwrap();
+    p
+}
+
+#[test]
+fn las_with_bytes_after_its_points_is_an_error() {
+    let d = tmp();
+    let p = las_file(d.path(), "ok.las", Format::Las, 100);
+    let bytes = std::fs::read(&p).unwrap();
+    // The header's point data record length (LAS 1.0-1.4: byte 105).
+    let record = u16::from_le_bytes([bytes[105], bytes[106]]) as usize;
+    // Two more records, copies of the last: points the header does not count.
+    let mut more = bytes.clone();
+    more.extend_from_slice(&bytes[bytes.len() - 2 * record..]);
+    let more = write(d.path(), "more.las", &more);
+    match read_err(&more) {
+        e @ IoError::TrailingData {
+            declared: 100,
+            extra_bytes: Some(_),
+            ..
+        } => {
+            assert_names_file(&e, &more);
+            assert!(
+                e.to_string()
+                    .contains(&format!("2 whole records of {record} bytes")),
+                "{e}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    // Garbage shorter than a record, too.
+    let mut junk = bytes.clone();
+    junk.extend_from_slice(b"junk");
+    let junk = write(d.path(), "junk.las", &junk);
+    assert!(matches!(
+        read_err(&junk),
+        IoError::TrailingData {
+            extra_bytes: Some(4),
+            ..
+        }
+    ));
+    // Zero padding is not an error.
+    let mut padded = bytes.clone();
+    padded.extend([0u8; 64]);
+    let padded = write(d.path(), "padded.las", &padded);
+    assert_eq!(read_ok(&padded, InvalidPolicy::Reject).0.len(), 100);
+}
+
+#[test]
+fn laz_whose_chunks_hold_more_points_than_declared_is_an_error() {
+    let d = tmp();
+    let p = las_file(d.path(), "ok.laz", Format::Laz, 120_000);
+    // The chunk table follows the points: a whole LAZ is no error.
+    assert_eq!(read_ok(&p, InvalidPolicy::Reject).0.len(), 120_000);
+    let mut bytes = std::fs::read(&p).unwrap();
+    // Declare fewer: the legacy point count (byte 107), and LAS 1.4's
+    // 64-bit one (byte 247) when the header is that long.
+    bytes[107..111].copy_from_slice(&40_000u32.to_le_bytes());
+    let header_size = u16::from_le_bytes([bytes[94], bytes[95]]);
+    if header_size >= 375 {
+        bytes[247..255].copy_from_slice(&40_000u64.to_le_bytes());
+    }
+    let fewer = write(d.path(), "fewer.laz", &bytes);
+    match read_err(&fewer) {
+        e @ IoError::TrailingData {
+            declared: 40_000, ..
+        } => {
+            assert_names_file(&e, &fewer);
+            assert!(e.to_string().contains("chunk table"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn xyz_cut_inside_its_last_number_is_an_error_or_skipped() {
+    let d = tmp();
+    let text = "1 2 3\n4 5 6\n7 8 9.2";
+    let gz = {
+        use std::io::Write;
+        let mut w = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        w.write_all(text.as_bytes()).unwrap();
+        w.finish().unwrap()
+    };
+    let files = [
+        write(d.path(), "cut.xyz", text.as_bytes()),
+        write(
+            d.path(),
+            "cut_crlf.csv",
+            text.replace('\n', "\r\n").as_bytes(),
+        ),
+        write(d.path(), "cut.xyz.gz", &gz),
+        write(d.path(), "one.txt", b"7 8 9.2"),
+    ];
+    for p in &files {
+        match read_err(p) {
+            e @ IoError::CutShort { .. } => {
+                assert_names_file(&e, p);
+                let msg = e.to_string();
+                assert!(
+                    msg.contains("cut short") && msg.contains("end it with a newline"),
+                    "{msg}"
+                );
+            }
+            other => panic!("{}: {other:?}", p.display()),
+        }
+    }
+    match read_err(&files[0]) {
+        e @ IoError::CutShort {
+            record: 2, line: 3, ..
+        } => {
+            assert!(e.to_string().contains("line 3"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // --skip-invalid drops the line and counts it, as a non-finite record.
+    let (got, skipped) = read_ok(&files[2], InvalidPolicy::Skip);
+    assert_eq!(got, [DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)]);
+    assert_eq!(skipped, 1);
+    // A whole file: ended by a newline, or by a comment or blank line
+    // without one.
+    for (name, text) in [
+        ("whole.xyz", "1 2 3\n4 5 6\n"),
+        ("comment.xyz", "1 2 3\n4 5 6\n# end"),
+        ("blank.xyz", "1 2 3\n4 5 6\n  "),
+    ] {
+        let p = write(d.path(), name, text.as_bytes());
+        assert_eq!(read_ok(&p, InvalidPolicy::Reject).0.len(), 2, "{name}");
+    }
+}
+
+#[test]
+fn ascii_ply_and_pcd_cut_inside_their_last_number_are_errors_or_skipped() {
+    let d = tmp();
+    let pcd = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n\
+               HEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6.5";
+    let files = [
+        (
+            write(d.path(), "cut.ply", &ascii_ply(2, "1 2 3\n4 5 6.5")),
+            9,
+        ),
+        (write(d.path(), "cut.pcd", pcd.as_bytes()), 11),
+    ];
+    for (p, line) in &files {
+        match read_err(p) {
+            e @ IoError::CutShort { record: 1, .. } => {
+                assert_names_file(&e, p);
+                assert!(e.to_string().contains(&format!("line {line}")), "{e}");
+            }
+            other => panic!("{}: {other:?}", p.display()),
+        }
+        let (got, skipped) = read_ok(p, InvalidPolicy::Skip);
+        assert_eq!((got, skipped), (vec![DVec3::new(1.0, 2.0, 3.0)], 1));
+    }
+    // More lines than POINTS in an ASCII PCD.
+    let more = pcd.replace("4 5 6.5", "4 5 6\n7 8 9\n");
+    let p = write(d.path(), "more.pcd", more.as_bytes());
+    match read_err(&p) {
+        e @ IoError::TrailingData { declared: 2, .. } => {
+            assert_names_file(&e, &p);
+            assert!(e.to_string().contains("line 12"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn xyz_first_line_is_a_header_only_if_it_looks_like_one() {
+    let d = tmp();
+    // Damaged points are not headers: they were silently dropped.
+    for (name, text) in [
+        ("corrupt.xyz", "1.0 2.0 x3.0\n4 5 6\n7 8 9\n"),
+        ("short.xyz", "1.0 2.0\n4 5 6\n"),
+        ("mixed.csv", "x,2.0,z\n4,5,6\n"),
+    ] {
+        let p = write(d.path(), name, text.as_bytes());
+        match read_err(&p) {
+            e @ IoError::BadRecord { record: 0, .. } => {
+                assert_names_file(&e, &p);
+                assert!(e.to_string().contains("line 1"), "{name}: {e}");
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    // Real headers are still skipped: names, quoted names, CloudCompare's
+    // `//X`, comments, and the count line of .pts.
+    for (name, text) in [
+        ("names.xyz", "x y z\n1 2 3\n4 5 6\n"),
+        ("upper.csv", "X,Y,Z,R,G,B\n1,2,3,9,9,9\n4,5,6,9,9,9\n"),
+        ("quoted.csv", "\"x\",\"y\",\"z\"\n1,2,3\n4,5,6\n"),
+        ("cc.txt", "//X Y Z\n1 2 3\n4 5 6\n"),
+        ("comment.xyz", "# x y z\n1 2 3\n4 5 6\n"),
+        ("count.pts", "2\n1 2 3 7 9 9 9\n4 5 6 7 9 9 9\n"),
+        ("units.csv", "x (m),y (m),z (m)\n1,2,3\n4,5,6\n"),
+    ] {
+        let p = write(d.path(), name, text.as_bytes());
+        let (got, _) = read_ok(&p, InvalidPolicy::Reject);
+        assert_eq!(
+            got,
+            [DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0)],
+            "{name}"
         );
     }
 }

@@ -146,14 +146,20 @@ fn camera(r: &mut Rng) -> El {
     }
 }
 
-/// Faces after the vertices: declared but absent, which a point reader must
-/// not notice since it never reads past the vertices.
-fn absent_faces() -> El {
+/// Faces after the vertices, which a point reader skips: it reads them only
+/// to find where the file must end. `declared`: a count that may differ
+/// from the rows written.
+fn faces_after(r: &mut Rng, declared: Option<usize>) -> El {
     El {
         name: "face",
         props: vec![("vertex_indices", Kind::List("uchar", "int"))],
-        rows: vec![],
-        declared: Some(1000),
+        rows: (0..5)
+            .map(|i| {
+                let corners = (0..3 + i % 3).map(|_| (r.next_u64() % 257) as f64);
+                vec![Val::L(corners.collect())]
+            })
+            .collect(),
+        declared,
     }
 }
 
@@ -269,10 +275,28 @@ fn odd_ply_layouts_in_all_encodings() {
             };
             let mut els = vec![cam, vertex];
             if enc != Enc::Ascii {
-                els.push(absent_faces());
+                els.push(faces_after(&mut r, None));
             }
             let path = d.path().join(format!("odd{li}.ply"));
             std::fs::write(&path, build_ply(enc, &els)).unwrap();
+            if enc != Enc::Ascii {
+                // Faces declared but absent: the file is cut, even though
+                // every vertex is there.
+                let faces = els.len() - 1;
+                els[faces] = faces_after(&mut r, Some(1000));
+                let cut = d.path().join(format!("odd{li}_cut.ply"));
+                std::fs::write(&cut, build_ply(enc, &els)).unwrap();
+                let mut reader = open_reader(&cut, InvalidPolicy::Reject).unwrap();
+                let mut chunk = scanmesh::io::PointChunk::default();
+                let e = loop {
+                    match reader.read_chunk(&mut chunk, DEFAULT_CHUNK) {
+                        Ok(0) => panic!("layout {li}: faces cut short read as whole"),
+                        Ok(_) => {}
+                        Err(e) => break e.to_string(),
+                    }
+                };
+                assert!(e.contains("element 'face': 1000 declared, 5 found"), "{e}");
+            }
             for max in [1, 10, 300] {
                 let back = read_all(&path, InvalidPolicy::Reject, max);
                 let want: Vec<DVec3> = (0..257).map(|i| DVec3::new(xs[i], ys[i], zs[i])).collect();

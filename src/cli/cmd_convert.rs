@@ -32,6 +32,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
             stats.dropped.describe()
         );
     }
+    super::report::input_skipped(&a.input.display().to_string(), stats.skipped);
     super::report::summary(format!(
         "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
         stats.points,

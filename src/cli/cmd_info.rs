@@ -44,6 +44,21 @@ pub struct InfoArgs {
     /// Plan `reconstruct --closed` (with --plan --command reconstruct).
     #[arg(long)]
     closed: bool,
+    /// Count points with NaN/inf coordinates (and a last line cut short)
+    /// as a processing command would drop them with --skip-invalid,
+    /// instead of failing (`skipped_invalid`).
+    #[arg(long)]
+    skip_invalid: bool,
+}
+
+impl InfoArgs {
+    /// What to do with invalid records: fail, or count them as skipped.
+    fn policy(&self) -> InvalidPolicy {
+        match self.skip_invalid {
+            true => InvalidPolicy::Skip,
+            false => InvalidPolicy::Reject,
+        }
+    }
 }
 
 /// Commands `info --plan` can plan.
@@ -64,13 +79,10 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let progress = super::progress::progress(a.quiet);
         let (r, scans) = match is_e57(&a.input) {
             true => {
-                let (r, scans) = inspect_scans(&a.input, InvalidPolicy::Reject, progress.as_ref())?;
+                let (r, scans) = inspect_scans(&a.input, a.policy(), progress.as_ref())?;
                 (r, Some(scans))
             }
-            false => (
-                inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?,
-                None,
-            ),
+            false => (inspect(&a.input, a.policy(), progress.as_ref())?, None),
         };
         json!({
             "path": a.input.display().to_string(),
@@ -194,10 +206,10 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         PointStore::open_shared(&a.input)?.len()
     } else {
         let progress = super::progress::progress(a.quiet);
-        let r = scanmesh::io::open_reader(&a.input, InvalidPolicy::Reject)?;
+        let r = scanmesh::io::open_reader(&a.input, a.policy())?;
         match r.info().declared_count {
             Some(n) => n,
-            None => inspect(&a.input, InvalidPolicy::Reject, progress.as_ref())?.count,
+            None => inspect(&a.input, a.policy(), progress.as_ref())?.count,
         }
     };
     let cost: KernelCost = match a.command {

@@ -46,6 +46,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let spacing = ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
+    super::report::input_skipped(&m.source, m.skipped_invalid);
     super::report::summary(format!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
         m.count,

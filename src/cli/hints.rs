@@ -8,7 +8,7 @@ use scanmesh::units::human_bytes;
 
 /// `err` with the flag that fixes it named first, when one does: `--mem`
 /// for a budget no plan fits, `--skip-invalid` for a non-finite input
-/// coordinate.
+/// coordinate or a last line without end of line.
 pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
     let hint = err.chain().find_map(|cause| {
         let budget =
@@ -34,6 +34,9 @@ pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
         match io {
             Some(IoError::NonFinite { .. }) => {
                 Some("a coordinate is not finite (--skip-invalid drops such points)".to_string())
+            }
+            Some(IoError::CutShort { .. }) => {
+                Some("the last line may be cut short (--skip-invalid drops it)".to_string())
             }
             _ => None,
         }

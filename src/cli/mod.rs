@@ -101,7 +101,9 @@ pub struct CommonArgs {
     /// No progress bars.
     #[arg(long, short)]
     quiet: bool,
-    /// Drop points with NaN/inf coordinates (counted) instead of failing.
+    /// Drop points with NaN/inf coordinates, and a text file's last line
+    /// without end of line (it may be cut short), instead of failing; the
+    /// summary line and --report say how many.
     #[arg(long)]
     skip_invalid: bool,
     /// E57 input: read only these scans (indices as `scanmesh info` lists
@@ -452,6 +454,9 @@ impl Settings {
 
     /// The plan and run options for an open store.
     pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared> {
+        // The summary says how many input records the store lacks.
+        let m = ws.store.manifest();
+        report::input_skipped(&m.source, m.skipped_invalid);
         let (plan, opts) = self.plan_for(&ws.store, cost)?;
         Ok(Prepared { ws, opts, plan })
     }

@@ -4,6 +4,12 @@
 //! storage bytes), whatever the terminal shows; the command's summary line
 //! and its outcome (or error) close the report. The file appears whole or
 //! not at all (written beside, then renamed).
+//!
+//! Input records a reader dropped (`--skip-invalid`, or records the file
+//! marks invalid) are told in the summary line and the report
+//! (`skipped_invalid`) whatever the command, so nobody joins an output to
+//! its input by position unwarned: a command names its input's count once
+//! it is known ([`input_skipped`]).
 
 use super::clock::{Mark, Span};
 use scanmesh::pipeline::Progress;
@@ -16,11 +22,14 @@ use std::sync::Mutex;
 static LOG: Mutex<Log> = Mutex::new(Log {
     stages: Vec::new(),
     summary: None,
+    skipped: None,
 });
 
 struct Log {
     stages: Vec<Stage>,
     summary: Option<String>,
+    /// The input read and the records dropped from it.
+    skipped: Option<(String, u64)>,
 }
 
 #[derive(Clone, Serialize)]
@@ -38,6 +47,10 @@ struct Report<'a> {
     /// "ok", or the error and its causes.
     outcome: String,
     summary: Option<String>,
+    /// Input records dropped (non-finite coordinates or a cut last line
+    /// under --skip-invalid, or marked invalid by the file); `None` when
+    /// the command read no input.
+    skipped_invalid: Option<u64>,
     total: Span,
     stages: Vec<Stage>,
 }
@@ -97,8 +110,30 @@ impl Drop for Recorder {
     }
 }
 
-/// Prints a command's closing summary line and keeps it for the report.
+/// Records that `skipped` records of the input `source` were dropped while
+/// reading it, for the summary line and the report.
+pub fn input_skipped(source: &str, skipped: u64) {
+    if let Ok(mut log) = LOG.lock() {
+        log.skipped = Some((source.to_string(), skipped));
+    }
+}
+
+/// The words the summary line ends with when records were dropped.
+fn skipped_note(source: &str, n: u64) -> String {
+    let records = if n == 1 { "record" } else { "records" };
+    format!(
+        "{n} {records} skipped (non-finite coordinates or a cut last line, --skip-invalid; or marked invalid by the file) from {source}"
+    )
+}
+
+/// Prints a command's closing summary line and keeps it for the report;
+/// the records dropped from its input, if any, are told at its end.
 pub fn summary(line: String) {
+    let skipped = LOG.lock().ok().and_then(|log| log.skipped.clone());
+    let line = match skipped {
+        Some((source, n)) if n > 0 => format!("{line}; {}", skipped_note(&source, n)),
+        _ => line,
+    };
     // A closed pipe (`| head`) is the reader's choice, not an error of ours.
     let _ = writeln!(std::io::stdout(), "{line}");
     if let Ok(mut log) = LOG.lock() {
@@ -114,9 +149,9 @@ pub fn last_summary() -> Option<String> {
 /// Writes the report of this run to `path`: `start` is when the command
 /// began, `outcome` its result.
 pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow::Result<()> {
-    let (stages, summary) = match LOG.lock() {
-        Ok(log) => (log.stages.clone(), log.summary.clone()),
-        Err(_) => (Vec::new(), None),
+    let (stages, summary, skipped) = match LOG.lock() {
+        Ok(log) => (log.stages.clone(), log.summary.clone(), log.skipped.clone()),
+        Err(_) => (Vec::new(), None, None),
     };
     let outcome = match outcome {
         Ok(()) => "ok".to_string(),
@@ -133,6 +168,7 @@ pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow:
         args: std::env::args().collect(),
         outcome,
         summary,
+        skipped_invalid: skipped.map(|(_, n)| n),
         total: start.span(),
         stages,
     };

@@ -15,7 +15,7 @@ use std::path::Path;
 pub struct ConvertStats {
     /// Points written.
     pub points: u64,
-    /// Input records dropped (non-finite coordinates under the skip policy, or flagged invalid by the file).
+    /// Input records dropped (non-finite coordinates or a cut last line under the skip policy, or flagged invalid by the file).
     pub skipped: u64,
     /// Attributes carried from the input to the output.
     pub carried: AttributeSet,

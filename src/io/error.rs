@@ -51,6 +51,34 @@ pub enum IoError {
         /// Points the file holds.
         found: u64,
     },
+    /// The file holds data past the end its header declares: more records
+    /// than the declared count, or bytes after the last declared element.
+    /// Zero bytes there are taken as padding, not as data.
+    #[error("{path}: more data than the header declares ({declared} points): {found}")]
+    TrailingData {
+        /// The file read.
+        path: PathBuf,
+        /// Points the header declares.
+        declared: u64,
+        /// Bytes after the declared data, where the body is binary (at
+        /// least this many: counting stops after a bound).
+        extra_bytes: Option<u64>,
+        /// What follows the declared data, in words.
+        found: String,
+    },
+    /// The last line of a text body has no end of line, so it may be cut
+    /// inside its last number (an unfinished copy or download).
+    #[error(
+        "{path}: line {line}: no end of line after the last line: the file may be cut short; if it is whole, end it with a newline"
+    )]
+    CutShort {
+        /// The file read.
+        path: PathBuf,
+        /// 0-based index of the record on that line.
+        record: u64,
+        /// 1-based line number, as in an editor.
+        line: u64,
+    },
     /// A record has a NaN or infinite coordinate and the policy rejects such records.
     #[error("{path}: record {record}: coordinate is not finite ({value})")]
     NonFinite {

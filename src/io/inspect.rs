@@ -19,7 +19,9 @@ pub struct Inspection {
     pub info: SourceInfo,
     /// Points read (after dropping skipped records).
     pub count: u64,
-    /// Records dropped (non-finite, or flagged invalid by the file).
+    /// Records dropped (non-finite or a cut last line, under
+    /// [`InvalidPolicy::Skip`](super::InvalidPolicy::Skip); or flagged
+    /// invalid by the file).
     pub skipped: u64,
     /// Bounding box of the points read.
     pub bounds: Aabb,

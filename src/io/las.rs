@@ -8,7 +8,14 @@
 //! and lets LAZ decompression overlap with the consumer.
 //!
 //! For uncompressed LAS the file length is checked against the declared
-//! count at open, so a short file fails before any point is read.
+//! count at open, so a short file fails before any point is read, and so
+//! is what follows the point records: bytes there that are not zero and
+//! not the extended VLRs (LAS 1.4, from the header's start of the first
+//! EVLR) or the waveform packets (LAS 1.3) are more records than declared,
+//! or garbage ([`IoError::TrailingData`]). LAZ point data is followed by
+//! its chunk table, so its bytes say nothing; the chunk table's point
+//! counts do, and a LAZ whose chunks hold more points than the header
+//! declares is refused the same way.
 
 use super::policy::Admitter;
 use super::source::BUF_CAPACITY;
@@ -81,6 +88,20 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
     let raw =
         las::raw::Header::read_from(BufReader::new(&mut file)).map_err(|e| las_error(path, e))?;
     file.seek(SeekFrom::Start(0)).map_err(os)?;
+    // `las` works out where the points end without checked arithmetic (a
+    // panic with overflow checks, a wrapped offset without): a count whose
+    // records no file could hold is refused first.
+    let start = u64::from(raw.offset_to_point_data);
+    let record = u64::from(raw.point_data_record_length);
+    let count = raw_count(&raw);
+    if count
+        .checked_mul(record)
+        .and_then(|b| b.checked_add(start))
+        .is_none()
+    {
+        let found = file_len.saturating_sub(start) / record.max(1);
+        return Err(truncated(path, count, found));
+    }
     let reader = match Reader::new(BufReader::with_capacity(BUF_CAPACITY, file)) {
         Ok(r) => r,
         Err(e) if ends_early(&e) => return Err(truncated(path, raw_count(&raw), 0)),
@@ -90,7 +111,6 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
     let declared = header.number_of_points();
     let compressed = header.point_format().is_compressed;
     if !compressed {
-        let start = u64::from(raw.offset_to_point_data);
         let record = u64::from(header.point_format().len()).max(1);
         let found = file_len.saturating_sub(start) / record;
         if found < declared {
@@ -100,6 +120,16 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
                 found,
             });
         }
+        check_las_tail(
+            path,
+            &raw,
+            start + declared * record,
+            file_len,
+            declared,
+            record,
+        )?;
+    } else {
+        check_laz_chunks(path, header, u64::from(raw.offset_to_point_data), declared)?;
     }
     let t = header.transforms();
     let format = header.point_format();
@@ -129,6 +159,99 @@ fn open_las(path: &Path) -> Result<(Reader, SourceInfo), IoError> {
         }),
     };
     Ok((reader, info))
+}
+
+/// Where the point records of an uncompressed LAS may end at the latest:
+/// the start of the extended VLRs (LAS 1.4) or of the waveform packets
+/// (LAS 1.3) when they follow the points, else the end of the file.
+fn end_of_point_region(raw: &las::raw::Header, points_end: u64, file_len: u64) -> u64 {
+    let evlr = raw
+        .evlr
+        .as_ref()
+        .filter(|e| e.number_of_evlrs > 0)
+        .map(|e| e.start_of_first_evlr);
+    let waveform = raw.start_of_waveform_data_packet_record.filter(|&w| w > 0);
+    [evlr, waveform]
+        .into_iter()
+        .flatten()
+        .filter(|&at| at >= points_end)
+        .fold(file_len, u64::min)
+}
+
+/// Refuses bytes after the declared point records of an uncompressed LAS
+/// (up to its EVLRs or waveform packets) unless they are all zero.
+fn check_las_tail(
+    path: &Path,
+    raw: &las::raw::Header,
+    points_end: u64,
+    file_len: u64,
+    declared: u64,
+    record: u64,
+) -> Result<(), IoError> {
+    let stop = end_of_point_region(raw, points_end, file_len);
+    if stop <= points_end {
+        return Ok(());
+    }
+    let os = |e| IoError::os(path, e);
+    let mut file = File::open(path).map_err(os)?;
+    file.seek(SeekFrom::Start(points_end)).map_err(os)?;
+    let mut tail = std::io::Read::take(BufReader::new(file), stop - points_end);
+    match crate::io::source::binary_tail(&mut tail).map_err(os)? {
+        None => Ok(()),
+        Some(t) => Err(IoError::TrailingData {
+            path: path.to_path_buf(),
+            declared,
+            extra_bytes: Some(t.bytes),
+            found: t.describe(Some(record)),
+        }),
+    }
+}
+
+/// Refuses a LAZ whose chunk table lists more points than the header
+/// declares. A table that cannot be read is left to the decoder (LAZ
+/// allows a missing one); fixed-size chunks say only how many there are,
+/// so points past the count inside the last chunk go unseen, but a chunk
+/// more than the count needs does not (laz-rs writes one empty chunk for
+/// no points, so one chunk is always allowed).
+fn check_laz_chunks(
+    path: &Path,
+    header: &las::Header,
+    points_start: u64,
+    declared: u64,
+) -> Result<(), IoError> {
+    let Ok(vlr) = header.laz_vlr() else {
+        return Ok(());
+    };
+    let table = File::open(path).and_then(|mut f| {
+        f.seek(SeekFrom::Start(points_start))?;
+        Ok(laz::laszip::ChunkTable::read_from(BufReader::new(f), &vlr))
+    });
+    let Ok(Ok(table)) = table else {
+        return Ok(());
+    };
+    let chunks = table.as_ref();
+    let found = if vlr.uses_variable_size_chunks() {
+        let listed: u64 = chunks.iter().map(|c| c.point_count).sum();
+        (listed > declared).then(|| format!("its chunk table lists {listed} points"))
+    } else {
+        let size = u64::from(vlr.chunk_size()).max(1);
+        let needed = declared.div_ceil(size).max(1);
+        (chunks.len() as u64 > needed).then(|| {
+            format!(
+                "its chunk table lists {} chunks of {size} points; {needed} would hold them",
+                chunks.len()
+            )
+        })
+    };
+    match found {
+        None => Ok(()),
+        Some(found) => Err(IoError::TrailingData {
+            path: path.to_path_buf(),
+            declared,
+            extra_bytes: None,
+            found,
+        }),
+    }
 }
 
 /// Worker: decodes blocks until the declared count, an error, or until the
@@ -206,11 +329,13 @@ fn ends_early(e: &las::Error) -> bool {
     io.kind() == std::io::ErrorKind::UnexpectedEof
 }
 
-/// Point count of a raw header (LAS 1.4 keeps large counts elsewhere).
+/// Point count of a raw header, as `las` takes it: the legacy 32-bit count
+/// unless it is 0, then LAS 1.4's 64-bit one (LAS 1.4 R15 asks readers to
+/// prefer a non-zero legacy count).
 fn raw_count(raw: &las::raw::Header) -> u64 {
-    match &raw.large_file {
-        Some(l) if l.number_of_point_records > 0 => l.number_of_point_records,
-        _ => u64::from(raw.number_of_point_records),
+    match (raw.number_of_point_records, &raw.large_file) {
+        (0, Some(l)) => l.number_of_point_records,
+        (legacy, _) => u64::from(legacy),
     }
 }
 
@@ -320,6 +445,67 @@ impl Drop for LasReader {
         drop(std::mem::replace(&mut self.blocks, dead));
         if let Some(w) = self.worker.take() {
             let _ = w.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_may_be_followed_by_evlrs_or_waveforms_only() {
+        let mut raw = las::raw::Header::default();
+        // No EVLRs: the points run to the end of the file.
+        assert_eq!(end_of_point_region(&raw, 1000, 1500), 1500);
+        // LAS 1.4 EVLRs after the points: bytes from their start are theirs.
+        raw.evlr = Some(las::raw::header::Evlr {
+            start_of_first_evlr: 1200,
+            number_of_evlrs: 1,
+        });
+        assert_eq!(end_of_point_region(&raw, 1000, 1500), 1200);
+        // A start before the end of the points, or no EVLR, says nothing.
+        raw.evlr = Some(las::raw::header::Evlr {
+            start_of_first_evlr: 900,
+            number_of_evlrs: 1,
+        });
+        assert_eq!(end_of_point_region(&raw, 1000, 1500), 1500);
+        raw.evlr = Some(las::raw::header::Evlr {
+            start_of_first_evlr: 1000,
+            number_of_evlrs: 0,
+        });
+        assert_eq!(end_of_point_region(&raw, 1000, 1500), 1500);
+        // LAS 1.3 waveform packets after the points.
+        raw.start_of_waveform_data_packet_record = Some(1000);
+        assert_eq!(end_of_point_region(&raw, 1000, 1500), 1000);
+    }
+
+    #[test]
+    fn a_count_no_file_can_hold_is_truncated_not_a_panic() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("huge.las");
+        let raw = las::raw::Header {
+            version: las::Version::new(1, 4),
+            header_size: 375,
+            offset_to_point_data: 375,
+            point_data_record_length: 20,
+            large_file: Some(las::raw::header::LargeFile {
+                number_of_point_records: u64::MAX / 4,
+                number_of_points_by_return: [0; 15],
+            }),
+            evlr: Some(Default::default()),
+            ..Default::default()
+        };
+        let mut bytes = Vec::new();
+        raw.write_to(&mut bytes).unwrap();
+        bytes.resize(375 + 40, 7);
+        std::fs::write(&path, bytes).unwrap();
+        match LasReader::open(&path, InvalidPolicy::Reject) {
+            Err(IoError::Truncated {
+                declared, found: 2, ..
+            }) => assert_eq!(declared, u64::MAX / 4),
+            Err(e) => panic!("{e:?}"),
+            Ok(_) => panic!("opened"),
         }
     }
 }

@@ -3,7 +3,8 @@
 //!
 //! Readers hand out [`PointChunk`]s of bounded size, so no format ever needs the
 //! whole file in memory. Coordinates are validated once here (finite, counts
-//! consistent with headers), so nothing downstream checks again.
+//! consistent with headers, no data past the declared end, no text record
+//! on a last line cut short), so nothing downstream checks again.
 
 pub mod atomic;
 pub(crate) mod attributes;
@@ -167,7 +168,9 @@ pub enum InvalidPolicy {
     /// Fail with an error naming the file and record (the default).
     #[default]
     Reject,
-    /// Drop the record and count it ([`PointReader::skipped`]).
+    /// Drop the record and count it ([`PointReader::skipped`]); so too a
+    /// text file's last line without end of line, which may be cut inside
+    /// a number ([`IoError::CutShort`] under `Reject`).
     Skip,
 }
 
@@ -202,9 +205,12 @@ pub trait PointReader: Send {
     fn info(&self) -> &SourceInfo;
     /// Clears `chunk`, then fills it with up to `max` points. Returns the
     /// number read; 0 means the input is exhausted (and its declared count,
-    /// if any, was met: a short file is an error, not an early 0).
+    /// if any, was met: a short file is an error, not an early 0, and so is
+    /// data past the declared end, checked in the call that reads the last
+    /// declared record).
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError>;
-    /// Records dropped so far: those with non-finite coordinates under
+    /// Records dropped so far: those with non-finite coordinates, or on a
+    /// text file's last line without end of line, under
     /// [`InvalidPolicy::Skip`], and those the file itself flags as no point
     /// (E57's invalid states), under every policy.
     fn skipped(&self) -> u64;

@@ -105,6 +105,27 @@ impl Admitter {
         }
     }
 
+    /// Input record `record`, on line `line`, is the input's last line and
+    /// has no end of line: it may be cut inside its last number, so it is
+    /// never taken as a point. An error under [`InvalidPolicy::Reject`];
+    /// dropped and counted with the other invalid records under
+    /// [`InvalidPolicy::Skip`].
+    #[cold]
+    pub fn cut(&mut self, chunk: &mut PointChunk, record: u64, line: u64) -> Result<(), IoError> {
+        match self.policy {
+            InvalidPolicy::Reject => Err(IoError::CutShort {
+                path: self.path.clone(),
+                record,
+                line,
+            }),
+            InvalidPolicy::Skip => {
+                self.skipped += 1;
+                explicit_indices(chunk);
+                Ok(())
+            }
+        }
+    }
+
     /// Drops a record the file itself marks as no point (E57's invalid
     /// states), under every policy; the reader counts these itself.
     pub fn pass(&self, chunk: &mut PointChunk) {

@@ -106,3 +106,93 @@ pub(crate) fn read_full<R: Read + ?Sized>(r: &mut R, buf: &mut [u8]) -> io::Resu
 pub(crate) fn skip_bytes<R: Read + ?Sized>(r: &mut R, n: u64) -> io::Result<u64> {
     io::copy(&mut Read::take(&mut *r, n), &mut io::sink())
 }
+
+/// Bytes counted past the first non-zero byte of a tail at most: enough
+/// to say how much follows, without reading a huge file to its end to
+/// word an error.
+const TAIL_COUNT_CAP: u64 = 1 << 26;
+
+/// What follows the declared data of a binary body, when it is data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tail {
+    /// Bytes after the declared data (all of them when `exact`, else at
+    /// least this many).
+    pub bytes: u64,
+    pub exact: bool,
+}
+
+impl Tail {
+    /// The tail in words: its size and, for a body of `record`-byte records,
+    /// how many whole records it would hold.
+    pub fn describe(&self, record: Option<u64>) -> String {
+        let at_least = if self.exact { "" } else { "at least " };
+        let mut s = format!("{at_least}{} bytes follow the declared data", self.bytes);
+        if let Some(size) = record.filter(|&r| r > 0) {
+            let (whole, rest) = (self.bytes / size, self.bytes % size);
+            let records = if whole == 1 { "record" } else { "records" };
+            s += &format!(", {at_least}{whole} whole {records} of {size} bytes");
+            if rest > 0 && self.exact {
+                s += &format!(" and {rest} bytes");
+            }
+        }
+        s
+    }
+}
+
+/// Reads `r` to its end after the declared data of a binary body: `None`
+/// when nothing follows, or only zero bytes (padding: PCL pads its binary
+/// PCD files with zeros, and zeros cannot be told from padding anyway),
+/// else how much follows.
+pub(crate) fn binary_tail<R: Read + ?Sized>(r: &mut R) -> io::Result<Option<Tail>> {
+    let mut buf = vec![0u8; 1 << 16];
+    let mut bytes = 0u64;
+    let mut data_at = None;
+    loop {
+        let n = match r.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if data_at.is_none() && buf[..n].iter().any(|&b| b != 0) {
+            data_at = Some(bytes);
+        }
+        bytes += n as u64;
+        if data_at.is_some_and(|at| bytes - at > TAIL_COUNT_CAP) {
+            return Ok(Some(Tail {
+                bytes,
+                exact: false,
+            }));
+        }
+    }
+    Ok(data_at.map(|_| Tail { bytes, exact: true }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tail_of_zeros_is_padding_any_other_byte_is_data() {
+        assert_eq!(binary_tail(&mut &b""[..]).unwrap(), None);
+        assert_eq!(binary_tail(&mut &[0u8; 5000][..]).unwrap(), None);
+        let mut tail = vec![0u8; 70_000];
+        tail[69_999] = 1;
+        let t = binary_tail(&mut &tail[..]).unwrap().unwrap();
+        assert_eq!(
+            t,
+            Tail {
+                bytes: 70_000,
+                exact: true
+            }
+        );
+        assert_eq!(
+            Tail {
+                bytes: 30,
+                exact: true
+            }
+            .describe(Some(12)),
+            "30 bytes follow the declared data, 2 whole records of 12 bytes and 6 bytes"
+        );
+    }
+}

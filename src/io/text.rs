@@ -11,8 +11,19 @@ pub(crate) const MAX_LINE: u64 = 1 << 20;
 pub(crate) enum Line {
     /// `buf` holds the line without its terminator.
     Read,
+    /// `buf` holds the input's last line, which has no end of line: a
+    /// record there may have been cut inside its last number, so readers
+    /// of records do not take it as whole.
+    Unterminated,
     Eof,
     TooLong,
+}
+
+impl Line {
+    /// Whether `buf` holds a line (ended or not).
+    pub(crate) fn is_line(&self) -> bool {
+        matches!(self, Line::Read | Line::Unterminated)
+    }
 }
 
 /// Reads the next line into `buf` (cleared first).
@@ -22,7 +33,8 @@ pub(crate) fn read_line<R: BufRead + ?Sized>(r: &mut R, buf: &mut Vec<u8>) -> io
     if n == 0 {
         return Ok(Line::Eof);
     }
-    if buf.last() == Some(&b'\n') {
+    let ended = buf.last() == Some(&b'\n');
+    if ended {
         buf.pop();
     } else if n as u64 > MAX_LINE {
         return Ok(Line::TooLong);
@@ -30,7 +42,11 @@ pub(crate) fn read_line<R: BufRead + ?Sized>(r: &mut R, buf: &mut Vec<u8>) -> io
     if buf.last() == Some(&b'\r') {
         buf.pop();
     }
-    Ok(Line::Read)
+    Ok(if ended {
+        Line::Read
+    } else {
+        Line::Unterminated
+    })
 }
 
 /// The line as text, or a reason it is not.
@@ -53,4 +69,31 @@ pub(crate) fn parse_f32(tok: &str, what: &str) -> Result<f32, String> {
 /// At most 40 characters of a token, for error messages about garbage.
 pub(crate) fn shorten(tok: &str) -> String {
     tok.chars().take(40).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_last_line_without_end_of_line_is_told_apart() {
+        let mut r: &[u8] = b"1 2 3\r\n4 5 6\n7 8 9.2";
+        let mut buf = Vec::new();
+        let mut got = Vec::new();
+        loop {
+            let line = read_line(&mut r, &mut buf).unwrap();
+            if line == Line::Eof {
+                break;
+            }
+            got.push((line, String::from_utf8(buf.clone()).unwrap()));
+        }
+        assert_eq!(
+            got,
+            [
+                (Line::Read, "1 2 3".to_string()),
+                (Line::Read, "4 5 6".to_string()),
+                (Line::Unterminated, "7 8 9.2".to_string()),
+            ]
+        );
+    }
 }

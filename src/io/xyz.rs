@@ -4,9 +4,16 @@
 //! Layout rules:
 //! - fields are separated by whitespace and/or commas (or semicolons);
 //! - blank lines and lines starting with `#` or `//` are skipped anywhere;
-//! - the first remaining line is a header, and skipped, when it is not a
-//!   point: a non-numeric field among its first three, or fewer than three
-//!   fields (like the count line of `.pts`);
+//! - the first remaining line is a header, and skipped, only when it looks
+//!   like one: every field a column name (`x`, `Y`, `"z"`, `nx`: no field a
+//!   number or starting like one), or a lone integer (the point count line
+//!   of `.pts`). A first line mixing numbers and other text (`1.0 2.0
+//!   x3.0`) is an error, not a header: it is a damaged point;
+//! - the last line must end with an end of line: without one it may be cut
+//!   inside its last number (`3.25` read as `3.2`), so it is an error, or
+//!   under [`InvalidPolicy::Skip`] dropped and counted like a non-finite
+//!   record. Blank and comment lines are exempt. A gzip stream cut short is
+//!   an error of the decompressor already;
 //! - the first data line fixes the layout: with 6 or more numeric columns,
 //!   columns 4-6 are the normal `nx ny nz`; with 3-5, only `x y z` are read.
 //!   Every later line must have at least as many columns as that layout
@@ -34,11 +41,43 @@ pub struct XyzReader {
     columns: Option<usize>,
     /// `line` holds a data line not consumed yet (the one `open` read).
     pending: bool,
+    /// `line` is the input's last line and has no end of line.
+    unterminated: bool,
 }
 
 fn split_fields(s: &str) -> impl Iterator<Item = &str> {
     s.split(|c: char| c == ',' || c == ';' || c.is_ascii_whitespace())
         .filter(|t| !t.is_empty())
+}
+
+/// What the first line that is no comment holds.
+#[derive(Debug, PartialEq, Eq)]
+enum FirstLine {
+    /// A point: read 3 columns, or 6 (with the normal).
+    Point(usize),
+    /// Column names, or the point count of `.pts`: skipped.
+    Header,
+}
+
+/// A column name: neither a number nor starting like one, so a field cut
+/// or damaged out of a number (`x3.0`, `3.0x`, `-`) is not taken for one.
+fn is_name(tok: &str) -> bool {
+    let numberlike = |c: char| c.is_ascii_digit() || matches!(c, '+' | '-' | '.');
+    tok.parse::<f64>().is_err() && !tok.starts_with(numberlike)
+}
+
+fn first_line(s: &str) -> Option<FirstLine> {
+    let fields: Vec<&str> = split_fields(s).collect();
+    let numeric = fields
+        .iter()
+        .take_while(|t| t.parse::<f64>().is_ok())
+        .count();
+    if numeric >= 3 {
+        return Some(FirstLine::Point(if numeric >= 6 { 6 } else { 3 }));
+    }
+    let names = !fields.is_empty() && fields.iter().all(|t| is_name(t));
+    let count_line = matches!(fields[..], [n] if n.parse::<u64>().is_ok());
+    (names || count_line).then_some(FirstLine::Header)
 }
 
 /// Blank or comment line (checked on bytes: no UTF-8 validation twice).
@@ -76,6 +115,7 @@ impl XyzReader {
             next: 0,
             columns: None,
             pending: false,
+            unterminated: false,
         };
         r.find_first_record()?;
         Ok(r)
@@ -100,8 +140,9 @@ impl XyzReader {
                     self.line_no += 1;
                     return Err(self.bad(format!("longer than {} bytes", text::MAX_LINE)));
                 }
-                Line::Read => self.line_no += 1,
+                Line::Read | Line::Unterminated => self.line_no += 1,
             }
+            self.unterminated = got == Line::Unterminated;
             if !is_comment(&self.line) {
                 return Ok(true);
             }
@@ -114,20 +155,30 @@ impl XyzReader {
         let mut header_seen = false;
         while self.next_line()? {
             let s = text::as_text(&self.line).map_err(|e| self.bad(e))?;
-            let numeric = split_fields(s)
-                .take_while(|t| t.parse::<f64>().is_ok())
-                .count();
-            if numeric >= 3 {
-                let columns = if numeric >= 6 { 6 } else { 3 };
-                self.columns = Some(columns);
-                self.info.has_normals = columns == 6;
-                self.pending = true;
-                return Ok(());
+            match first_line(s) {
+                Some(FirstLine::Point(columns)) => {
+                    self.columns = Some(columns);
+                    self.info.has_normals = columns == 6;
+                    self.pending = true;
+                    return Ok(());
+                }
+                // A cut first line is still a point: `read_chunk` says so.
+                None if self.unterminated => {
+                    self.columns = Some(3);
+                    self.pending = true;
+                    return Ok(());
+                }
+                Some(FirstLine::Header) if !header_seen => header_seen = true,
+                Some(FirstLine::Header) => {
+                    return Err(self.bad("expected at least 3 numeric columns x y z".into()))
+                }
+                None => {
+                    let line = text::shorten(s);
+                    return Err(self.bad(format!(
+                        "'{line}' is neither a point (at least 3 numbers: x y z) nor a header of column names"
+                    )));
+                }
             }
-            if header_seen {
-                return Err(self.bad("expected at least 3 numeric columns x y z".into()));
-            }
-            header_seen = true;
         }
         Ok(())
     }
@@ -170,6 +221,11 @@ impl PointReader for XyzReader {
             if !std::mem::take(&mut self.pending) && !self.next_line()? {
                 break;
             }
+            if self.unterminated {
+                self.admit.cut(chunk, self.next, self.line_no)?;
+                self.next += 1;
+                continue;
+            }
             let (p, n) = self.parse_record(columns)?;
             self.admit.push(chunk, self.next, p, n)?;
             self.next += 1;
@@ -179,5 +235,81 @@ impl PointReader for XyzReader {
 
     fn skipped(&self) -> u64 {
         self.admit.skipped()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reader(text: &str, policy: InvalidPolicy) -> Result<XyzReader, IoError> {
+        let input: Input = Box::new(std::io::Cursor::new(text.as_bytes().to_vec()));
+        XyzReader::open(Path::new("t.xyz"), input, false, policy)
+    }
+
+    /// The points read, the records skipped, or the first error.
+    fn read(text: &str, policy: InvalidPolicy) -> Result<(Vec<DVec3>, u64), IoError> {
+        let mut r = reader(text, policy)?;
+        let mut chunk = PointChunk::default();
+        let mut all = Vec::new();
+        while r.read_chunk(&mut chunk, 2)? > 0 {
+            all.extend_from_slice(&chunk.xyz);
+        }
+        Ok((all, r.skipped()))
+    }
+
+    #[test]
+    fn a_first_line_is_a_header_only_when_it_looks_like_one() {
+        for header in [
+            "x y z",
+            "X,Y,Z,R,G,B",
+            "\"x\";\"y\";\"z\"",
+            "nx ny nz x y z",
+            "12345",
+        ] {
+            assert_eq!(first_line(header), Some(FirstLine::Header), "{header}");
+        }
+        assert_eq!(first_line("1 2 3"), Some(FirstLine::Point(3)));
+        assert_eq!(first_line("1,2,3,0,0,1,255"), Some(FirstLine::Point(6)));
+        for damaged in ["1.0 2.0 x3.0", "1.0 2.0", "x 2.0 z", "1.0 2.0 3.0x", "-"] {
+            assert_eq!(first_line(damaged), None, "{damaged}");
+        }
+    }
+
+    #[test]
+    fn a_damaged_first_line_is_an_error_naming_it() {
+        let e = read("1.0 2.0 x3.0\n4 5 6\n", InvalidPolicy::Skip).unwrap_err();
+        assert!(matches!(e, IoError::BadRecord { record: 0, .. }), "{e:?}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("t.xyz") && msg.contains("line 1") && msg.contains("x3.0"),
+            "{msg}"
+        );
+        // A real header is skipped, its points read.
+        let (got, _) = read("x y z\n4 5 6\n", InvalidPolicy::Reject).unwrap();
+        assert_eq!(got, [DVec3::new(4.0, 5.0, 6.0)]);
+    }
+
+    #[test]
+    fn a_last_line_without_end_of_line_is_cut_or_skipped() {
+        let text = "1 2 3\n4 5 6\n7 8 9.2";
+        match read(text, InvalidPolicy::Reject) {
+            Err(IoError::CutShort {
+                record: 2, line: 3, ..
+            }) => {}
+            other => panic!("{other:?}"),
+        }
+        let (got, skipped) = read(text, InvalidPolicy::Skip).unwrap();
+        assert_eq!(got.len(), 2);
+        assert_eq!(skipped, 1);
+        // Cut in the first and only line, even one that looks like no point.
+        for cut in ["7 8 9.2", "7 8"] {
+            assert!(matches!(
+                read(cut, InvalidPolicy::Reject),
+                Err(IoError::CutShort { line: 1, .. })
+            ));
+            assert_eq!(read(cut, InvalidPolicy::Skip).unwrap(), (vec![], 1));
+        }
+        assert_eq!(read("1 2 3\n", InvalidPolicy::Reject).unwrap().0.len(), 1);
     }
 }

@@ -96,7 +96,7 @@ pub fn parse_header(input: &mut dyn BufRead) -> Result<PcdHeader, String> {
         match got {
             Line::Eof => return Err("the header ends before its DATA line".into()),
             Line::TooLong => return Err(format!("header line {lines} is too long")),
-            Line::Read => {}
+            Line::Read | Line::Unterminated => {}
         }
         let text = as_text(&line).map_err(|e| format!("header line {lines}: {e}"))?;
         let mut words = text.split_ascii_whitespace();

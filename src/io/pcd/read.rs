@@ -12,12 +12,18 @@
 //! read from there side by side: memory stays a chunk's worth whatever the
 //! cloud's size, disk is the uncompressed size. PCD's `VIEWPOINT` is not
 //! applied to the points, as PCL does not apply it when loading.
+//!
+//! After the declared points the file must end: blank lines may follow an
+//! ASCII body and zero bytes a binary one (PCL pads its binary and
+//! binary_compressed files with zeros), anything else is
+//! [`IoError::TrailingData`]. An ASCII body's last line must end with an
+//! end of line (else it may be cut inside its last number).
 
 use super::header::{parse_header, Data, PcdHeader, Scalar};
 use super::lzf;
 use crate::io::attributes::{to_unsigned, widen_8bit};
 use crate::io::policy::Admitter;
-use crate::io::source::{read_full, Input};
+use crate::io::source::{binary_tail, read_full, Input, Tail};
 use crate::io::text::{self, Line};
 use crate::io::{
     Attribute, AttributeSet, AttributeValues, Format, InvalidPolicy, IoError, PointChunk,
@@ -59,6 +65,8 @@ pub struct PcdReader {
     body: Body,
     /// Records consumed so far (kept or skipped).
     next: u64,
+    /// Whether the end of the file has been checked (after the last record).
+    ended: bool,
 }
 
 impl PcdReader {
@@ -80,10 +88,16 @@ impl PcdReader {
                 line_no: header.lines,
             },
             Data::Binary => Body::Binary { buf: Vec::new() },
-            Data::Compressed => Body::Columns {
-                file: decompress_body(path, &mut input, &header)?,
-                buf: Vec::new(),
-            },
+            Data::Compressed => {
+                let file = decompress_body(path, &mut input, &header)?;
+                // The block is all the body: what follows it is known now.
+                let tail = binary_tail(&mut input).map_err(|e| IoError::os(path, e))?;
+                trailing(path, header.points, tail, None)?;
+                Body::Columns {
+                    file,
+                    buf: Vec::new(),
+                }
+            }
         };
         let info = SourceInfo {
             path: path.to_path_buf(),
@@ -100,6 +114,8 @@ impl PcdReader {
             input,
             admit: Admitter::new(path.to_path_buf(), policy),
             header,
+            // A compressed body's end was checked above.
+            ended: matches!(body, Body::Columns { .. }),
             wanted,
             body,
             next: 0,
@@ -132,6 +148,11 @@ impl PcdReader {
             match got {
                 Line::Eof => return Err(self.truncated(self.next)),
                 Line::TooLong => return Err(bad(format!("longer than {} bytes", text::MAX_LINE))),
+                Line::Unterminated => {
+                    self.admit.cut(chunk, self.next, *line_no)?;
+                    self.next += 1;
+                    continue;
+                }
                 Line::Read => {}
             }
             let s = text::as_text(line).map_err(bad)?;
@@ -213,6 +234,56 @@ impl PcdReader {
         }
         self.next += n as u64;
         Ok(())
+    }
+
+    /// After the last record: nothing but blank lines (ASCII) or zero bytes
+    /// (binary) may follow.
+    fn check_end(&mut self) -> Result<(), IoError> {
+        self.ended = true;
+        let path = &self.info.path;
+        let os = |e| IoError::os(path, e);
+        match &mut self.body {
+            Body::Ascii { line, line_no } => loop {
+                let got = text::read_line(&mut self.input, line).map_err(os)?;
+                if got == Line::Eof {
+                    return Ok(());
+                }
+                *line_no += 1;
+                if got == Line::TooLong || !line.iter().all(u8::is_ascii_whitespace) {
+                    return Err(IoError::TrailingData {
+                        path: path.clone(),
+                        declared: self.header.points,
+                        extra_bytes: None,
+                        found: format!("line {line_no} follows the declared points"),
+                    });
+                }
+            },
+            Body::Binary { .. } => {
+                let tail = binary_tail(&mut self.input).map_err(os)?;
+                let record = self.header.record_bytes() as u64;
+                trailing(path, self.header.points, tail, Some(record))
+            }
+            Body::Columns { .. } => Ok(()),
+        }
+    }
+}
+
+/// [`IoError::TrailingData`] when data (not zero padding) follows the
+/// declared body; `record` is the record size of a binary body.
+fn trailing(
+    path: &Path,
+    declared: u64,
+    tail: Option<Tail>,
+    record: Option<u64>,
+) -> Result<(), IoError> {
+    match tail {
+        None => Ok(()),
+        Some(t) => Err(IoError::TrailingData {
+            path: path.to_path_buf(),
+            declared,
+            extra_bytes: Some(t.bytes),
+            found: t.describe(record),
+        }),
     }
 }
 
@@ -370,6 +441,11 @@ impl PointReader for PcdReader {
                 Body::Columns { .. } => self.read_columns(chunk, want)?,
             }
         }
+        // Checked in the call that reads the last record, so a caller that
+        // stops at the declared count still gets the check.
+        if self.next == self.header.points && !self.ended {
+            self.check_end()?;
+        }
         Ok(self.admit.end(chunk))
     }
 
@@ -385,5 +461,69 @@ impl PointReader for PcdReader {
         crate::io::source::reopen_with(path, |input, gzip| {
             PcdReader::open(path, input, gzip, policy)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ASCII: &str = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 2\nDATA ascii\n";
+
+    fn read(bytes: &[u8], policy: InvalidPolicy) -> Result<(Vec<DVec3>, u64), IoError> {
+        let input: Input = Box::new(std::io::Cursor::new(bytes.to_vec()));
+        let mut r = PcdReader::open(Path::new("t.pcd"), input, false, policy)?;
+        let mut chunk = PointChunk::default();
+        let mut all = Vec::new();
+        while r.read_chunk(&mut chunk, 1)? > 0 {
+            all.extend_from_slice(&chunk.xyz);
+        }
+        Ok((all, r.skipped()))
+    }
+
+    #[test]
+    fn ascii_lines_after_the_points_or_a_cut_last_line_are_errors() {
+        let ok = format!("{ASCII}1 2 3\n4 5 6\n\n");
+        assert_eq!(
+            read(ok.as_bytes(), InvalidPolicy::Reject).unwrap().0.len(),
+            2
+        );
+        let more = format!("{ASCII}1 2 3\n4 5 6\n7 8 9\n");
+        match read(more.as_bytes(), InvalidPolicy::Reject) {
+            Err(e @ IoError::TrailingData { declared: 2, .. }) => {
+                assert!(e.to_string().contains("line 9"), "{e}")
+            }
+            other => panic!("{other:?}"),
+        }
+        let cut = format!("{ASCII}1 2 3\n4 5 6.5");
+        assert!(matches!(
+            read(cut.as_bytes(), InvalidPolicy::Reject),
+            Err(IoError::CutShort {
+                record: 1,
+                line: 8,
+                ..
+            })
+        ));
+        assert_eq!(read(cut.as_bytes(), InvalidPolicy::Skip).unwrap().1, 1);
+    }
+
+    #[test]
+    fn binary_records_past_the_count_are_errors_zeros_are_padding() {
+        let header = ASCII.replace("ascii", "binary");
+        let body: Vec<u8> = (0..9).flat_map(|i| (i as f32).to_le_bytes()).collect();
+        let mut bytes = header.clone().into_bytes();
+        bytes.extend_from_slice(&body);
+        match read(&bytes, InvalidPolicy::Reject) {
+            Err(IoError::TrailingData {
+                declared: 2,
+                extra_bytes: Some(12),
+                ..
+            }) => {}
+            other => panic!("{other:?}"),
+        }
+        let mut padded = header.into_bytes();
+        padded.extend_from_slice(&body[..24]);
+        padded.extend([0u8; 4096]);
+        assert_eq!(read(&padded, InvalidPolicy::Reject).unwrap().0.len(), 2);
     }
 }

@@ -7,7 +7,7 @@
 
 use std::io::{BufRead, Read};
 
-use crate::io::text::{self, Line};
+use crate::io::text;
 
 /// Longest header accepted: a file without `end_header` in its first bytes is
 /// not PLY, and must not be read to the end looking for one.
@@ -134,7 +134,8 @@ pub fn parse_header<R: BufRead + ?Sized>(r: &mut R) -> Result<PlyHeader, HeaderE
     let mut elements: Vec<Element> = Vec::new();
     loop {
         let line = text::read_line(&mut limited, &mut buf).map_err(|e| e.to_string())?;
-        if line != Line::Read {
+        // A header ends at `end_header`; its own line may end the file.
+        if !line.is_line() {
             return Err("no 'end_header' line: not a PLY file, or its header is cut off".into());
         }
         lines += 1;

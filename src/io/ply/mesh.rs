@@ -1,11 +1,12 @@
 //! Whole-mesh PLY reading (vertices and faces), for ground-truth meshes and
 //! `scanmesh eval`. Polygons are fan-triangulated; face indices are checked
 //! against the vertex count. Elements other than `vertex` and `face` are
-//! skipped; reading stops once both are read.
+//! skipped; after the last element the file must end (blank lines or zero
+//! bytes may follow), as for the point reader.
 
-use super::header::{parse_header, Element, PlyHeader, PropertyKind};
-use super::read::{element_error, record_error, vertex_props};
-use super::record::{skip_element, RecordDecoder, RecordError};
+use super::header::{parse_header, Element, Encoding, PlyHeader, PropertyKind};
+use super::read::{element_error, ensure_end, record_error, vertex_props};
+use super::record::{rest, skip_element, RecordDecoder, RecordError};
 use crate::io::source::{open_input, Input};
 use crate::io::IoError;
 use glam::DVec3;
@@ -51,8 +52,7 @@ pub(crate) fn read_ply_mesh(
         vertices: Vec::new(),
         triangles: Vec::new(),
     };
-    let last = f.map_or(v, |f| f.max(v));
-    for (i, el) in header.elements[..=last].iter().enumerate() {
+    for (i, el) in header.elements.iter().enumerate() {
         if i == v {
             reader.read_vertices(&mut input, el)?;
         } else if Some(i) == f {
@@ -65,6 +65,12 @@ pub(crate) fn read_ply_mesh(
     if f.is_some_and(|f| f < v) {
         reader.check_all_indices()?;
     }
+    let rest =
+        rest(&mut input, header.encoding, reader.line_no).map_err(|e| IoError::os(path, e))?;
+    let vertex = &header.elements[v];
+    let last = v + 1 == header.elements.len() && header.encoding != Encoding::Ascii;
+    let record = vertex.fixed_size().filter(|_| last).map(|s| s as u64);
+    ensure_end(path, vertex.count, rest, record)?;
     Ok((reader.vertices, reader.triangles))
 }
 

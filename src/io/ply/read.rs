@@ -6,14 +6,16 @@
 //! counts are checked against the data (short data is
 //! [`IoError::Truncated`]), never used to size allocations.
 //!
-//! Data after the last declared element is an error in ASCII (trailing
-//! garbage, or a count that is too small) but is not looked for in binary
-//! files, where writers are known to pad.
+//! Once the last vertex is read, the elements after `vertex` (faces) are
+//! skipped and the file must end: data after the last declared element is
+//! [`IoError::TrailingData`] (more vertices than the count, or garbage),
+//! so a count too small never drops points silently. Blank lines may
+//! follow an ASCII body and zero bytes a binary one (padding).
 
 use super::attrs::AttrProps;
 use super::binary::FixedLayout;
 use super::header::{parse_header, Element, Encoding, PlyHeader};
-use super::record::{skip_element, RecordDecoder, RecordError};
+use super::record::{rest, skip_element, RecordDecoder, RecordError, Rest};
 use crate::io::policy::Admitter;
 use crate::io::source::{read_full, Input};
 use crate::io::{
@@ -49,8 +51,11 @@ pub struct PlyPointReader {
     declared: u64,
     /// Vertex records consumed so far (kept or skipped).
     next: u64,
-    /// ASCII file whose last element is `vertex`: the rest must be blank.
-    check_trailing: bool,
+    /// The elements declared after `vertex`, skipped once it is read.
+    after: Vec<Element>,
+    encoding: Encoding,
+    /// Whether the end of the file has been checked (after the last vertex).
+    ended: bool,
 }
 
 impl PlyPointReader {
@@ -92,7 +97,9 @@ impl PlyPointReader {
             admit: Admitter::new(path.to_path_buf(), policy),
             declared: vertex.count,
             next: 0,
-            check_trailing: header.encoding == Encoding::Ascii && v + 1 == header.elements.len(),
+            after: header.elements[v + 1..].to_vec(),
+            encoding: header.encoding,
+            ended: false,
             info,
             attrs,
             input,
@@ -155,6 +162,11 @@ impl PlyPointReader {
                         found: record,
                     })
                 }
+                Err(RecordError::Cut { line }) => {
+                    self.admit.cut(chunk, record, line)?;
+                    self.next += 1;
+                    continue;
+                }
                 Err(e) => return Err(record_error(&self.info.path, record, e)),
             }
             let v = &dec.values;
@@ -169,26 +181,47 @@ impl PlyPointReader {
         Ok(())
     }
 
-    /// After the last vertex of an ASCII file that ends with `vertex`, only
-    /// blank lines may follow.
-    fn check_rest(&mut self) -> Result<(), IoError> {
-        self.check_trailing = false;
-        let Body::General { dec, .. } = &mut self.body else {
-            return Ok(());
+    /// After the last vertex: skips the elements declared after `vertex`,
+    /// then checks that nothing but padding follows them.
+    fn check_end(&mut self) -> Result<(), IoError> {
+        self.ended = true;
+        let path = &self.info.path;
+        let (mut line_no, record) = match &self.body {
+            Body::General { dec, .. } => (dec.line_no, None),
+            Body::Fixed { layout, .. } => (0, Some(layout.size as u64)),
         };
-        match dec.next_line(&mut self.input) {
-            Ok(false) => Ok(()),
-            Ok(true) => Err(IoError::BadRecord {
-                path: self.info.path.clone(),
-                record: self.declared,
-                reason: format!(
-                    "line {}: data after the {} declared vertices (trailing garbage, or a wrong count)",
-                    dec.line_no, self.declared
-                ),
-            }),
-            Err(e) => Err(record_error(&self.info.path, self.declared, e)),
+        for el in &self.after {
+            skip_element(&mut self.input, el, self.encoding, &mut line_no)
+                .map_err(|(k, e)| element_error(path, el, k, e))?;
         }
+        // Whole vertex records fit in the tail only when it follows them.
+        let record = record.filter(|_| self.after.is_empty());
+        let rest =
+            rest(&mut self.input, self.encoding, line_no).map_err(|e| IoError::os(path, e))?;
+        ensure_end(path, self.declared, rest, record)
     }
+}
+
+/// `Ok` when nothing (but padding) follows the declared elements, else
+/// [`IoError::TrailingData`]; `record` is the vertex record size when the
+/// vertices are the last element of a binary body.
+pub(crate) fn ensure_end(
+    path: &Path,
+    declared: u64,
+    rest: Rest,
+    record: Option<u64>,
+) -> Result<(), IoError> {
+    let (extra_bytes, found) = match rest {
+        Rest::End => return Ok(()),
+        Rest::Line(line) => (None, format!("line {line} follows the declared elements")),
+        Rest::Bytes(tail) => (Some(tail.bytes), tail.describe(record)),
+    };
+    Err(IoError::TrailingData {
+        path: path.to_path_buf(),
+        declared,
+        extra_bytes,
+        found,
+    })
 }
 
 impl PointReader for PlyPointReader {
@@ -207,8 +240,10 @@ impl PointReader for PlyPointReader {
                 Body::General { .. } => self.read_records(chunk, want)?,
             }
         }
-        if self.next == self.declared && self.check_trailing {
-            self.check_rest()?;
+        // Checked in the call that reads the last vertex, so a caller that
+        // stops at the declared count still gets the check.
+        if self.next == self.declared && !self.ended {
+            self.check_end()?;
         }
         Ok(self.admit.end(chunk))
     }
@@ -312,6 +347,11 @@ pub(crate) fn record_error(path: &Path, record: u64, e: RecordError) -> IoError 
             record,
             reason: "file ends inside the record".into(),
         },
+        RecordError::Cut { line } => IoError::CutShort {
+            path: path.to_path_buf(),
+            record,
+            line,
+        },
     }
 }
 
@@ -332,5 +372,67 @@ pub(crate) fn element_error(path: &Path, el: &Element, found: u64, e: RecordErro
             reason: format!("element '{}': {reason}", el.name),
         },
         RecordError::Io(e) => IoError::os(path, e),
+        RecordError::Cut { line } => IoError::CutShort {
+            path: path.to_path_buf(),
+            record: found,
+            line,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three f32 vertices declared, `records` written, in either byte order,
+    /// then `tail`.
+    fn ply(big_endian: bool, records: u32, tail: &[u8]) -> Vec<u8> {
+        let order = if big_endian { "big" } else { "little" };
+        let mut b = format!(
+            "ply\nformat binary_{order}_endian 1.0\nelement vertex 3\n\
+             property float x\nproperty float y\nproperty float z\nend_header\n"
+        )
+        .into_bytes();
+        for v in (0..records * 3).map(|i| i as f32 + 1.0) {
+            b.extend(if big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            });
+        }
+        b.extend_from_slice(tail);
+        b
+    }
+
+    fn read(bytes: Vec<u8>, max: usize) -> Result<Vec<DVec3>, IoError> {
+        let input: Input = Box::new(std::io::Cursor::new(bytes));
+        let mut r = PlyPointReader::open(Path::new("t.ply"), input, false, InvalidPolicy::Reject)?;
+        let mut chunk = PointChunk::default();
+        let mut all = Vec::new();
+        while r.read_chunk(&mut chunk, max)? > 0 {
+            all.extend_from_slice(&chunk.xyz);
+        }
+        Ok(all)
+    }
+
+    #[test]
+    fn records_past_the_declared_count_are_an_error_in_both_byte_orders() {
+        for big_endian in [false, true] {
+            for max in [1, 3, 10] {
+                match read(ply(big_endian, 5, &[]), max) {
+                    Err(
+                        e @ IoError::TrailingData {
+                            declared: 3,
+                            extra_bytes: Some(24),
+                            ..
+                        },
+                    ) => assert!(e.to_string().contains("t.ply"), "{e}"),
+                    other => panic!("big endian {big_endian}, max {max}: {other:?}"),
+                }
+                assert_eq!(read(ply(big_endian, 3, &[]), max).unwrap().len(), 3);
+                assert_eq!(read(ply(big_endian, 3, &[0; 40]), max).unwrap().len(), 3);
+                assert!(read(ply(big_endian, 3, b"\n"), max).is_err());
+            }
+        }
     }
 }

@@ -4,7 +4,7 @@
 
 use super::binary::decode;
 use super::header::{Element, Encoding, PropertyKind, ScalarType};
-use crate::io::source::{read_full, skip_bytes};
+use crate::io::source::{binary_tail, read_full, skip_bytes, Tail};
 use crate::io::text::{self, Line};
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
 use std::io::{self, BufRead};
@@ -15,6 +15,11 @@ pub(crate) enum RecordError {
     Eof,
     Bad(String),
     Io(io::Error),
+    /// The record is on the input's last line, which has no end of line
+    /// (`line`): it may be cut inside its last number.
+    Cut {
+        line: u64,
+    },
 }
 
 fn io_err(e: io::Error) -> RecordError {
@@ -39,6 +44,8 @@ pub(crate) struct RecordDecoder {
     line: Vec<u8>,
     /// Last line read, numbered as in the file (ASCII only).
     pub line_no: u64,
+    /// The last line read is the input's last and has no end of line.
+    unterminated: bool,
 }
 
 impl RecordDecoder {
@@ -64,6 +71,7 @@ impl RecordDecoder {
             list: Vec::new(),
             line: Vec::new(),
             line_no,
+            unterminated: false,
         }
     }
 
@@ -87,6 +95,7 @@ impl RecordDecoder {
                 let msg = format!("longer than {} bytes", text::MAX_LINE);
                 return Err(RecordError::Bad(format!("line {}: {msg}", self.line_no)));
             }
+            self.unterminated = got == Line::Unterminated;
             if !self.line.iter().all(u8::is_ascii_whitespace) {
                 return Ok(true);
             }
@@ -98,6 +107,9 @@ impl RecordDecoder {
             return Err(RecordError::Eof);
         }
         let line_no = self.line_no;
+        if self.unterminated {
+            return Err(RecordError::Cut { line: line_no });
+        }
         let at = |e: String| RecordError::Bad(format!("line {line_no}: {e}"));
         let s = text::as_text(&self.line).map_err(at)?;
         let mut tok = s.split_ascii_whitespace();
@@ -232,6 +244,40 @@ pub(crate) fn skip_element<R: BufRead + ?Sized>(
     Ok(())
 }
 
+/// What follows the last declared element.
+#[derive(Debug, PartialEq, Eq)]
+pub(crate) enum Rest {
+    /// The end of the input (or, binary, only zero bytes: padding).
+    End,
+    /// A line that is not blank, numbered as in the file (ASCII).
+    Line(u64),
+    /// Bytes that are not all zero (binary).
+    Bytes(Tail),
+}
+
+/// Reads what follows the last declared element; `line_no` is the number
+/// of the last line read (ASCII).
+pub(crate) fn rest<R: BufRead + ?Sized>(
+    r: &mut R,
+    encoding: Encoding,
+    mut line_no: u64,
+) -> io::Result<Rest> {
+    if encoding != Encoding::Ascii {
+        return Ok(binary_tail(r)?.map_or(Rest::End, Rest::Bytes));
+    }
+    let mut line = Vec::new();
+    loop {
+        let got = text::read_line(r, &mut line)?;
+        if got == Line::Eof {
+            return Ok(Rest::End);
+        }
+        line_no += 1;
+        if got == Line::TooLong || !line.iter().all(u8::is_ascii_whitespace) {
+            return Ok(Rest::Line(line_no));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -250,6 +296,30 @@ mod tests {
             Err(RecordError::Bad(m)) => assert!(m.contains("line 9") && m.contains("extra"), "{m}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn the_rest_after_the_last_element() {
+        let rest_of = |body: &[u8], enc| rest(&mut &body[..], enc, 10).unwrap();
+        assert_eq!(rest_of(b"", Encoding::Ascii), Rest::End);
+        assert_eq!(rest_of(b"\n  \r\n\t", Encoding::Ascii), Rest::End);
+        assert_eq!(rest_of(b"\n\n1 2 3\n", Encoding::Ascii), Rest::Line(13));
+        assert_eq!(rest_of(&[0; 300], Encoding::BinaryLe), Rest::End);
+        let tail = Tail {
+            bytes: 3,
+            exact: true,
+        };
+        assert_eq!(rest_of(&[0, 0, 9], Encoding::BinaryBe), Rest::Bytes(tail));
+    }
+
+    #[test]
+    fn ascii_record_on_a_last_line_without_end_of_line_is_cut() {
+        let src = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1\n2.5";
+        let mut r = src.as_bytes();
+        let h = parse_header(&mut r).unwrap();
+        let mut d = RecordDecoder::new(&h.elements[0], h.encoding, &[0], None, h.lines);
+        d.read(&mut r).unwrap();
+        assert!(matches!(d.read(&mut r), Err(RecordError::Cut { line: 7 })));
     }
 
     #[test]
