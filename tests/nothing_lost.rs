@@ -446,3 +446,87 @@ fn scratch_a_killed_run_left_is_reclaimed_by_the_next() {
     assert!(live_out.is_file());
     assert!(scratch(dir.path()).is_empty(), "{:?}", scratch(dir.path()));
 }
+
+/// The checkpoint fuzzer's first finding: a saved normals tile whose
+/// checksum is right but whose forest names point 12,692 of a 2,000-point
+/// store (a panic in the orientation's union-find). A saved result that
+/// does not fit its tile is recomputed, and the run says so.
+#[test]
+fn a_saved_tile_that_does_not_fit_its_tile_is_recomputed() {
+    use glam::DVec3;
+    use scanmesh::io::memory::MemoryReader;
+    use scanmesh::normals::{compute_normals, NormalParams};
+    use scanmesh::pipeline::{NoProgress, RunOptions};
+    use scanmesh::store::{build_store, BuildOptions, Checkpoints, Job, TileTarget, NORMALS};
+    let found = std::fs::read("tests/fixtures/fuzz/checkpoint_forged_edge.bin").expect("fixture");
+    let payload = &found[1..];
+    let dir = tempfile::tempdir().expect("tmp");
+    let pts = scanmesh::synth::fibonacci::fibonacci_sphere(DVec3::ZERO, 1.0, 2000);
+    let opts = BuildOptions {
+        tiles: TileTarget::Points(500),
+        ..BuildOptions::default()
+    };
+    let normals_of = |store_dir: &Path, keep: Option<&Path>| {
+        let mut reader = MemoryReader::new("sphere", pts.clone(), None);
+        let mut store = build_store(&mut reader, store_dir, &opts, &NoProgress).expect("store");
+        let checkpoints = keep.map(|k| Checkpoints::new(k, Job::Whole));
+        if let Some(c) = &checkpoints {
+            store.keep_tiles(c.clone());
+        }
+        compute_normals(
+            &mut store,
+            &NormalParams::default(),
+            RunOptions::new(1),
+            &NoProgress,
+        )
+        .expect("normals");
+        let column = store.column(&NORMALS).expect("column");
+        let mut n = Vec::new();
+        column.read_f32(0, store.len(), &mut n).expect("read");
+        (n, checkpoints.map(|c| c.damaged()).unwrap_or_default())
+    };
+    let (clean, _) = normals_of(&dir.path().join("a"), None);
+    let tiles = dir.path().join("tiles");
+    std::fs::create_dir_all(tiles.join("normals")).expect("mkdir");
+    let mut file = b"SMTILE2\0".to_vec();
+    file.extend((payload.len() as u64).to_le_bytes());
+    file.extend(u64::from(crc32fast::hash(payload)).to_le_bytes());
+    file.extend_from_slice(payload);
+    let forged = tiles.join("normals/0000000.tile");
+    std::fs::write(&forged, file).expect("forge");
+    let (resumed, damaged) = normals_of(&dir.path().join("b"), Some(&tiles));
+    assert!(resumed == clean, "the forged tile reached the normals");
+    assert_eq!(damaged, vec![forged]);
+}
+
+/// The other side of the check above: every tile a run saved fits its
+/// tile, so a resumed run reuses them all (normals, marching cubes,
+/// neighbours) and rejects none.
+#[test]
+fn a_resumed_run_rejects_none_of_its_own_tiles() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = dir.path().join("in.xyz");
+    write_xyz(&input, &utm_points(20_000, 7));
+    for (command, out, extra) in [
+        ("reconstruct", "m.ply", &["--closed"][..]),
+        ("neighbors", "a.csr", &[][..]),
+        ("normals", "n.ply", &["--orient", "sources"][..]),
+    ] {
+        let out = dir.path().join(out);
+        let run = dir.path().join(format!("run-{command}"));
+        let args = [
+            &[command, s(&input), "-o", s(&out), "--run-dir", s(&run)][..],
+            &["--tile-points", "3000", "-q"],
+            extra,
+        ]
+        .concat();
+        ok(&args);
+        std::fs::remove_file(&out).expect("rm output");
+        let _ = std::fs::remove_dir_all(run.join("stages"));
+        let o = scanmesh(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{command}: {err}");
+        assert!(!err.contains("damaged tile"), "{command}: {err}");
+        assert!(out.is_file());
+    }
+}

@@ -33,6 +33,25 @@ pub struct NeighboursTile {
     pub stats: HoodStats,
 }
 
+impl NeighboursTile {
+    /// Whether a saved result fits tile `t` of a store of `points` points:
+    /// one ascending id per core point, offsets that partition the lists,
+    /// every id in the store.
+    pub(crate) fn fits(&self, t: &crate::store::TileEntry, points: u64) -> bool {
+        let o = &self.offsets;
+        let partitions = o.len() == self.ids.len() + 1
+            && o.first() == Some(&0)
+            && o.last() == Some(&(self.neighbours.len() as u64))
+            && o.windows(2).all(|w| w[0] <= w[1]);
+        let longest = o.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        self.ids.len() as u64 == t.count
+            && self.ids.windows(2).all(|w| w[0] < w[1])
+            && self.ids.iter().chain(&self.neighbours).all(|&i| i < points)
+            && partitions
+            && self.stats.fits(t.count, longest as usize)
+    }
+}
+
 /// The tile kernel of the neighbours pass: each core point's list in input-order ids.
 pub struct NeighboursKernel {
     /// Which neighbourhood to compute.
@@ -59,7 +78,7 @@ impl TileKernel for NeighboursKernel {
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
-        Some(crate::pipeline::Codec::serde())
+        Some(crate::pipeline::Codec::serde(NeighboursTile::fits))
     }
 
     fn margin(&self) -> f64 {

@@ -35,6 +35,18 @@ impl HoodStats {
         self.hit_cap += other.hit_cap;
     }
 
+    /// Whether these are the counts of `points` points whose lists hold at
+    /// most `longest` neighbours (a saved tile result's, checked before
+    /// use: a histogram's length is a size it allocates when merged).
+    pub(crate) fn fits(&self, points: u64, longest: usize) -> bool {
+        let total = |h: &[u64]| h.iter().try_fold(0u64, |s, &c| s.checked_add(c));
+        self.sizes.len() <= longest + 1
+            && self.iterations.len() <= 1 << 16
+            && total(&self.sizes) == Some(points)
+            && total(&self.iterations).is_some_and(|n| n <= points)
+            && self.hit_cap <= points
+    }
+
     /// Points counted.
     pub fn points(&self) -> u64 {
         self.sizes.iter().sum()

@@ -39,6 +39,15 @@ pub struct Edge {
     pub slots: [u32; 2],
 }
 
+/// Whether every edge names points (and slots) of a store of `points`
+/// points and has a cost the edge order can rank.
+pub(crate) fn edges_fit(edges: &[Edge], points: u64) -> bool {
+    edges.iter().all(|e| {
+        let ids = [e.a, e.b, e.slots[0], e.slots[1]];
+        ids.iter().all(|&i| u64::from(i) < points) && !e.w.is_nan()
+    })
+}
+
 impl Edge {
     /// The paper's edge: cost `1 - |n_a . n_b|`.
     pub fn new(a: u32, b: u32, dot: f64) -> Self {

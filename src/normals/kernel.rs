@@ -39,6 +39,19 @@ pub struct NormalsTile {
     pub nn_slots: Vec<u16>,
 }
 
+impl NormalsTile {
+    /// Whether a saved result fits tile `t` of a store of `points` points.
+    pub(crate) fn fits(&self, t: &crate::store::TileEntry, points: u64) -> bool {
+        let n = t.count as usize;
+        self.normals.len() == n
+            && self.flags.len() == n
+            && self.normals.iter().flatten().all(|v| v.is_finite())
+            && (self.nn_slots.is_empty() || self.nn_slots.len() == n)
+            && super::forest::edges_fit(&self.forest, points)
+            && self.sampling.fits(t.count)
+    }
+}
+
 pub struct NormalsKernel {
     pub params: NormalParams,
     /// Store origin, for the viewpoint (given in absolute coordinates).
@@ -92,7 +105,7 @@ impl TileKernel for NormalsKernel {
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
-        Some(crate::pipeline::Codec::serde())
+        Some(crate::pipeline::Codec::serde(NormalsTile::fits))
     }
 
     fn margin(&self) -> f64 {

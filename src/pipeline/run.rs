@@ -209,10 +209,13 @@ fn fetch<K: TileKernel>(
         return run_one(store, kernel, shares, t);
     };
     if let Some(bytes) = c.load(kernel.name(), t)? {
-        // One that does not decode (checksum right, encoding not) is
-        // recomputed like a missing one.
-        if let Ok(out) = (codec.decode)(&bytes) {
-            return Ok((out, kernel.margin(), 0));
+        // One that does not decode or fit its tile (checksum right,
+        // content not) is recomputed like a damaged one.
+        match (codec.decode)(&bytes) {
+            Ok(out) if (codec.fits)(&out, &store.tiles()[t], store.len()) => {
+                return Ok((out, kernel.margin(), 0));
+            }
+            _ => c.reject(kernel.name(), t)?,
         }
     }
     let (out, margin, retries) = run_one(store, kernel, shares, t)?;

@@ -153,6 +153,17 @@ impl Checkpoints {
         }
     }
 
+    /// Removes `tile`'s saved result of `stage`, whose content does not fit
+    /// the tile (counted with the damaged ones).
+    pub(crate) fn reject(&self, stage: &str, tile: usize) -> Result<(), StoreError> {
+        let path = self.tile_path(stage, tile);
+        std::fs::remove_file(&path).map_err(|e| StoreError::os(&path, e))?;
+        if let Ok(mut d) = self.damaged.lock() {
+            d.push(path);
+        }
+        Ok(())
+    }
+
     /// The tile files this process found damaged and removed (their tiles
     /// were recomputed).
     pub fn damaged(&self) -> Vec<PathBuf> {

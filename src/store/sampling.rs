@@ -60,7 +60,9 @@ impl LogHistogram {
         }
         self.max = self.max.max(v);
         // Saturating: an absurd outlier must not wrap the sum.
-        self.sum += (v / self.scale * SUM_UNIT).round().min(1e30) as u128;
+        self.sum = self
+            .sum
+            .saturating_add((v / self.scale * SUM_UNIT).round().min(1e30) as u128);
     }
 
     /// Where [`Self::add`] counts `v`: [`ZERO_SLOT`] (zero, negative or
@@ -87,7 +89,7 @@ impl LogHistogram {
         self.zeros += o.zeros;
         self.above += o.above;
         self.max = self.max.max(o.max);
-        self.sum += o.sum;
+        self.sum = self.sum.saturating_add(o.sum);
     }
 
     /// Mean of the positive values (0 when there are none), exact to the
@@ -196,6 +198,24 @@ impl SamplingHistograms {
             nn: LogHistogram::new(spacing),
             residual: LogHistogram::new(spacing),
         }
+    }
+
+    /// Whether these are histograms of at most `points` values, binned as
+    /// [`Self::new`] bins them (a saved tile result's, checked before use).
+    pub fn fits(&self, points: u64) -> bool {
+        [&self.nn, &self.residual].iter().all(|h| {
+            let counted = h
+                .bins
+                .iter()
+                .try_fold(h.zeros.checked_add(h.above), |s, &b| {
+                    s?.checked_add(b).map(Some)
+                })
+                .flatten();
+            h.bins.len() == BINS
+                && h.max.is_finite()
+                && counted.is_some_and(|c| c <= points)
+                && h.sum <= u128::from(points).saturating_mul(1e30 as u128)
+        })
     }
 
     pub fn merge(&mut self, o: &SamplingHistograms) {

@@ -32,7 +32,9 @@ impl TileKernel for SourcesKernel {
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
-        Some(crate::pipeline::Codec::serde())
+        Some(crate::pipeline::Codec::serde(|edges, _, points| {
+            crate::normals::forest::edges_fit(edges, points)
+        }))
     }
 
     fn margin(&self) -> f64 {

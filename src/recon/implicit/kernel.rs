@@ -34,6 +34,24 @@ pub struct ImplicitTile {
     pub undefined_corners: usize,
 }
 
+impl ImplicitTile {
+    /// Whether a saved result could be a tile's marching cubes: every
+    /// vertex on a lattice edge its key names, at a finite place, three
+    /// distinct vertices a triangle, counts that sum without overflow.
+    pub(crate) fn fits(&self, _: &crate::store::TileEntry, _: u64) -> bool {
+        let vertex = |v: &CubeVertex| edge_from_key(v.key).is_ok() && v.pos.is_finite();
+        let triangle = |t: &[CubeVertex; 3]| {
+            t.iter().all(vertex)
+                && t[0].key != t[1].key
+                && t[1].key != t[2].key
+                && t[0].key != t[2].key
+        };
+        self.cubes < 1 << 48
+            && self.undefined_corners < 1 << 48
+            && self.triangles.iter().all(triangle)
+    }
+}
+
 pub struct ImplicitKernel {
     pub lattice: Lattice,
     /// `rho + delta`, infinite when the surface is known to be closed.
@@ -95,7 +113,7 @@ impl TileKernel for ImplicitKernel {
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
-        Some(crate::pipeline::Codec::serde())
+        Some(crate::pipeline::Codec::serde(ImplicitTile::fits))
     }
 
     fn margin(&self) -> f64 {
