@@ -15,9 +15,9 @@ use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::store::{build_store, BuildOptions, Checkpoints, Job, TileTarget};
 use scanmesh::{reconstruct_implicit, ImplicitParams};
 
-/// A small sphere in four tiles.
+/// A small sphere in four tiles (small: every input runs the whole stage).
 fn points() -> Vec<DVec3> {
-    scanmesh::synth::fibonacci::fibonacci_sphere(DVec3::ZERO, 1.0, 2000)
+    scanmesh::synth::fibonacci::fibonacci_sphere(DVec3::ZERO, 1.0, 600)
 }
 
 /// A tile file as `store::checkpoint` writes it: magic, payload length,
@@ -34,9 +34,15 @@ fuzz_target!(|data: &[u8]| {
     let Some((&which, payload)) = data.split_first() else {
         return;
     };
-    let dir = tempfile::tempdir().expect("tempdir");
+    // In memory where there is one: every input runs a whole stage, and
+    // its tile files and columns are forced to disk.
+    let dir = match std::path::Path::new("/dev/shm").is_dir() {
+        true => tempfile::tempdir_in("/dev/shm"),
+        false => tempfile::tempdir(),
+    }
+    .expect("tempdir");
     let opts = BuildOptions {
-        tiles: TileTarget::Points(500),
+        tiles: TileTarget::Points(150),
         ..BuildOptions::default()
     };
     let mut reader = MemoryReader::new("sphere", points(), None);

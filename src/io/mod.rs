@@ -214,13 +214,6 @@ pub trait PointReader: Send {
     /// [`InvalidPolicy::Skip`], and those the file itself flags as no point
     /// (E57's invalid states), under every policy.
     fn skipped(&self) -> u64;
-    /// A new reader over the same points from the first, when reading the
-    /// source again costs no more than reading a copy of it (an uncompressed
-    /// binary file of fixed-size records): a store build then reads the
-    /// input again instead of spilling a copy to disk. `None` otherwise.
-    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
-        None
-    }
 }
 
 /// What a point writer is asked to produce.

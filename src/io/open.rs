@@ -59,9 +59,7 @@ pub fn open_reader(
 /// body, a pipe) in the formats that read front to back: PLY, PCD and
 /// XYZ/CSV text, gzip allowed. `name` names the stream in errors and, for
 /// text, says its format (`.xyz`, `.csv`, ...). LAS/LAZ and E57 need a
-/// seekable file and are refused with a reason. The reader never offers to
-/// read the stream again ([`PointReader::reopen`]), so a store build keeps
-/// a copy instead.
+/// seekable file and are refused with a reason.
 pub fn open_stream_reader(
     name: &Path,
     stream: impl std::io::Read + Send + 'static,

@@ -25,10 +25,6 @@ impl Admitter {
         self.skipped
     }
 
-    pub fn policy(&self) -> InvalidPolicy {
-        self.policy
-    }
-
     /// Clears `chunk` for records starting at input index `first`, keeping
     /// its allocations, ready for the normals and attributes of `info`.
     pub fn begin(&self, chunk: &mut PointChunk, first: u64, info: &SourceInfo) {

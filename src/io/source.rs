@@ -24,16 +24,6 @@ pub(crate) struct Opened {
     pub magic: Vec<u8>,
 }
 
-/// A new reader over `path` from its first point, made by a format's
-/// constructor `open(input, gzip)` (for [`super::PointReader::reopen`]).
-pub(crate) fn reopen_with<R: super::PointReader + 'static>(
-    path: &Path,
-    open: impl FnOnce(Input, bool) -> Result<R, IoError>,
-) -> Option<Result<Box<dyn super::PointReader>, IoError>> {
-    let again = open_input(path).and_then(|o| open(o.input, o.gzip));
-    Some(again.map(|r| Box::new(r) as Box<dyn super::PointReader>))
-}
-
 /// Opens `path`, unwrapping gzip (also multi-member gzip) when present.
 /// An empty file, or a gzip stream of nothing, is [`IoError::Empty`].
 pub(crate) fn open_input(path: &Path) -> Result<Opened, IoError> {

@@ -17,10 +17,6 @@
 //! normalised by the scan's limits (the crate's default) and scaled to
 //! 16 bits; a point whose own value is flagged invalid gets 0, the value
 //! LAS and PLY would hold for "none".
-//!
-//! An E57 is bit-packed: reading it again costs a full decode, so the
-//! reader offers no [`PointReader::reopen`] and a store build spills the
-//! points once instead.
 
 use super::scan::{describe, ScanInfo, Transform};
 use super::seekbuf::SeekBuf;

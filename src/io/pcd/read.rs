@@ -452,16 +452,6 @@ impl PointReader for PcdReader {
     fn skipped(&self) -> u64 {
         self.admit.skipped()
     }
-
-    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
-        if self.info.gzip || !matches!(self.body, Body::Binary { .. }) {
-            return None;
-        }
-        let (path, policy) = (&self.info.path, self.admit.policy());
-        crate::io::source::reopen_with(path, |input, gzip| {
-            PcdReader::open(path, input, gzip, policy)
-        })
-    }
 }
 
 #[cfg(test)]

@@ -251,16 +251,6 @@ impl PointReader for PlyPointReader {
     fn skipped(&self) -> u64 {
         self.admit.skipped()
     }
-
-    fn reopen(&self) -> Option<Result<Box<dyn PointReader>, IoError>> {
-        if self.info.gzip || !matches!(self.body, Body::Fixed { .. }) {
-            return None;
-        }
-        let (path, policy) = (&self.info.path, self.admit.policy());
-        crate::io::source::reopen_with(path, |input, gzip| {
-            PlyPointReader::open(path, input, gzip, policy)
-        })
-    }
 }
 
 fn decode_all<'a, B: ByteOrder>(
