@@ -1,7 +1,7 @@
 //! Checksums of a store: a CRC-32 per tile of every tile-ordered column,
-//! per tile of the block table, per segment of [`INPUT_SEGMENT`] points of
+//! per tile of the block table, per segment of `INPUT_SEGMENT` (2^20) points of
 //! every input-order column, and one of the manifest itself. They are
-//! written when a column is made ([`PointStore::seal_column`]) and checked
+//! written when a column is made (`PointStore::seal_column`) and checked
 //! whenever a store is opened ([`PointStore::verify`]), so a store changed
 //! behind scanmesh's back (a flipped byte, a column copied from another
 //! store, an edited manifest) is refused, naming the column and the tile,
