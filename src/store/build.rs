@@ -103,7 +103,9 @@ pub fn build_store(
     let source = reader.info().path.clone();
     let mut manifest = build_columns(reader, dir, opts, progress)?;
     manifest.source = source.display().to_string();
+    progress.begin("checksums", 0);
     seal(dir, &mut manifest)?;
+    progress.end();
     save_manifest(dir, &manifest)?;
     PointStore::open_fresh(dir, lock)
 }

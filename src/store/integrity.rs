@@ -63,11 +63,30 @@ fn describe(layout: Layout, segment: usize, range: &Range<u64>) -> String {
     }
 }
 
-/// The CRC-32 of each segment of `column`.
-fn sums_of(column: &Column, ranges: &[Range<u64>]) -> Result<Vec<u32>, StoreError> {
+/// Bytes mapped at a time while a segment is hashed: a map's touched pages
+/// count in RSS until it is dropped, and a segment can be a tile of
+/// millions of points.
+const MAP_BYTES: u64 = 1 << 20;
+
+/// The CRC-32 of each segment of `column` (`item_bytes` per item).
+fn sums_of(
+    column: &Column,
+    item_bytes: usize,
+    ranges: &[Range<u64>],
+) -> Result<Vec<u32>, StoreError> {
+    let step = (MAP_BYTES / item_bytes.max(1) as u64).max(1);
     ranges
         .par_iter()
-        .map(|r| column.with_bytes(r.start, r.end.saturating_sub(r.start), crc32fast::hash))
+        .map(|r| {
+            let mut h = crc32fast::Hasher::new();
+            let mut at = r.start;
+            while at < r.end {
+                let n = (r.end - at).min(step);
+                column.with_bytes(at, n, |b| h.update(b))?;
+                at += n;
+            }
+            Ok(h.finalize())
+        })
         .collect()
 }
 
@@ -95,8 +114,8 @@ impl PointStore {
                 });
             }
             let items = ranges.last().map_or(0, |r| r.end);
-            let column = Column::open(&path, item_bytes(&path, items)?, false)?;
-            let now = sums_of(&column, &ranges)?;
+            let bytes = item_bytes(&path, items)?;
+            let now = sums_of(&Column::open(&path, bytes, false)?, bytes, &ranges)?;
             if let Some(k) = (0..sums.len()).find(|&k| now[k] != sums[k]) {
                 return Err(StoreError::Damaged {
                     path,
@@ -117,7 +136,11 @@ pub(super) fn sums_in(
     item_bytes: usize,
 ) -> Result<Vec<u32>, StoreError> {
     let ranges = segments(layout_of(name), &manifest.tiles, manifest.count);
-    sums_of(&Column::open(&dir.join(name), item_bytes, false)?, &ranges)
+    sums_of(
+        &Column::open(&dir.join(name), item_bytes, false)?,
+        item_bytes,
+        &ranges,
+    )
 }
 
 /// Bytes per item of the column at `path` whose segments end at item
