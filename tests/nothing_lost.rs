@@ -530,3 +530,30 @@ fn a_resumed_run_rejects_none_of_its_own_tiles() {
         assert!(out.is_file());
     }
 }
+
+/// The interpolating methods' vertices are the input's points: written
+/// with the input's coordinates exactly, not the store's f32 offsets.
+#[test]
+fn interpolating_meshes_keep_the_inputs_coordinates() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let pts = utm_points(20_000, 8);
+    let xyz = dir.path().join("utm.xyz");
+    write_xyz(&xyz, &pts);
+    let mut want: Vec<[u64; 3]> = std::fs::read_to_string(&xyz)
+        .expect("read")
+        .lines()
+        .map(|l| {
+            let v: Vec<f64> = l.split(' ').map(|t| t.parse().expect("f64")).collect();
+            [v[0].to_bits(), v[1].to_bits(), v[2].to_bits()]
+        })
+        .collect();
+    want.sort_unstable();
+    for method in ["projection", "delaunay"] {
+        let out = dir.path().join(format!("{method}.ply"));
+        let args = ["--method", method, "--tile-points", "4000", "-q"];
+        ok(&[&["reconstruct", s(&xyz), "-o", s(&out)][..], &args].concat());
+        let mut got: Vec<[u64; 3]> = ply_xyz(&out).iter().map(|p| p.map(f64::to_bits)).collect();
+        got.sort_unstable();
+        assert!(got == want, "{method}: vertices are not the input's points");
+    }
+}

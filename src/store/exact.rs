@@ -200,6 +200,10 @@ pub(super) fn for_each_exact(
     Ok(())
 }
 
+/// Items between two wanted ones up to which a gather reads them along
+/// rather than starting a new read.
+const GATHER_GAP: u64 = 32;
+
 impl PointStore {
     /// How the store keeps the input's exact coordinates.
     pub fn coordinates(&self) -> Coordinates {
@@ -218,6 +222,50 @@ impl PointStore {
         let c = self.coordinates();
         let column = Column::open(&self.dir.join(EXACT_FILE), c.item_bytes(), false)?;
         column.with_bytes(first, count, |b| c.decode(b, out))
+    }
+}
+
+impl PointStore {
+    /// The input's exact coordinates of the points of *store* range
+    /// `[first, first + count)` (a tile's), in store order: what a mesh
+    /// whose vertices are the input's points writes. Their input ranks are
+    /// scattered through the input-order column, so they are read sorted,
+    /// in runs of positioned reads (nearby ranks share one), never by
+    /// mapping the column: a map's touched pages would count in RSS.
+    pub fn read_exact_in_store_order(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<DVec3>,
+    ) -> Result<(), StoreError> {
+        let mut ranks = Vec::new();
+        self.read_indices(first, count, &mut ranks)?;
+        let mut order: Vec<usize> = (0..ranks.len()).collect();
+        order.sort_unstable_by_key(|&k| ranks[k]);
+        let c = self.coordinates();
+        let bytes = c.item_bytes();
+        let column = Column::open(&self.dir.join(EXACT_FILE), bytes, false)?;
+        out.clear();
+        out.resize(ranks.len(), DVec3::ZERO);
+        let (mut buf, mut one) = (Vec::new(), Vec::with_capacity(1));
+        let mut k = 0;
+        while k < order.len() {
+            let start = ranks[order[k]];
+            let mut end = k + 1;
+            while end < order.len() && ranks[order[end]] - ranks[order[end - 1]] <= GATHER_GAP {
+                end += 1;
+            }
+            let span = ranks[order[end - 1]] - start + 1;
+            column.read_items(start, span, &mut buf)?;
+            for &slot in &order[k..end] {
+                let at = (ranks[slot] - start) as usize * bytes;
+                one.clear();
+                c.decode(&buf[at..at + bytes], &mut one);
+                out[slot] = one[0];
+            }
+            k = end;
+        }
+        Ok(())
     }
 }
 

@@ -27,14 +27,10 @@ use super::wind::wind_beside;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::store::PointStore;
 use crate::tiling::{Beyond, TilePoints};
-use glam::DVec3;
 
 /// One tile's share of the surface.
 #[derive(Debug, Default)]
 pub struct DelaunayTile {
-    /// Core points, relative to the store origin (they become the output
-    /// vertices, in store order).
-    pub core_points: Vec<DVec3>,
     /// Owned triangles, wound, as store indices.
     pub tris: Vec<[u64; 3]>,
     /// Tile-local component of each triangle.
@@ -117,7 +113,6 @@ impl TileKernel for DelaunayKernel<'_> {
         let w = wind_beside(&mut owned, &beside);
         let seams = seam_edges(&owned, &beside, &w.component, tile);
         Ok(DelaunayTile {
-            core_points: tile.core_points().to_vec(),
             tris: owned
                 .iter()
                 .map(|t| t.map(|v| tile.store_index(v as usize)))
@@ -197,6 +192,7 @@ fn seam_edges(
 mod tests {
     use super::*;
     use crate::synth::Rng;
+    use glam::DVec3;
     use std::collections::HashMap;
 
     /// Seam edges are exactly the owned triangles' edges that one owned

@@ -177,9 +177,9 @@ pub fn reconstruct_delaunay(
         initial_margin: MARGIN_SPACINGS * spacing,
         store: Some(store),
     };
-    let mut seam = Seams::new(MeshWriter::create(output, format)?, store)?;
-    let run = run_tiles(store, &kernel, opts, progress, |_, out| {
-        seam.add_tile(out).map_err(PipelineError::seam)
+    let mut seam = Seams::new(MeshWriter::create(output, format)?)?;
+    let run = run_tiles(store, &kernel, opts, progress, |t, out| {
+        seam.add_tile(store, t, out).map_err(PipelineError::seam)
     })?;
     let mut report = seam.finish()?;
     report.run = run;
@@ -195,7 +195,6 @@ pub fn reconstruct_delaunay(
 /// The seam side of the run (see the module doc).
 struct Seams {
     writer: MeshWriter,
-    origin: glam::DVec3,
     spool: BufWriter<std::fs::File>,
     /// Edge (low, high store index) -> component and whether it runs low
     /// to high in its triangle.
@@ -206,10 +205,9 @@ struct Seams {
 }
 
 impl Seams {
-    fn new(writer: MeshWriter, store: &PointStore) -> Result<Self, DelaunayReconError> {
+    fn new(writer: MeshWriter) -> Result<Self, DelaunayReconError> {
         Ok(Seams {
             writer,
-            origin: store.origin(),
             spool: BufWriter::new(tempfile::tempfile()?),
             waiting: HashMap::new(),
             joins: Vec::new(),
@@ -218,9 +216,17 @@ impl Seams {
         })
     }
 
-    fn add_tile(&mut self, tile: DelaunayTile) -> Result<(), DelaunayReconError> {
-        let vertices: Vec<glam::DVec3> =
-            tile.core_points.iter().map(|p| self.origin + *p).collect();
+    /// Tile `t`'s vertices (its core points: the input's own coordinates,
+    /// in store order) and its triangles.
+    fn add_tile(
+        &mut self,
+        store: &PointStore,
+        t: usize,
+        tile: DelaunayTile,
+    ) -> Result<(), DelaunayReconError> {
+        let entry = &store.tiles()[t];
+        let mut vertices = Vec::new();
+        store.read_exact_in_store_order(entry.start, entry.count, &mut vertices)?;
         self.writer.add_vertices(&vertices)?;
         let base = self.inconsistent.len() as u32;
         self.inconsistent.extend_from_slice(&tile.inconsistent);

@@ -91,9 +91,8 @@ impl Stitcher {
         entry: &TileEntry,
         tile: &ProjectionTile,
     ) -> Result<(), StitchError> {
-        store.read_points(entry.start, entry.count, &mut self.points)?;
-        let origin = store.origin();
-        self.points.iter_mut().for_each(|p| *p += origin);
+        // The input's own coordinates, not the store's f32 offsets.
+        store.read_exact_in_store_order(entry.start, entry.count, &mut self.points)?;
         let first = self.writer.add_vertices(&self.points)?;
         if u64::from(first) != entry.start {
             return Err(StitchError::VertexOrder {
