@@ -557,3 +557,28 @@ fn interpolating_meshes_keep_the_inputs_coordinates() {
         assert!(got == want, "{method}: vertices are not the input's points");
     }
 }
+
+/// Real aerial LAS/LAZ (las-rs's test data): LAS out holds the input's
+/// integers under its scale and offset, PLY out the f64 they make.
+#[test]
+fn real_las_files_come_out_with_their_own_integers() {
+    let dir = tempfile::tempdir().expect("tmp");
+    for name in ["autzen.las", "32-1-472-150-76.laz"] {
+        let input = Path::new("tests/fixtures/las").join(name);
+        let (ints, tf) = las_raw(&input);
+        for out in ["n.las", "n.laz"] {
+            let out = dir.path().join(out);
+            ok(&["normals", s(&input), "-o", s(&out), "-q"]);
+            let (got, got_tf) = las_raw(&out);
+            assert_eq!(got_tf, tf, "{name}: the LAS transform changed");
+            assert!(got == ints, "{name}: integers changed");
+        }
+        let ply = dir.path().join("k.ply");
+        ok(&["curvature", s(&input), "-o", s(&ply), "-q"]);
+        let decoded: Vec<[f64; 3]> = ints
+            .iter()
+            .map(|i| [0, 1, 2].map(|a| tf[a] * f64::from(i[a]) + tf[3 + a]))
+            .collect();
+        assert!(ply_xyz(&ply) == decoded, "{name}: curvature moved points");
+    }
+}
