@@ -70,6 +70,16 @@ pub trait TileKernel: Sync {
     fn bytes_per_loaded_point(&self) -> Option<u64> {
         None
     }
+    /// Peak bytes the kernel will hold running `tile`, when its need is not
+    /// its loaded points times a constant (the marching cubes' grows with
+    /// the cubes of its band, which a sparse region has many of per point):
+    /// the tile then waits for that much of the plan's memory for tiles.
+    /// `None`: the plan's tile sizes hold. Defaults to
+    /// [`Self::bytes_per_loaded_point`] times the loaded points.
+    fn bytes_for(&self, tile: &TilePoints) -> Option<u64> {
+        self.bytes_per_loaded_point()
+            .map(|b| b.saturating_mul(tile.points.len() as u64))
+    }
     /// The store columns the kernel reads: each tile carries their values
     /// for every loaded point (`TilePoints::column`).
     fn reads(&self) -> &[ColumnSpec] {

@@ -14,7 +14,7 @@ pub struct RunOptions {
     /// pass keeps its state in memory).
     pub budget: Option<MemoryBudget>,
     /// Bytes the plan gives each tile in flight (`None`: no plan), for
-    /// kernels whose margins outgrow it (`TileKernel::bytes_per_loaded_point`).
+    /// kernels whose tiles can need more (`TileKernel::bytes_for`).
     pub tile_bytes: Option<u64>,
     /// How many `tile_bytes` the plan holds for tiles at once (at least
     /// `in_flight`): a tile whose margin outgrows one takes several.

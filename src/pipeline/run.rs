@@ -265,9 +265,9 @@ fn run_one<K: TileKernel>(
     let mut retries = 0;
     loop {
         let tile = load_tile(store, t, margin, kernel.reads())?;
-        let _memory = match (shares, kernel.bytes_per_loaded_point()) {
+        let _memory = match (shares, kernel.bytes_for(&tile)) {
             (Some(s), Some(b)) => {
-                let times = s.needed(b.saturating_mul(tile.points.len() as u64));
+                let times = s.needed(b);
                 let taken = s.take(times).ok_or(PipelineError::OverBudget {
                     tile: t,
                     margin,

@@ -82,6 +82,40 @@ const SDF_GRID_CELLS: f64 = 1.5;
 /// 5.8 s (shared machine).
 const MLS_GRID_SPACINGS: f64 = 7.0;
 
+/// Bytes a tile holds per loaded point (its samples, normals, ids, the
+/// tile's columns and the field's index) and per cube of its band (the
+/// band's keys, the corners' keys and values, the triangles, 96 bytes
+/// each, and their concatenation). Measured on 519k points of a
+/// terrestrial scan as one tile, one thread, at four cells: 213, 405, 625
+/// MiB at 0.57, 1.80, 3.15 million cubes (165 B a cube), 123 MiB with none
+/// (230 B a point).
+const BYTES_PER_LOADED_POINT: u64 = 230;
+const BYTES_PER_CUBE: u64 = 165;
+
+/// Band cubes per core point at a cell of 2.2 mean spacings (the 1M and
+/// 200k noisy dragons: 7.8 and 7.7); a surface's band holds about
+/// (spacing / cell)^3 as many at other cells (3 spacings: 2.9 measured).
+const CUBES_PER_POINT_AT_2_2: f64 = 7.7;
+
+/// Peak bytes per loaded point the plan sizes tiles by, for a cell of
+/// `cell_spacings` mean spacings (a loaded point is 2/3 of a core point
+/// with the plan's margin): 1,076 at the open default, 554 at `--closed`'s
+/// 3. The plan sized tiles by 650 whatever the cell, measured at 3
+/// spacings before the open default became 2.2; each tile's own need
+/// ([`tile_bytes`], its band counted) is what holds `--mem` where density
+/// varies.
+pub(crate) fn planned_bytes_per_loaded_point(cell_spacings: f64) -> u64 {
+    let cubes = CUBES_PER_POINT_AT_2_2 * (2.2 / cell_spacings.max(0.1)).powi(3) / 1.5;
+    BYTES_PER_LOADED_POINT + (cubes * BYTES_PER_CUBE as f64) as u64
+}
+
+/// What a tile of `points` loaded points and `cubes` band cubes holds.
+pub(crate) fn tile_bytes(points: u64, cubes: u64) -> u64 {
+    points
+        .saturating_mul(BYTES_PER_LOADED_POINT)
+        .saturating_add(cubes.saturating_mul(BYTES_PER_CUBE))
+}
+
 /// A corner as a `u64` that sorts like the triple: its x-edge key, which
 /// the stitcher needs anyway, so a corner out of key range is refused here.
 /// Sorting keys rather than triples is several times faster.
@@ -114,6 +148,15 @@ impl TileKernel for ImplicitKernel {
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
         Some(crate::pipeline::Codec::serde(ImplicitTile::fits))
+    }
+
+    /// The tile's points and its band's cubes (counted first, exactly): a
+    /// sparse region has many cubes per point, so a count of points alone
+    /// let a terrestrial scan's tiles overrun `--mem` (519k points of a
+    /// geyser cone at 256 MiB peaked at 308 MiB).
+    fn bytes_for(&self, tile: &TilePoints) -> Option<u64> {
+        let cubes = band(&self.lattice, &tile.points, &tile.core, self.band).ok()?;
+        Some(tile_bytes(tile.points.len() as u64, cubes.len() as u64))
     }
 
     fn margin(&self) -> f64 {

@@ -56,15 +56,6 @@ impl ImplicitParams {
 /// spacing (paper 1's cell, rho + delta, gave 0.1 to 0.17).
 const VERTICES_PER_POINT: f64 = 0.8;
 
-/// Peak bytes per loaded point of the marching-cubes kernel at the default
-/// cell (3 spacings): band cubes (~3 per point), corner keys and values,
-/// the MLS index, the tile's triangles (~1.3 per point, 96 B each) and the
-/// sorted-key merges. Measured: the 1M dragon as one tile peaked at 703 MiB
-/// (from 210 MiB before the stage), so at most 650 B per point; above the
-/// normals kernel's 360, so it sets the tiles of a reconstruction (with
-/// the normals' 360 the 10M run planned 301 MiB and peaked at 354 MiB).
-const MARCHING_BYTES_PER_POINT: u64 = 650;
-
 impl ImplicitParams {
     /// What a reconstruction costs, for the memory plan: the normals run's
     /// cost, plus the small-piece filter's page tables when pieces are
@@ -74,8 +65,13 @@ impl ImplicitParams {
     pub fn cost(&self) -> KernelCost {
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
         let normals = self.normals.cost();
+        let cell = match self.closed {
+            true => CLOSED_MLS_CELL_SPACINGS,
+            false => MLS_CELL_SPACINGS,
+        };
+        let marching = super::kernel::planned_bytes_per_loaded_point(cell);
         KernelCost {
-            bytes_per_point: normals.bytes_per_point.max(MARCHING_BYTES_PER_POINT),
+            bytes_per_point: normals.bytes_per_point.max(marching),
             resident_per_point: if pieces {
                 VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX
             } else {
