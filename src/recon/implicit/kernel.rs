@@ -401,3 +401,48 @@ fn band(
         .filter(|&c| owns(lattice, core, c))
         .collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plane(step: f64, side: f64) -> TilePoints {
+        let n = (side / step) as usize;
+        let points = (0..n * n)
+            .map(|i| DVec3::new((i % n) as f64 * step, (i / n) as f64 * step, 0.0))
+            .collect();
+        TilePoints::whole(points)
+    }
+
+    /// A sparse region needs nearly the band of a dense one over the same
+    /// area: a budget by points alone let sparse tiles overrun `--mem`.
+    #[test]
+    fn a_sparse_tile_needs_the_bytes_of_its_band_not_of_its_points() {
+        let kernel = ImplicitKernel {
+            lattice: Lattice::new(DVec3::ZERO, 2.2).expect("lattice"),
+            limit: f64::INFINITY,
+            initial_margin: 0.0,
+            band: 2,
+            field: Field::Mls,
+            spacing: 1.0,
+        };
+        let (dense, sparse) = (plane(1.0, 120.0), plane(3.0, 120.0));
+        let bytes = |t: &TilePoints| kernel.bytes_for(t).expect("bytes");
+        let per_point = |t: &TilePoints| bytes(t) as f64 / t.points.len() as f64;
+        // Same area, a ninth of the points: the band (not the points) sets
+        // most of the need, so the sparse tile needs over half the dense
+        // tile's bytes and several times as much per point.
+        assert!(
+            bytes(&sparse) * 2 > bytes(&dense),
+            "{} {}",
+            bytes(&sparse),
+            bytes(&dense)
+        );
+        assert!(per_point(&sparse) > 4.0 * per_point(&dense));
+        // And the dense plane's need is its points' and its band's.
+        let cubes = (120.0f64 / 2.2 + 1.0).powi(2) * 5.0;
+        let expected = tile_bytes(dense.points.len() as u64, cubes as u64) as f64;
+        let got = bytes(&dense) as f64;
+        assert!((got / expected - 1.0).abs() < 0.2, "{got} vs {expected}");
+    }
+}
