@@ -256,13 +256,17 @@ impl MemoryPlan {
     }
 
     /// How many tiles of `largest` core points, margins as planned, the
-    /// plan's free memory holds at once: the shares a tile whose margin
-    /// outgrows the plan may take. Tiles forced smaller than the budget
-    /// allows (`--tile-points`) leave room for more than the tiles in
-    /// flight, and a reload may use it.
+    /// plan's free memory holds at once. Tiles forced smaller than the
+    /// budget allows (`--tile-points`) leave room for more than the tiles
+    /// in flight, and a tile needing more than planned may use it.
     pub(crate) fn tile_shares(&self, cost: &KernelCost, largest: u64) -> usize {
-        let free = self.budget.bytes.saturating_sub(BASE_BYTES + self.reserved);
-        (free / self.tile_bytes(cost, largest).max(1)) as usize
+        (self.tile_room() / self.tile_bytes(cost, largest).max(1)) as usize
+    }
+
+    /// The plan's free memory, which the tiles in flight share
+    /// (`pipeline::shares`).
+    pub(crate) fn tile_room(&self) -> u64 {
+        self.budget.bytes.saturating_sub(BASE_BYTES + self.reserved)
     }
 
     /// Bytes one tile in flight may use: the largest tile's core points

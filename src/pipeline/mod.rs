@@ -50,7 +50,7 @@ pub enum PipelineError {
         needed: f64,
     },
     /// A tile's margin grew past what the memory promise can hold.
-    #[error("tile {tile}: its margin {margin:.3e} loads {points} points, {times} times the memory the plan gives a tile, more than the budget holds for tiles; a larger --mem gives it room (and larger tiles, whose margins are a smaller share, unless --tile-points fixes their size)")]
+    #[error("tile {tile}: its margin {margin:.3e} loads {points} points, which need about {need_mib} MiB, more than the {room_mib} MiB the budget holds for tiles; a larger --mem gives it room (and larger tiles, whose margins are a smaller share, unless --tile-points fixes their size)")]
     OverBudget {
         /// 0-based index of the tile.
         tile: usize,
@@ -58,8 +58,10 @@ pub enum PipelineError {
         margin: f64,
         /// Points loaded.
         points: usize,
-        /// Tile shares of memory they need.
-        times: usize,
+        /// What the kernel says the tile needs, MiB.
+        need_mib: u64,
+        /// The plan's room for the tiles in flight, MiB.
+        room_mib: u64,
     },
     /// A worker thread ended without handing back its tile's result (it panicked).
     #[error("a worker thread stopped without a result")]

@@ -16,9 +16,10 @@ pub struct RunOptions {
     /// Bytes the plan gives each tile in flight (`None`: no plan), for
     /// kernels whose tiles can need more (`TileKernel::bytes_for`).
     pub tile_bytes: Option<u64>,
-    /// How many `tile_bytes` the plan holds for tiles at once (at least
-    /// `in_flight`): a tile whose margin outgrows one takes several.
-    pub shares: usize,
+    /// Bytes the plan holds for the tiles in flight at once (`None`:
+    /// `in_flight` times `tile_bytes`): a tile needing more than
+    /// `tile_bytes` takes more of it (`pipeline::shares`).
+    pub tile_room: Option<u64>,
 }
 
 impl RunOptions {
@@ -31,7 +32,7 @@ impl RunOptions {
             in_flight,
             budget: None,
             tile_bytes: None,
-            shares: in_flight,
+            tile_room: None,
         }
     }
 
@@ -47,7 +48,10 @@ impl RunOptions {
         Ok(RunOptions {
             in_flight,
             tile_bytes: Some(plan.tile_bytes(cost, largest)),
-            shares: plan.tile_shares(cost, largest).max(in_flight),
+            tile_room: Some(
+                plan.tile_room()
+                    .max(in_flight as u64 * plan.tile_bytes(cost, largest)),
+            ),
             ..opts
         })
     }

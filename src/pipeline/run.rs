@@ -66,7 +66,9 @@ pub fn run_tiles<K: TileKernel>(
     let (res_tx, res_rx) = channel::unbounded::<TileOutcome<K::Output>>();
     let cancel = AtomicBool::new(false);
     let retries = AtomicUsize::new(0);
-    let shares = opts.tile_bytes.map(|b| Shares::new(b, opts.shares));
+    let shares = opts
+        .tile_bytes
+        .map(|b| Shares::new(b, opts.tile_room.unwrap_or(b * opts.in_flight as u64)));
     let shares = shares.as_ref();
     progress.begin(&stage, tiles.len() as u64);
     let mut stats = RunStats {
@@ -266,16 +268,13 @@ fn run_one<K: TileKernel>(
     loop {
         let tile = load_tile(store, t, margin, kernel.reads())?;
         let _memory = match (shares, kernel.bytes_for(&tile)) {
-            (Some(s), Some(b)) => {
-                let times = s.needed(b);
-                let taken = s.take(times).ok_or(PipelineError::OverBudget {
-                    tile: t,
-                    margin,
-                    points: tile.points.len(),
-                    times,
-                })?;
-                Some(taken)
-            }
+            (Some(s), Some(bytes)) => Some(s.take(bytes).ok_or(PipelineError::OverBudget {
+                tile: t,
+                margin,
+                points: tile.points.len(),
+                need_mib: bytes.div_ceil(1 << 20),
+                room_mib: s.room() >> 20,
+            })?),
             _ => None,
         };
         match kernel.run(&tile) {

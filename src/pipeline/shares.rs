@@ -1,76 +1,82 @@
-//! Memory shares of the tiles in flight: the plan's memory for tiles, cut
-//! into shares of the bytes of its largest tile with the planned margin
-//! (ARCHITECTURE.md, "Memory model"); each tile in flight takes one, and
-//! tiles forced smaller than the budget allows leave more shares than
-//! tiles in flight (`RunOptions::shares`). A kernel whose margin grows on
-//! reload (the Delaunay surface's doubt) can load several times that; it
-//! then waits until it can take as many shares as it needs, so the tiles
-//! running at once never hold more than the plan. A tile that needs more
-//! shares than there are is an error: no run could keep the promise.
+//! Memory of the tiles in flight: the plan's room for tiles (its free
+//! memory, ARCHITECTURE.md, "Memory model"), taken by each tile for the
+//! bytes it says it needs (`TileKernel::bytes_for`) and given back when it
+//! is done, so the tiles running at once never hold more than the plan. A
+//! kernel whose need varies by tile (the Delaunay surface's reloads, the
+//! marching cubes' bands in sparse regions) then waits until the room has
+//! its bytes. A tile that needs more than the whole room is an error: no
+//! run could keep the promise.
+//!
+//! The room is counted in bytes, not in tiles of the plan's size: a store
+//! tiled for a larger budget leaves room for one planned tile and most of
+//! another, which a tile needing 1.5 planned tiles may use.
 
 use std::sync::{Condvar, Mutex};
 
-/// The shares of one run.
+/// The room of one run.
 pub(crate) struct Shares {
-    /// Bytes of one share.
-    bytes: u64,
-    total: usize,
+    /// Bytes of one planned tile: a tile needing more waits ahead of the
+    /// others, so it is not starved by a stream of small ones.
+    tile: u64,
+    room: u64,
     state: Mutex<State>,
     freed: Condvar,
 }
 
 struct State {
-    free: usize,
-    /// Requests of more than one share waiting: single shares wait for
-    /// them, so a large tile is not starved by a stream of small ones.
+    free: u64,
+    /// Requests of more than a planned tile waiting.
     large_waiting: usize,
 }
 
-/// Shares taken, given back when dropped.
+/// Bytes taken, given back when dropped.
 pub(crate) struct Taken<'a> {
     shares: &'a Shares,
-    count: usize,
+    bytes: u64,
 }
 
 impl Shares {
-    pub fn new(bytes: u64, total: usize) -> Self {
+    /// A room of `room` bytes for tiles planned at `tile` bytes each.
+    pub fn new(tile: u64, room: u64) -> Self {
+        let tile = tile.max(1);
+        let room = room.max(tile);
         Shares {
-            bytes: bytes.max(1),
-            total: total.max(1),
+            tile,
+            room,
             state: Mutex::new(State {
-                free: total.max(1),
+                free: room,
                 large_waiting: 0,
             }),
             freed: Condvar::new(),
         }
     }
 
-    /// Shares a tile of `bytes` needs (at least one).
-    pub fn needed(&self, bytes: u64) -> usize {
-        bytes.div_ceil(self.bytes).max(1) as usize
+    /// The room, in bytes.
+    pub fn room(&self) -> u64 {
+        self.room
     }
 
-    /// Takes `count` shares, waiting for them; `None` when there are
-    /// fewer in all.
-    pub fn take(&self, count: usize) -> Option<Taken<'_>> {
-        if count > self.total {
+    /// Takes `bytes` of the room, waiting for them; `None` when the room
+    /// is smaller.
+    pub fn take(&self, bytes: u64) -> Option<Taken<'_>> {
+        if bytes > self.room {
             return None;
         }
-        let large = count > 1;
+        let large = bytes > self.tile;
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         if large {
             s.large_waiting += 1;
         }
-        while s.free < count || (!large && s.large_waiting > 0) {
+        while s.free < bytes || (!large && s.large_waiting > 0) {
             s = self.freed.wait(s).unwrap_or_else(|e| e.into_inner());
         }
-        s.free -= count;
+        s.free -= bytes;
         if large {
             s.large_waiting -= 1;
         }
         Some(Taken {
             shares: self,
-            count,
+            bytes,
         })
     }
 }
@@ -78,7 +84,7 @@ impl Shares {
 impl Drop for Taken<'_> {
     fn drop(&mut self) {
         let mut s = self.shares.state.lock().unwrap_or_else(|e| e.into_inner());
-        s.free += self.count;
+        s.free += self.bytes;
         self.shares.freed.notify_all();
     }
 }
@@ -86,32 +92,31 @@ impl Drop for Taken<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::atomic::{AtomicU64, Ordering};
 
     #[test]
-    fn tiles_never_hold_more_shares_than_there_are() {
-        let shares = Shares::new(100, 3);
-        assert_eq!(shares.needed(1), 1);
-        assert_eq!(shares.needed(250), 3);
-        assert!(shares.take(4).is_none());
-        let held = AtomicUsize::new(0);
-        let most = AtomicUsize::new(0);
+    fn tiles_never_hold_more_than_the_room() {
+        let shares = Shares::new(100, 250);
+        assert!(shares.take(251).is_none());
+        assert!(shares.take(250).is_some());
+        let held = AtomicU64::new(0);
+        let most = AtomicU64::new(0);
         std::thread::scope(|s| {
-            for w in 0..4 {
+            for w in 0..4u64 {
                 let (shares, held, most) = (&shares, &held, &most);
                 s.spawn(move || {
                     for k in 0..50 {
-                        let count = if (w + k) % 7 == 0 { 3 } else { 1 };
-                        let _t = shares.take(count).expect("fits");
-                        let now = held.fetch_add(count, Ordering::SeqCst) + count;
+                        let bytes = if (w + k) % 7 == 0 { 180 } else { 30 + 10 * w };
+                        let _t = shares.take(bytes).expect("fits");
+                        let now = held.fetch_add(bytes, Ordering::SeqCst) + bytes;
                         most.fetch_max(now, Ordering::SeqCst);
                         std::thread::yield_now();
-                        held.fetch_sub(count, Ordering::SeqCst);
+                        held.fetch_sub(bytes, Ordering::SeqCst);
                     }
                 });
             }
         });
-        assert!(most.load(Ordering::SeqCst) <= 3);
+        assert!(most.load(Ordering::SeqCst) <= 250);
         assert_eq!(held.load(Ordering::SeqCst), 0);
     }
 }
