@@ -32,7 +32,11 @@ pub fn run(a: ConvertArgs) -> Result<()> {
             stats.dropped.describe()
         );
     }
-    super::report::input_skipped(&a.input.display().to_string(), stats.skipped);
+    super::report::input_skipped(
+        &a.input.display().to_string(),
+        stats.skipped,
+        stats.left_out,
+    );
     super::report::summary(format!(
         "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
         stats.points,

@@ -46,7 +46,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let spacing = ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
-    super::report::input_skipped(&m.source, m.skipped_invalid);
+    super::report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
     super::report::summary(format!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
         m.count,

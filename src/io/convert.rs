@@ -17,6 +17,8 @@ pub struct ConvertStats {
     pub points: u64,
     /// Input records dropped (non-finite coordinates or a cut last line under the skip policy, or flagged invalid by the file).
     pub skipped: u64,
+    /// Input records not written: pixels without a return, points not selected.
+    pub left_out: super::LeftOut,
     /// Attributes carried from the input to the output.
     pub carried: AttributeSet,
     /// Attributes of the input the output format cannot hold.
@@ -60,10 +62,12 @@ pub fn convert(
     }
     progress.end();
     let skipped = reader.skipped();
+    let left_out = reader.left_out();
     writer.finish()?;
     Ok(ConvertStats {
         points,
         skipped,
+        left_out,
         carried: spec.attributes,
         dropped: info.attributes.without(spec.attributes),
     })

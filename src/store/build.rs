@@ -164,6 +164,7 @@ fn build_columns(
         version: STORE_VERSION,
         count,
         skipped_invalid: reader.skipped(),
+        left_out: reader.left_out(),
         duplicates,
         origin: origin.to_array(),
         coordinates,
