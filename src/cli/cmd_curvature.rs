@@ -97,6 +97,9 @@ impl FitArgs {
 
 pub fn run(a: CurvatureArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_keep(
+        "the selected points only (keeping the others is not implemented for curvature yet)",
+    )?;
     let params = a.fit.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;

@@ -112,6 +112,13 @@ pub struct CommonArgs {
     scans: Option<Vec<usize>>,
     #[command(flatten)]
     select: SelectArgs,
+    /// What a per-point output (normals, convert) holds of the points
+    /// --classes/--returns leave out: drop (default: the selected points
+    /// only, as with --skip-invalid; the summary line counts the others)
+    /// or keep (every input point in input order, the unselected ones
+    /// with a NaN normal and flag 4).
+    #[arg(long, value_enum, default_value_t = Unselected::Drop)]
+    unselected: Unselected,
     /// Directory for the scratch store and spill files (default: beside
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
@@ -154,6 +161,16 @@ pub struct SelectArgs {
     /// 1), last (return number = number of returns, LAS/LAZ) or all.
     #[arg(long, value_enum, default_value_t = ReturnsArg::All)]
     returns: ReturnsArg,
+}
+
+/// `--unselected`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Unselected {
+    /// Per-point outputs hold the selected points only.
+    #[default]
+    Drop,
+    /// Per-point outputs hold every input point, the unselected flagged.
+    Keep,
 }
 
 /// `--returns`.
@@ -211,6 +228,9 @@ pub struct Settings {
     pub scans: Option<Vec<usize>>,
     /// `--classes`, `--returns`: the points to process.
     pub select: Selection,
+    /// `--unselected keep`, with a selection: per-point outputs write the
+    /// points it leaves out too, flagged.
+    pub keep_unselected: bool,
     pub scratch_dir: Option<PathBuf>,
     /// The run directory (`--run-dir`) and this process's part of it.
     pub run: Option<rundir::RunDir>,
@@ -304,6 +324,8 @@ impl CommonArgs {
             scratch_dir: self.scratch_dir.clone(),
             scans: self.scans.clone(),
             select: self.select.selection(),
+            keep_unselected: self.unselected == Unselected::Keep
+                && !self.select.selection().is_all(),
             run: self
                 .run_dir
                 .as_deref()
@@ -327,6 +349,15 @@ impl Settings {
             scans: self.scans.clone(),
             select: self.select.clone(),
         }
+    }
+
+    /// Refuses `--unselected keep` for a command whose output has no row
+    /// per point (`what` says what it writes).
+    pub fn no_keep(&self, what: &str) -> Result<()> {
+        if self.keep_unselected {
+            bail!("--unselected keep: this command writes {what}, not a row per input point; leave it out (or use drop)");
+        }
+        Ok(())
     }
 
     pub fn budget(&self) -> MemoryBudget {

@@ -25,6 +25,7 @@ static LOG: Mutex<Log> = Mutex::new(Log {
     summary: None,
     skipped: None,
     left_out: None,
+    kept: false,
 });
 
 struct Log {
@@ -34,6 +35,8 @@ struct Log {
     skipped: Option<(String, u64)>,
     /// Records of the input left out: no return, or not selected.
     left_out: Option<LeftOut>,
+    /// Whether the output holds the unselected points, flagged.
+    kept: bool,
 }
 
 #[derive(Clone, Serialize)]
@@ -127,11 +130,24 @@ pub fn input_skipped(source: &str, skipped: u64, left_out: LeftOut) {
     }
 }
 
+/// Records that the output holds the unselected points, flagged
+/// (`--unselected keep`), for the summary line.
+pub fn unselected_kept(kept: bool) {
+    if let Ok(mut log) = LOG.lock() {
+        log.kept = kept;
+    }
+}
+
 /// The words the summary line ends with when records were left out.
-fn left_out_note(source: &str, l: &LeftOut) -> String {
+fn left_out_note(source: &str, l: &LeftOut, kept: bool) -> String {
     let records = if l.total() == 1 { "record" } else { "records" };
+    let output = match (kept, l.unselected > 0) {
+        (true, true) => "; the unselected are in the output, flagged 4 (--unselected keep)",
+        (false, true) => "; not in the output (--unselected drop)",
+        _ => "",
+    };
     format!(
-        "{} {records} of {source} left out: {}",
+        "{} {records} of {source} left out: {}{output}",
         l.total(),
         l.describe()
     )
@@ -148,16 +164,16 @@ fn skipped_note(source: &str, n: u64) -> String {
 /// Prints a command's closing summary line and keeps it for the report;
 /// the records dropped from its input, if any, are told at its end.
 pub fn summary(line: String) {
-    let (skipped, left_out) = match LOG.lock() {
-        Ok(log) => (log.skipped.clone(), log.left_out),
-        Err(_) => (None, None),
+    let (skipped, left_out, kept) = match LOG.lock() {
+        Ok(log) => (log.skipped.clone(), log.left_out, log.kept),
+        Err(_) => (None, None, false),
     };
     let mut line = match &skipped {
         Some((source, n)) if *n > 0 => format!("{line}; {}", skipped_note(source, *n)),
         _ => line,
     };
     if let (Some((source, _)), Some(l)) = (&skipped, left_out.filter(|l| l.total() > 0)) {
-        line = format!("{line}; {}", left_out_note(source, &l));
+        line = format!("{line}; {}", left_out_note(source, &l, kept));
     }
     // A closed pipe (`| head`) is the reader's choice, not an error of ours.
     let _ = writeln!(std::io::stdout(), "{line}");

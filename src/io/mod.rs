@@ -13,6 +13,7 @@ pub mod convert;
 pub mod e57;
 pub(crate) mod error;
 pub mod inspect;
+pub mod keep;
 pub(crate) mod las;
 mod las_extra;
 pub mod memory;

@@ -142,10 +142,46 @@ fn format_name(f: Format) -> &'static str {
 /// others ([`LeftOut::unselected`]); input indices stay those of the file.
 pub(crate) struct Selecting {
     inner: Box<dyn PointReader>,
-    classes: Option<[bool; 256]>,
-    returns: Returns,
+    selector: Selector,
     unselected: u64,
     keep: Vec<bool>,
+}
+
+/// A [`Selection`] ready to test points: classes as a table.
+#[derive(Clone, Copy)]
+pub(crate) struct Selector {
+    classes: Option<[bool; 256]>,
+    returns: Returns,
+}
+
+impl Selector {
+    pub(crate) fn new(selection: &Selection) -> Self {
+        let classes = selection.classes.as_ref().map(|c| {
+            let mut set = [false; 256];
+            c.iter().for_each(|&k| set[usize::from(k)] = true);
+            set
+        });
+        Selector {
+            classes,
+            returns: selection.returns,
+        }
+    }
+
+    /// Whether point `i` of `chunk` is selected (the chunk carries what
+    /// the selection reads: checked by [`Selecting::wrap`]).
+    pub(crate) fn selects(&self, chunk: &PointChunk, i: usize) -> bool {
+        let a = &chunk.attrs;
+        let class_ok = self
+            .classes
+            .is_none_or(|set| set[usize::from(a.classification[i])]);
+        class_ok
+            && match self.returns {
+                Returns::All => true,
+                Returns::First => a.return_number[i] == 1,
+                // LAS only (checked when wrapped): the reader fills the counts.
+                Returns::Last => chunk.number_of_returns.get(i) == Some(&a.return_number[i]),
+            }
+    }
 }
 
 impl Selecting {
@@ -164,32 +200,12 @@ impl Selecting {
                 reason,
             });
         }
-        let classes = selection.classes.as_ref().map(|c| {
-            let mut set = [false; 256];
-            c.iter().for_each(|&k| set[usize::from(k)] = true);
-            set
-        });
         Ok(Box::new(Selecting {
             inner,
-            classes,
-            returns: selection.returns,
+            selector: Selector::new(selection),
             unselected: 0,
             keep: Vec::new(),
         }))
-    }
-
-    fn selects(&self, chunk: &PointChunk, i: usize) -> bool {
-        let a = &chunk.attrs;
-        let class_ok = self
-            .classes
-            .is_none_or(|set| set[usize::from(a.classification[i])]);
-        class_ok
-            && match self.returns {
-                Returns::All => true,
-                Returns::First => a.return_number[i] == 1,
-                // LAS only (checked when wrapped): the reader fills the counts.
-                Returns::Last => chunk.number_of_returns.get(i) == Some(&a.return_number[i]),
-            }
     }
 }
 
@@ -207,7 +223,7 @@ impl PointReader for Selecting {
             }
             let mut keep = std::mem::take(&mut self.keep);
             keep.clear();
-            keep.extend((0..chunk.len()).map(|i| self.selects(chunk, i)));
+            keep.extend((0..chunk.len()).map(|i| self.selector.selects(chunk, i)));
             let kept = keep.iter().filter(|&&k| k).count();
             self.unselected += (chunk.len() - kept) as u64;
             retain(chunk, &keep);
