@@ -207,3 +207,91 @@ fn a_selection_the_input_cannot_answer_is_an_error_naming_it() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--unselected keep"));
     assert!(!out.exists());
 }
+
+/// Nearest distance from `p` to any of `set`, over the axes `dims`.
+fn nearest(p: DVec3, set: &[DVec3], dims: usize) -> f64 {
+    set.iter()
+        .map(|q| {
+            let d = (*q - p).to_array();
+            d[..dims].iter().map(|c| c * c).sum::<f64>()
+        })
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+#[test]
+fn a_mesh_of_ground_only_stays_on_the_ground() {
+    // 5,535 points of PDAL's autzen_trim.las (a 160 m square with houses):
+    // 1,860 ground (class 2), the rest unclassified (roofs, trees).
+    let input =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las/autzen_town_cut.las");
+    let inp = input.to_str().unwrap();
+    let recs = records(&input);
+    let ground: Vec<DVec3> = recs.iter().filter(|r| r.1 == 2).map(|r| r.0).collect();
+    let other: Vec<DVec3> = recs.iter().filter(|r| r.1 != 2).map(|r| r.0).collect();
+    assert_eq!((ground.len(), recs.len()), (1860, 5535));
+    let sp = ground
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let rest: Vec<DVec3> = [&ground[..i], &ground[i + 1..]].concat();
+            nearest(*p, &rest, 3)
+        })
+        .sum::<f64>()
+        / ground.len() as f64;
+    // Unclassified points with no ground point within 3 sp horizontally:
+    // roofs and canopies over ground the scanner did not see.
+    let above: Vec<DVec3> = other
+        .iter()
+        .copied()
+        .filter(|p| nearest(*p, &ground, 2) > 3.0 * sp)
+        .collect();
+    assert!(
+        above.len() > 20,
+        "{} points over unseen ground",
+        above.len()
+    );
+
+    let dir = tempfile::tempdir().expect("tmp");
+    let mesh_of = |name: &str, flags: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["reconstruct", inp, "-o", out.to_str().unwrap(), "-q"];
+        args.extend(flags);
+        ok(scanmesh(&args));
+        scanmesh::io::read_mesh_any(&out).expect("mesh").0
+    };
+    let selected = mesh_of("ground.ply", &["--classes", "2"]);
+    let whole = mesh_of("all.ply", &[]);
+    let far = |mesh: &[DVec3]| {
+        mesh.iter()
+            .map(|v| nearest(*v, &ground, 3) / sp)
+            .fold(0.0, f64::max)
+    };
+    // Measured: 4.12 sp with --classes 2 (the mesh bridges ground the
+    // roofs hid, at ground height), 17.9 sp without (the roofs).
+    assert!(far(&selected) < 5.0, "{}", far(&selected));
+    assert!(far(&whole) > 10.0, "{}", far(&whole));
+    let from_above =
+        |mesh: &[DVec3]| median(above.iter().map(|p| nearest(*p, mesh, 3) / sp).collect());
+    // Measured: 7.95 sp and 0.72 sp.
+    assert!(from_above(&selected) > 5.0, "{}", from_above(&selected));
+    assert!(from_above(&whole) < 1.5, "{}", from_above(&whole));
+
+    // Per-point outputs of the same selection hold the ground's rows.
+    let k = dir.path().join("k.ply");
+    ok(scanmesh(&[
+        "curvature",
+        inp,
+        "-o",
+        k.to_str().unwrap(),
+        "--classes",
+        "2",
+        "-q",
+    ]));
+    assert_eq!(read_rows(&k).0, ground);
+}
