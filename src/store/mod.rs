@@ -82,6 +82,15 @@ pub enum StoreError {
         /// The input read.
         path: PathBuf,
     },
+    /// The input holds points, but the selection (classes, returns)
+    /// kept none of them.
+    #[error("{path}: the selection kept no point ({unselected} points not selected)")]
+    NoneSelected {
+        /// The input read.
+        path: PathBuf,
+        /// Points the selection left out.
+        unselected: u64,
+    },
     /// The input holds more points than a store can index.
     #[error("{path}: {count} points exceed the supported {max}")]
     TooMany {
