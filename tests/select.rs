@@ -295,3 +295,53 @@ fn a_mesh_of_ground_only_stays_on_the_ground() {
     ]));
     assert_eq!(read_rows(&k).0, ground);
 }
+
+#[test]
+fn curvature_keeps_the_unselected_rows_when_asked() {
+    let input = autzen();
+    let inp = input.to_str().unwrap();
+    let recs = records(&input);
+    let dir = tempfile::tempdir().expect("tmp");
+    let (d, k) = (dir.path().join("d.ply"), dir.path().join("k.ply"));
+    for (out, mode) in [(&d, "drop"), (&k, "keep")] {
+        let args = [
+            "curvature",
+            inp,
+            "-o",
+            out.to_str().unwrap(),
+            "--returns",
+            "first",
+        ];
+        ok(scanmesh(
+            &[&args[..], &["--unselected", mode, "-q"]].concat(),
+        ));
+    }
+    let first: Vec<DVec3> = recs.iter().filter(|r| r.2 == 1).map(|r| r.0).collect();
+    assert_eq!(read_rows(&d).0, first);
+    assert_eq!(
+        read_rows(&k).0,
+        recs.iter().map(|r| r.0).collect::<Vec<_>>()
+    );
+    // The records: x y z (f64), k1 k2 H K residual (f32), flags (u8).
+    let body = |p: &Path| {
+        let b = std::fs::read(p).unwrap();
+        let h = b.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        b[h..]
+            .chunks_exact(45)
+            .map(|r| r.to_vec())
+            .collect::<Vec<_>>()
+    };
+    let (dropped, kept) = (body(&d), body(&k));
+    let mut selected = dropped.iter();
+    for (rec, row) in recs.iter().zip(&kept) {
+        match rec.2 == 1 {
+            true => assert_eq!(Some(row), selected.next()),
+            false => {
+                assert_eq!(row[44], 128, "{rec:?}");
+                let k1 = f32::from_le_bytes(row[24..28].try_into().unwrap());
+                assert!(k1.is_nan());
+            }
+        }
+    }
+    assert!(selected.next().is_none());
+}

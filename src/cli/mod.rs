@@ -112,11 +112,11 @@ pub struct CommonArgs {
     scans: Option<Vec<usize>>,
     #[command(flatten)]
     select: SelectArgs,
-    /// What a per-point output (normals, convert) holds of the points
-    /// --classes/--returns leave out: drop (default: the selected points
-    /// only, as with --skip-invalid; the summary line counts the others)
-    /// or keep (every input point in input order, the unselected ones
-    /// with a NaN normal and flag 4).
+    /// What a per-point output (normals, curvature, convert) holds of
+    /// the points --classes/--returns leave out: drop (default: the
+    /// selected points only, as with --skip-invalid; the summary line
+    /// counts the others) or keep (every input point in input order, the
+    /// unselected ones with NaN values and flag 128).
     #[arg(long, value_enum, default_value_t = Unselected::Drop)]
     unselected: Unselected,
     /// Directory for the scratch store and spill files (default: beside

@@ -142,7 +142,7 @@ pub fn unselected_kept(kept: bool) {
 fn left_out_note(source: &str, l: &LeftOut, kept: bool) -> String {
     let records = if l.total() == 1 { "record" } else { "records" };
     let output = match (kept, l.unselected > 0) {
-        (true, true) => "; the unselected are in the output, flagged 4 (--unselected keep)",
+        (true, true) => "; the unselected are in the output, flagged 128 (--unselected keep)",
         (false, true) => "; not in the output (--unselected drop)",
         _ => "",
     };

@@ -14,70 +14,47 @@
 
 use super::select::Selector;
 use super::{
-    open_reader, AttributeSet, IoError, PointChunk, PointReader, PointWriter, ReadOptions,
-    Selection, DEFAULT_CHUNK,
+    open_reader, AttributeSet, AttributeValues, IoError, PointChunk, PointReader, PointWriter,
+    ReadOptions, Selection, DEFAULT_CHUNK,
 };
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 
-/// The flag of a row a selection left out, with `--unselected keep`: no
-/// normal (NaN) was computed for it.
-pub const UNSELECTED: u8 = 4;
+/// The flag of a row a selection left out, with `--unselected keep`, in
+/// every per-point output: nothing was computed for it (NaN values).
+pub const UNSELECTED: u8 = 128;
 
 /// Rows gathered before they are handed to the writer.
 const BATCH: usize = 1 << 14;
 
-/// A writer of processed points that writes the unselected points of
-/// the input between them.
-pub struct KeepUnselected {
-    inner: Box<dyn PointWriter>,
-    path: PathBuf,
+/// The input read again, every point, to find the unselected points
+/// between two processed (selected) ones.
+pub struct UnselectedRows {
     input: Box<dyn PointReader>,
     selector: Selector,
-    with_normals: bool,
-    with_flags: bool,
-    attributes: AttributeSet,
     current: PointChunk,
     pos: usize,
-    out: PointChunk,
-    out_flags: Vec<u8>,
     kept: u64,
 }
 
-impl KeepUnselected {
-    /// Wraps `inner`, which writes `output` with normals and flags as
-    /// asked and `attributes`, so that the points of `input` (read with
-    /// `read`'s policy) that `read`'s selection leaves out are written too.
-    pub fn wrap(
-        inner: Box<dyn PointWriter>,
-        output: &Path,
-        input: &Path,
-        read: &ReadOptions,
-        with_normals: bool,
-        with_flags: bool,
-        attributes: AttributeSet,
-    ) -> Result<Self, IoError> {
+impl UnselectedRows {
+    /// `input` read with `read`'s policy, its points judged by `read`'s
+    /// selection.
+    pub fn open(input: &Path, read: &ReadOptions) -> Result<Self, IoError> {
         let every = ReadOptions {
             select: Selection::default(),
             ..read.clone()
         };
-        Ok(KeepUnselected {
-            inner,
-            path: output.to_path_buf(),
+        Ok(UnselectedRows {
             input: open_reader(input, every)?,
             selector: Selector::new(&read.select),
-            with_normals,
-            with_flags,
-            attributes,
             current: PointChunk::default(),
             pos: 0,
-            out: PointChunk::default(),
-            out_flags: Vec::new(),
             kept: 0,
         })
     }
 
-    /// Unselected rows written so far.
+    /// Unselected points handed out so far.
     pub fn kept(&self) -> u64 {
         self.kept
     }
@@ -94,25 +71,78 @@ impl KeepUnselected {
         Ok(Some(self.pos - 1))
     }
 
-    /// Writes the input's unselected points up to its next selected one;
-    /// `false` when the input ended first.
-    fn up_to_selected(&mut self) -> Result<bool, IoError> {
+    /// Calls `f` with each unselected point (position, attributes) up to
+    /// the input's next selected one, which it passes over; `false` when
+    /// the input ended first.
+    pub fn up_to_selected<E: From<IoError>>(
+        &mut self,
+        mut f: impl FnMut(DVec3, &AttributeValues) -> Result<(), E>,
+    ) -> Result<bool, E> {
         while let Some(i) = self.next_record()? {
             if self.selector.selects(&self.current, i) {
                 return Ok(true);
             }
-            let (p, a) = (self.current.xyz[i], self.current.attrs.get(i));
-            self.push(p, Vec3::NAN, &a, UNSELECTED)?;
             self.kept += 1;
+            f(self.current.xyz[i], &self.current.attrs.get(i))?;
         }
         Ok(false)
+    }
+}
+
+/// A writer of processed points that writes the unselected points of
+/// the input between them.
+pub struct KeepUnselected {
+    inner: Box<dyn PointWriter>,
+    path: PathBuf,
+    rows: Option<UnselectedRows>,
+    with_normals: bool,
+    with_flags: bool,
+    attributes: AttributeSet,
+    out: PointChunk,
+    out_flags: Vec<u8>,
+}
+
+impl KeepUnselected {
+    /// Wraps `inner`, which writes `output` with normals and flags as
+    /// asked and `attributes`, so that the points of `input` (read with
+    /// `read`'s policy) that `read`'s selection leaves out are written too.
+    pub fn wrap(
+        inner: Box<dyn PointWriter>,
+        output: &Path,
+        input: &Path,
+        read: &ReadOptions,
+        with_normals: bool,
+        with_flags: bool,
+        attributes: AttributeSet,
+    ) -> Result<Self, IoError> {
+        Ok(KeepUnselected {
+            inner,
+            path: output.to_path_buf(),
+            rows: Some(UnselectedRows::open(input, read)?),
+            with_normals,
+            with_flags,
+            attributes,
+            out: PointChunk::default(),
+            out_flags: Vec::new(),
+        })
+    }
+
+    /// Writes the input's unselected points up to its next selected one;
+    /// `false` when the input ended first.
+    fn up_to_selected(&mut self) -> Result<bool, IoError> {
+        let Some(mut rows) = self.rows.take() else {
+            return Ok(false);
+        };
+        let more = rows.up_to_selected(|p, a| self.push(p, Vec3::NAN, a, UNSELECTED));
+        self.rows = Some(rows);
+        more
     }
 
     fn push(
         &mut self,
         p: DVec3,
         normal: Vec3,
-        a: &super::AttributeValues,
+        a: &AttributeValues,
         flag: u8,
     ) -> Result<(), IoError> {
         if self.out.xyz.is_empty() {
