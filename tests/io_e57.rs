@@ -318,6 +318,7 @@ fn scans_are_selected_by_index() {
     let pick = |s: Vec<usize>| ReadOptions {
         policy: InvalidPolicy::Reject,
         scans: Some(s),
+        ..ReadOptions::default()
     };
     // Order and repeats in the request do not matter: file order, once.
     let got = read(&path, pick(vec![3, 0, 3]), 50).unwrap();

@@ -423,6 +423,7 @@ fn point_chunk(n: usize) -> PointChunk {
         normals: None,
         indices: None,
         attrs: Default::default(),
+        number_of_returns: Vec::new(),
     }
 }
 

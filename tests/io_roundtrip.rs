@@ -81,6 +81,7 @@ fn write_cloud(path: &Path, spec: &WriterSpec, c: &Cloud, step: usize) -> u64 {
             normals: Some(c.normals[start..end].to_vec()),
             indices: None,
             attrs: Default::default(),
+            number_of_returns: Vec::new(),
         };
         w.write_chunk(&chunk, Some(&c.flags[start..end])).unwrap();
     }

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use scanmesh::io::convert::convert;
+use scanmesh::io::convert::convert_keeping;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -24,7 +24,15 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
-    let stats = convert(&a.input, &a.output, s.read_options(), progress.as_ref())?;
+    let read = s.read_options();
+    let stats = convert_keeping(
+        &a.input,
+        &a.output,
+        read,
+        s.keep_unselected,
+        progress.as_ref(),
+    )?;
+    super::report::unselected_kept(s.keep_unselected);
     if !stats.dropped.is_empty() && !s.quiet {
         eprintln!(
             "note: {} cannot hold the input's {}: not written",
@@ -32,7 +40,11 @@ pub fn run(a: ConvertArgs) -> Result<()> {
             stats.dropped.describe()
         );
     }
-    super::report::input_skipped(&a.input.display().to_string(), stats.skipped);
+    super::report::input_skipped(
+        &a.input.display().to_string(),
+        stats.skipped,
+        stats.left_out,
+    );
     super::report::summary(format!(
         "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
         stats.points,

@@ -4,7 +4,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::features::curvature::CurvatureReport;
-use scanmesh::features::export::write_curvature_ply;
+use scanmesh::features::export::write_curvature_ply_keeping;
 use scanmesh::features::{compute_curvature, CurvatureParams, HoodChoice};
 use scanmesh::normals::{NormalParams, Orientation};
 use std::path::{Path, PathBuf};
@@ -106,8 +106,11 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;
     let report = compute_curvature(store, &params, run.opts, progress.as_ref())?;
-    write_curvature_ply(store, &a.output, run.plan.window_points)
+    let read = s.read_options();
+    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
+    write_curvature_ply_keeping(store, &a.output, run.plan.window_points, keep)
         .with_context(|| format!("writing {}", a.output.display()))?;
+    super::report::unselected_kept(s.keep_unselected);
     print_summary(&report, t0.elapsed().as_secs_f64(), &a.output);
     Ok(())
 }

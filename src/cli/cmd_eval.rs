@@ -3,7 +3,7 @@
 use super::stdout::outln;
 use anyhow::Result;
 use clap::Args;
-use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
+use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk, ReadOptions, Selection};
 use scanmesh::mesh::distance::{compare, Reference};
 use scanmesh::mesh::{angle_report, quality, self_intersections, Mesh};
 use serde_json::json;
@@ -19,6 +19,9 @@ pub struct EvalArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// With a point file as --reference: its points to compare with.
+    #[command(flatten)]
+    select: super::SelectArgs,
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
@@ -29,7 +32,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let angles = angle_report(&mesh);
     let crossings = self_intersections(&mesh);
     let d = match &a.reference {
-        Some(r) => Some(compare_to(&mesh, r)?),
+        Some(r) => Some(compare_to(&mesh, r, &a.select.selection())?),
         None => None,
     };
     if a.json {
@@ -53,10 +56,18 @@ pub fn run(a: EvalArgs) -> Result<()> {
     Ok(())
 }
 
-fn compare_to(mesh: &Mesh, reference: &Path) -> Result<scanmesh::mesh::distance::DistanceReport> {
+fn compare_to(
+    mesh: &Mesh,
+    reference: &Path,
+    select: &Selection,
+) -> Result<scanmesh::mesh::distance::DistanceReport> {
     let (vertices, triangles) = match read_mesh_any(reference) {
-        Ok(m) => m,
-        Err(_) => (read_points(reference)?, Vec::new()),
+        Ok(m) if select.is_all() => m,
+        Ok(_) => anyhow::bail!(
+            "{}: --classes and --returns select points of a point file; this reference is a mesh",
+            reference.display()
+        ),
+        Err(_) => (read_points(reference, select)?, Vec::new()),
     };
     Ok(if triangles.is_empty() {
         compare(mesh, Reference::Points(&vertices))
@@ -65,8 +76,12 @@ fn compare_to(mesh: &Mesh, reference: &Path) -> Result<scanmesh::mesh::distance:
     })
 }
 
-fn read_points(path: &Path) -> Result<Vec<glam::DVec3>> {
-    let mut r = open_reader(path, InvalidPolicy::Reject)?;
+fn read_points(path: &Path, select: &Selection) -> Result<Vec<glam::DVec3>> {
+    let read = ReadOptions {
+        select: select.clone(),
+        ..ReadOptions::from(InvalidPolicy::Reject)
+    };
+    let mut r = open_reader(path, read)?;
     let mut chunk = PointChunk::default();
     let mut pts = Vec::new();
     while r.read_chunk(&mut chunk, 1 << 16)? > 0 {

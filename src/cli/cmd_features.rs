@@ -114,6 +114,7 @@ impl FeaturesArgs {
 
 pub fn run(a: FeaturesArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_keep("feature lines")?;
     let params = a.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;

@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::e57::is_e57_magic;
 use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
-use scanmesh::io::InvalidPolicy;
+use scanmesh::io::{InvalidPolicy, ReadOptions};
 use scanmesh::memory::plan::MIN_TILE_POINTS;
 use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
@@ -49,14 +49,22 @@ pub struct InfoArgs {
     /// instead of failing (`skipped_invalid`).
     #[arg(long)]
     skip_invalid: bool,
+    #[command(flatten)]
+    select: super::SelectArgs,
 }
 
 impl InfoArgs {
-    /// What to do with invalid records: fail, or count them as skipped.
-    fn policy(&self) -> InvalidPolicy {
-        match self.skip_invalid {
+    /// What to do with invalid records (fail, or count them as skipped)
+    /// and which points to count (`--classes`, `--returns`).
+    fn policy(&self) -> ReadOptions {
+        let policy = match self.skip_invalid {
             true => InvalidPolicy::Skip,
             false => InvalidPolicy::Reject,
+        };
+        ReadOptions {
+            policy,
+            select: self.select.selection(),
+            ..ReadOptions::default()
         }
     }
 }
@@ -74,12 +82,23 @@ pub fn run(a: InfoArgs) -> Result<()> {
         return print_plan(&a);
     }
     let report = if is_store(&a.input) {
+        if !a.select.selection().is_all() {
+            anyhow::bail!(
+                "{}: --classes and --returns select points of a point file; a store holds the points it was built from",
+                a.input.display()
+            );
+        }
         store_report(&a.input)?
     } else {
         let progress = super::progress::progress(a.quiet);
         let (r, scans) = match is_e57(&a.input) {
             true => {
-                let (r, scans) = inspect_scans(&a.input, a.policy(), progress.as_ref())?;
+                // E57 holds no class or return: a selection is refused here.
+                if !a.select.selection().is_all() {
+                    scanmesh::io::open_reader(&a.input, a.policy())?;
+                }
+                let policy = a.policy().policy;
+                let (r, scans) = inspect_scans(&a.input, policy, progress.as_ref())?;
                 (r, Some(scans))
             }
             false => (inspect(&a.input, a.policy(), progress.as_ref())?, None),
@@ -91,6 +110,8 @@ pub fn run(a: InfoArgs) -> Result<()> {
             "declared_points": r.info.declared_count,
             "points": r.count,
             "skipped_invalid": r.skipped,
+            "no_return": r.left_out.no_return,
+            "unselected": r.left_out.unselected,
             "has_normals": r.info.has_normals,
             "attributes": r.info.attributes.describe(),
             "bounds_min": r.bounds.min.to_array(),
@@ -121,6 +142,8 @@ fn store_report(dir: &std::path::Path) -> Result<serde_json::Value> {
         "largest_tile": largest,
         "duplicates": m.duplicates,
         "skipped_invalid": m.skipped_invalid,
+        "no_return": m.left_out.no_return,
+        "unselected": m.left_out.unselected,
         "attributes": store.attributes().describe(),
         "bounds_min": m.bounds_min,
         "bounds_max": m.bounds_max,

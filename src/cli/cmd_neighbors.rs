@@ -69,6 +69,7 @@ impl NeighborsArgs {
 
 pub fn run(a: NeighborsArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_keep("lists over the selected points only (keeping the others is not implemented for neighbors yet)")?;
     let params = a.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;

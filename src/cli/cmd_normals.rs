@@ -9,7 +9,7 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
 };
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::{export_points, NORMALS};
+use scanmesh::store::{export_points_keeping, NORMALS};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -183,8 +183,11 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     };
     spec.attributes = carried_attributes(store.attributes(), &spec, &a.output, s.quiet);
     let window = run.plan.window_points;
-    export_points(store, &a.output, &spec, window, progress.as_ref())
+    let read = s.read_options();
+    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
+    export_points_keeping(store, &a.output, &spec, window, keep, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
+    super::report::unselected_kept(s.keep_unselected);
     print_summary(&report, t0.elapsed().as_secs_f64(), &a.output);
     Ok(())
 }

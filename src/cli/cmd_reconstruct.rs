@@ -123,6 +123,7 @@ impl ReconstructArgs {
 
 pub fn run(a: ReconstructArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_keep("a mesh")?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;

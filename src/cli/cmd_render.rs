@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::DVec3;
 use scanmesh::features::lines::LineGraph;
-use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk};
+use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk, ReadOptions};
 use scanmesh::render::scene::{Scene, Style};
 use std::path::PathBuf;
 
@@ -18,6 +18,9 @@ pub struct RenderArgs {
     /// Points to draw (any point format), grey.
     #[arg(long)]
     points: Option<PathBuf>,
+    /// Of --points: the points to draw.
+    #[command(flatten)]
+    select: super::SelectArgs,
     /// Feature lines (`scanmesh features` PLY): ridges red, valleys blue.
     #[arg(long)]
     lines: Option<PathBuf>,
@@ -59,8 +62,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     }
     let mut scene = Scene::default();
     if let Some(p) = &a.points {
-        let mut r = open_reader(p, InvalidPolicy::Skip)
-            .with_context(|| format!("reading {}", p.display()))?;
+        let read = ReadOptions {
+            select: a.select.selection(),
+            ..ReadOptions::from(InvalidPolicy::Skip)
+        };
+        let mut r = open_reader(p, read).with_context(|| format!("reading {}", p.display()))?;
         let mut chunk = PointChunk::default();
         while r.read_chunk(&mut chunk, 1 << 16)? > 0 {
             scene.points.extend_from_slice(&chunk.xyz);

@@ -22,6 +22,7 @@ pub struct TileArgs {
 
 pub fn run(a: TileArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_keep("a store of the selected points")?;
     s.init_threads();
     if a.output.exists() && std::fs::read_dir(&a.output)?.next().is_some() {
         bail!("{}: exists and is not empty", a.output.display());
@@ -46,7 +47,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let spacing = ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
-    super::report::input_skipped(&m.source, m.skipped_invalid);
+    super::report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
     super::report::summary(format!(
         "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
         m.count,

@@ -30,7 +30,7 @@ pub use stdout::closed as stdout_closed;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::place;
-use scanmesh::io::{InvalidPolicy, ReadOptions};
+use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
 use scanmesh::store::build::scratch_store_dir_in;
 use scanmesh::store::{
@@ -110,6 +110,15 @@ pub struct CommonArgs {
     /// them, e.g. 0,2), in file order.
     #[arg(long, value_name = "I,J,...", value_delimiter = ',')]
     scans: Option<Vec<usize>>,
+    #[command(flatten)]
+    select: SelectArgs,
+    /// What a per-point output (normals, curvature, convert) holds of
+    /// the points --classes/--returns leave out: drop (default: the
+    /// selected points only, as with --skip-invalid; the summary line
+    /// counts the others) or keep (every input point in input order, the
+    /// unselected ones with NaN values and flag 128).
+    #[arg(long, value_enum, default_value_t = Unselected::Drop)]
+    unselected: Unselected,
     /// Directory for the scratch store and spill files (default: beside
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
@@ -136,6 +145,58 @@ pub struct CommonArgs {
     /// The part of the run this process does (set by `run-job`).
     #[arg(skip)]
     job: Job,
+}
+
+/// Which points of the input to process (`--classes`, `--returns`),
+/// taken by every command that reads a point file.
+#[derive(Args, Clone, Debug, Default)]
+pub struct SelectArgs {
+    /// Process only points of these classification codes (e.g. 2,6:
+    /// ground and buildings); the others are left out, counted on the
+    /// summary line. An input without classification (XYZ, most PLY)
+    /// is an error.
+    #[arg(long, value_name = "C,D,...", value_delimiter = ',')]
+    classes: Option<Vec<u8>>,
+    /// Process only these returns of each pulse: first (return number
+    /// 1), last (return number = number of returns, LAS/LAZ) or all.
+    #[arg(long, value_enum, default_value_t = ReturnsArg::All)]
+    returns: ReturnsArg,
+}
+
+/// `--unselected`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum Unselected {
+    /// Per-point outputs hold the selected points only.
+    #[default]
+    Drop,
+    /// Per-point outputs hold every input point, the unselected flagged.
+    Keep,
+}
+
+/// `--returns`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
+pub enum ReturnsArg {
+    /// Every return.
+    #[default]
+    All,
+    /// Return number 1.
+    First,
+    /// Return number equal to the pulse's number of returns.
+    Last,
+}
+
+impl SelectArgs {
+    /// The selection the flags give.
+    pub fn selection(&self) -> Selection {
+        Selection {
+            classes: self.classes.clone(),
+            returns: match self.returns {
+                ReturnsArg::All => Returns::All,
+                ReturnsArg::First => Returns::First,
+                ReturnsArg::Last => Returns::Last,
+            },
+        }
+    }
 }
 
 /// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
@@ -165,6 +226,11 @@ pub struct Settings {
     pub policy: InvalidPolicy,
     /// `--scans`: the E57 scans to read (`None`: all).
     pub scans: Option<Vec<usize>>,
+    /// `--classes`, `--returns`: the points to process.
+    pub select: Selection,
+    /// `--unselected keep`, with a selection: per-point outputs write the
+    /// points it leaves out too, flagged.
+    pub keep_unselected: bool,
     pub scratch_dir: Option<PathBuf>,
     /// The run directory (`--run-dir`) and this process's part of it.
     pub run: Option<rundir::RunDir>,
@@ -257,6 +323,9 @@ impl CommonArgs {
             quiet: self.quiet,
             scratch_dir: self.scratch_dir.clone(),
             scans: self.scans.clone(),
+            select: self.select.selection(),
+            keep_unselected: self.unselected == Unselected::Keep
+                && !self.select.selection().is_all(),
             run: self
                 .run_dir
                 .as_deref()
@@ -278,7 +347,17 @@ impl Settings {
         ReadOptions {
             policy: self.policy,
             scans: self.scans.clone(),
+            select: self.select.clone(),
         }
+    }
+
+    /// Refuses `--unselected keep` for a command whose output has no row
+    /// per point (`what` says what it writes).
+    pub fn no_keep(&self, what: &str) -> Result<()> {
+        if self.keep_unselected {
+            bail!("--unselected keep: this command writes {what}, not a row per input point; leave it out (or use drop)");
+        }
+        Ok(())
     }
 
     pub fn budget(&self) -> MemoryBudget {
@@ -318,6 +397,12 @@ impl Settings {
         if self.scans.is_some() && is_store(input) {
             bail!(
                 "{}: --scans selects scans of an E57 input; a store holds the scans it was built from",
+                input.display()
+            );
+        }
+        if !self.select.is_all() && is_store(input) {
+            bail!(
+                "{}: --classes and --returns select points of a point file; a store holds the points it was built from (give them to `scanmesh tile`)",
                 input.display()
             );
         }
@@ -456,7 +541,7 @@ impl Settings {
     pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared> {
         // The summary says how many input records the store lacks.
         let m = ws.store.manifest();
-        report::input_skipped(&m.source, m.skipped_invalid);
+        report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
         let (plan, opts) = self.plan_for(&ws.store, cost)?;
         Ok(Prepared { ws, opts, plan })
     }

@@ -12,6 +12,7 @@
 //! it is known ([`input_skipped`]).
 
 use super::clock::{Mark, Span};
+use scanmesh::io::LeftOut;
 use scanmesh::pipeline::Progress;
 use serde::Serialize;
 use std::io::Write;
@@ -23,6 +24,8 @@ static LOG: Mutex<Log> = Mutex::new(Log {
     stages: Vec::new(),
     summary: None,
     skipped: None,
+    left_out: None,
+    kept: false,
 });
 
 struct Log {
@@ -30,6 +33,10 @@ struct Log {
     summary: Option<String>,
     /// The input read and the records dropped from it.
     skipped: Option<(String, u64)>,
+    /// Records of the input left out: no return, or not selected.
+    left_out: Option<LeftOut>,
+    /// Whether the output holds the unselected points, flagged.
+    kept: bool,
 }
 
 #[derive(Clone, Serialize)]
@@ -51,6 +58,9 @@ struct Report<'a> {
     /// under --skip-invalid, or marked invalid by the file); `None` when
     /// the command read no input.
     skipped_invalid: Option<u64>,
+    /// Input records not processed: pixels of an organised cloud without
+    /// a return (NaN), points --classes / --returns did not select.
+    left_out: Option<LeftOut>,
     total: Span,
     stages: Vec<Stage>,
 }
@@ -111,11 +121,36 @@ impl Drop for Recorder {
 }
 
 /// Records that `skipped` records of the input `source` were dropped while
-/// reading it, for the summary line and the report.
-pub fn input_skipped(source: &str, skipped: u64) {
+/// reading it and `left_out` not processed, for the summary line and the
+/// report.
+pub fn input_skipped(source: &str, skipped: u64, left_out: LeftOut) {
     if let Ok(mut log) = LOG.lock() {
         log.skipped = Some((source.to_string(), skipped));
+        log.left_out = Some(left_out);
     }
+}
+
+/// Records that the output holds the unselected points, flagged
+/// (`--unselected keep`), for the summary line.
+pub fn unselected_kept(kept: bool) {
+    if let Ok(mut log) = LOG.lock() {
+        log.kept = kept;
+    }
+}
+
+/// The words the summary line ends with when records were left out.
+fn left_out_note(source: &str, l: &LeftOut, kept: bool) -> String {
+    let records = if l.total() == 1 { "record" } else { "records" };
+    let output = match (kept, l.unselected > 0) {
+        (true, true) => "; the unselected are in the output, flagged 128 (--unselected keep)",
+        (false, true) => "; not in the output (--unselected drop)",
+        _ => "",
+    };
+    format!(
+        "{} {records} of {source} left out: {}{output}",
+        l.total(),
+        l.describe()
+    )
 }
 
 /// The words the summary line ends with when records were dropped.
@@ -129,11 +164,17 @@ fn skipped_note(source: &str, n: u64) -> String {
 /// Prints a command's closing summary line and keeps it for the report;
 /// the records dropped from its input, if any, are told at its end.
 pub fn summary(line: String) {
-    let skipped = LOG.lock().ok().and_then(|log| log.skipped.clone());
-    let line = match skipped {
-        Some((source, n)) if n > 0 => format!("{line}; {}", skipped_note(&source, n)),
+    let (skipped, left_out, kept) = match LOG.lock() {
+        Ok(log) => (log.skipped.clone(), log.left_out, log.kept),
+        Err(_) => (None, None, false),
+    };
+    let mut line = match &skipped {
+        Some((source, n)) if *n > 0 => format!("{line}; {}", skipped_note(source, *n)),
         _ => line,
     };
+    if let (Some((source, _)), Some(l)) = (&skipped, left_out.filter(|l| l.total() > 0)) {
+        line = format!("{line}; {}", left_out_note(source, &l, kept));
+    }
     // A closed pipe (`| head`) is the reader's choice, not an error of ours.
     let _ = writeln!(std::io::stdout(), "{line}");
     if let Ok(mut log) = LOG.lock() {
@@ -149,9 +190,14 @@ pub fn last_summary() -> Option<String> {
 /// Writes the report of this run to `path`: `start` is when the command
 /// began, `outcome` its result.
 pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow::Result<()> {
-    let (stages, summary, skipped) = match LOG.lock() {
-        Ok(log) => (log.stages.clone(), log.summary.clone(), log.skipped.clone()),
-        Err(_) => (Vec::new(), None, None),
+    let (stages, summary, skipped, left_out) = match LOG.lock() {
+        Ok(log) => (
+            log.stages.clone(),
+            log.summary.clone(),
+            log.skipped.clone(),
+            log.left_out,
+        ),
+        Err(_) => (Vec::new(), None, None, None),
     };
     let outcome = match outcome {
         Ok(()) => "ok".to_string(),
@@ -169,6 +215,7 @@ pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow:
         outcome,
         summary,
         skipped_invalid: skipped.map(|(_, n)| n),
+        left_out,
         total: start.span(),
         stages,
     };

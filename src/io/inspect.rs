@@ -2,7 +2,7 @@
 //! streaming pass gives (count, bounds) and a spacing estimate from the
 //! first points, which for scanner data are spatially coherent.
 
-use super::{open_reader, IoError, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
+use super::{open_reader, IoError, LeftOut, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
 use crate::geom::Aabb;
 use crate::progress::Progress;
 use crate::spatial::{build_index, KnnBackend};
@@ -23,6 +23,9 @@ pub struct Inspection {
     /// [`InvalidPolicy::Skip`](super::InvalidPolicy::Skip); or flagged
     /// invalid by the file).
     pub skipped: u64,
+    /// Records that hold no point to process (an organised cloud's pixels
+    /// without a return) or that the read's selection left out.
+    pub left_out: LeftOut,
     /// Bounding box of the points read.
     pub bounds: Aabb,
     /// Mean nearest-neighbour distance among the first points (duplicates
@@ -55,6 +58,7 @@ pub fn inspect(
         info,
         count,
         skipped: reader.skipped(),
+        left_out: reader.left_out(),
         bounds,
         spacing: prefix_spacing(&sample),
     })
@@ -108,6 +112,7 @@ pub fn inspect_scans(
         let read = ReadOptions {
             policy,
             scans: Some(vec![scan.index]),
+            ..ReadOptions::default()
         };
         let one = inspect(path, read, progress)?;
         out.push(ScanInspection {
@@ -121,6 +126,7 @@ pub fn inspect_scans(
             Some(mut w) => {
                 w.count += one.count;
                 w.skipped += one.skipped;
+                w.left_out = w.left_out.plus(one.left_out);
                 w.bounds = w.bounds.union(&one.bounds);
                 w.spacing = w.spacing.or(one.spacing);
                 w

@@ -45,6 +45,8 @@ struct Decoded {
     xyz: Vec<DVec3>,
     normals: Vec<Vec3>,
     attrs: Attributes,
+    /// Each point's number of returns (for a selection of last returns).
+    returns: Vec<u8>,
 }
 
 type Block = Result<Decoded, IoError>;
@@ -282,6 +284,8 @@ fn decode_blocks(
                 d.xyz
                     .extend(x.zip(y).zip(z).map(|((x, y), z)| DVec3::new(x, y, z)));
                 decode_attributes(&data, set, &mut d.attrs);
+                d.returns.clear();
+                d.returns.extend(data.number_of_returns());
                 d.normals.clear();
                 if let Some(at) = normals {
                     let records = data.raw_bytes().chunks_exact(data.record_len());
@@ -426,6 +430,9 @@ impl PointReader for LasReader {
                 let (p, a) = (self.current.xyz[k], self.current.attrs.get(k));
                 let n = self.current.normals.get(k).copied().unwrap_or(Vec3::ZERO);
                 self.admit.push_with(chunk, self.next, p, n, &a)?;
+                if chunk.number_of_returns.len() < chunk.len() {
+                    chunk.number_of_returns.push(self.current.returns[k]);
+                }
                 self.next += 1;
             }
             self.pos += take;

@@ -13,6 +13,7 @@ pub mod convert;
 pub mod e57;
 pub(crate) mod error;
 pub mod inspect;
+pub mod keep;
 pub(crate) mod las;
 mod las_extra;
 pub mod memory;
@@ -24,6 +25,7 @@ pub(crate) mod ply;
 mod policy;
 pub mod reclaim;
 pub(crate) mod scratch;
+pub mod select;
 mod source;
 mod text;
 pub mod write;
@@ -35,6 +37,7 @@ pub use error::IoError;
 pub use obj::read_obj_mesh;
 pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
 pub use ply::read_mesh;
+pub use select::{LeftOut, Returns, Selection};
 pub use write::create_writer;
 
 use glam::{DVec3, Vec3};
@@ -102,6 +105,9 @@ pub struct PointChunk {
     /// Intensity, colour and the other attributes the source carries
     /// ([`SourceInfo::attributes`]), one value per point each.
     pub attrs: Attributes,
+    /// LAS/LAZ only: each point's number of returns (what a selection of
+    /// last returns reads); empty for other formats.
+    pub number_of_returns: Vec<u8>,
 }
 
 impl PointChunk {
@@ -122,6 +128,7 @@ impl PointChunk {
             i.clear();
         }
         self.attrs.clear();
+        self.number_of_returns.clear();
     }
     /// Input index of the `i`-th point of this chunk.
     pub fn index_of(&self, i: usize) -> u64 {
@@ -174,21 +181,25 @@ pub enum InvalidPolicy {
     Skip,
 }
 
-/// How to read an input: what to do with non-finite coordinates and, for a
-/// file of several scans (E57), which scans to read (`None`: all).
+/// How to read an input: what to do with non-finite coordinates, for a
+/// file of several scans (E57) which scans to read (`None`: all), and
+/// which points to process (by class and return).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ReadOptions {
     /// What to do with records whose coordinates are not finite.
     pub policy: InvalidPolicy,
     /// Scan indices, as `scanmesh info` lists them; read in file order.
     pub scans: Option<Vec<usize>>,
+    /// The points handed out ([`Selection`]); the others are counted
+    /// ([`PointReader::left_out`]).
+    pub select: Selection,
 }
 
 impl From<InvalidPolicy> for ReadOptions {
     fn from(policy: InvalidPolicy) -> Self {
         ReadOptions {
             policy,
-            scans: None,
+            ..ReadOptions::default()
         }
     }
 }
@@ -214,6 +225,12 @@ pub trait PointReader: Send {
     /// [`InvalidPolicy::Skip`], and those the file itself flags as no point
     /// (E57's invalid states), under every policy.
     fn skipped(&self) -> u64;
+    /// Records read but not handed out because they hold no point to
+    /// process (an organised cloud's pixels without a return) or the
+    /// read's [`Selection`] left them out, under every policy.
+    fn left_out(&self) -> LeftOut {
+        LeftOut::default()
+    }
 }
 
 /// What a point writer is asked to produce.

@@ -6,6 +6,7 @@ use super::las::LasReader;
 use super::obj::read_obj;
 use super::pcd::{is_pcd_magic, PcdReader};
 use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
+use super::select;
 use super::source::{open_input, open_stream, Opened};
 use super::xyz::XyzReader;
 use super::{format_from_name, Format, InvalidPolicy, IoError, PointReader, ReadOptions};
@@ -33,7 +34,8 @@ pub fn open_reader(
     if is_e57_magic(&opened.magic) && !opened.gzip {
         // The e57 crate wants a seekable file: reopen it plainly.
         drop(opened);
-        return Ok(Box::new(E57Reader::open(path, &read)?));
+        let e57 = Box::new(E57Reader::open(path, &read)?);
+        return select::Selecting::wrap(e57, &read.select);
     }
     if read.scans.is_some() {
         return Err(IoError::Unsupported {
@@ -50,9 +52,11 @@ pub fn open_reader(
     if opened.magic.starts_with(LAS_MAGIC) && !opened.gzip {
         // The las crate wants a seekable file: reopen it plainly.
         drop(opened);
-        return Ok(Box::new(LasReader::open(path, read.policy)?));
+        let las = Box::new(LasReader::open(path, read.policy)?);
+        return select::Selecting::wrap(las, &read.select);
     }
-    streamed_format(path, opened, read.policy)
+    let r = streamed_format(path, opened, read.policy)?;
+    select::Selecting::wrap(r, &read.select)
 }
 
 /// Opens points from any byte stream (an embedded sample, a network
@@ -81,6 +85,7 @@ pub fn open_stream_reader(
         });
     }
     let inner = streamed_format(name, opened, read.policy)?;
+    let inner = select::Selecting::wrap(inner, &read.select)?;
     Ok(Box::new(Streamed(inner)))
 }
 
@@ -96,6 +101,9 @@ impl PointReader for Streamed {
     }
     fn skipped(&self) -> u64 {
         self.0.skipped()
+    }
+    fn left_out(&self) -> super::LeftOut {
+        self.0.left_out()
     }
 }
 

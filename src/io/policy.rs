@@ -10,6 +10,7 @@ pub(crate) struct Admitter {
     path: PathBuf,
     policy: InvalidPolicy,
     skipped: u64,
+    no_return: u64,
 }
 
 impl Admitter {
@@ -18,11 +19,17 @@ impl Admitter {
             path,
             policy,
             skipped: 0,
+            no_return: 0,
         }
     }
 
     pub fn skipped(&self) -> u64 {
         self.skipped
+    }
+
+    /// Records passed by [`Admitter::no_return`].
+    pub fn no_return_count(&self) -> u64 {
+        self.no_return
     }
 
     /// Clears `chunk` for records starting at input index `first`, keeping
@@ -32,6 +39,7 @@ impl Admitter {
         chunk.first_index = first;
         chunk.indices = None;
         chunk.attrs.reset(info.attributes);
+        chunk.number_of_returns.clear();
         if info.has_normals {
             match &mut chunk.normals {
                 Some(n) => n.clear(),
@@ -125,6 +133,14 @@ impl Admitter {
     /// Drops a record the file itself marks as no point (E57's invalid
     /// states), under every policy; the reader counts these itself.
     pub fn pass(&self, chunk: &mut PointChunk) {
+        explicit_indices(chunk);
+    }
+
+    /// Drops a pixel of an organised cloud where the sensor saw nothing
+    /// (NaN coordinates), under every policy, and counts it apart from the
+    /// invalid records ([`crate::io::LeftOut::no_return`]).
+    pub fn no_return(&mut self, chunk: &mut PointChunk) {
+        self.no_return += 1;
         explicit_indices(chunk);
     }
 

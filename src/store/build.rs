@@ -142,8 +142,10 @@ fn build_columns(
     sink.finish()?;
     exact.finish()?;
     if count == 0 {
-        return Err(StoreError::Empty {
-            path: reader.info().path.clone(),
+        let path = reader.info().path.clone();
+        return Err(match reader.left_out().unselected {
+            0 => StoreError::Empty { path },
+            unselected => StoreError::NoneSelected { path, unselected },
         });
     }
     // Checked once the count is known, before the points are read again.
@@ -164,6 +166,7 @@ fn build_columns(
         version: STORE_VERSION,
         count,
         skipped_invalid: reader.skipped(),
+        left_out: reader.left_out(),
         duplicates,
         origin: origin.to_array(),
         coordinates,

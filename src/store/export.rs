@@ -36,6 +36,20 @@ pub fn export_points(
     window_points: u64,
     progress: &dyn Progress,
 ) -> Result<u64, StoreError> {
+    export_points_keeping(store, path, spec, window_points, None, progress)
+}
+
+/// [`export_points`], with the points of the input file `keep.0` that
+/// its read `keep.1` left out of the store written between them, flagged
+/// ([`crate::io::keep`]); returns the rows written.
+pub fn export_points_keeping(
+    store: &PointStore,
+    path: &Path,
+    spec: &WriterSpec,
+    window_points: u64,
+    keep: Option<(&Path, &crate::io::ReadOptions)>,
+    progress: &dyn Progress,
+) -> Result<u64, StoreError> {
     let cols = Columns {
         normals: if spec.with_normals {
             Some(store.column(&NORMALS)?)
@@ -58,7 +72,18 @@ pub fn export_points(
             DVec3::from_array(store.manifest.bounds_max),
         ));
     }
-    let writer = create_writer(path, &spec)?;
+    let mut writer = create_writer(path, &spec)?;
+    if let Some((input, read)) = keep {
+        writer = Box::new(crate::io::keep::KeepUnselected::wrap(
+            writer,
+            path,
+            input,
+            read,
+            spec.with_normals,
+            spec.with_flags,
+            spec.attributes,
+        )?);
+    }
     let n = store.len();
     // Two windows of half the size: one filled while the other is written.
     let window = (attribute_window(window_points, spec.attributes) / 2).clamp(1, n.max(1));

@@ -19,6 +19,10 @@ pub struct Manifest {
     pub count: u64,
     /// Input records dropped under `--skip-invalid`.
     pub skipped_invalid: u64,
+    /// Input records not in the store because they hold no point to
+    /// process or a selection left them out (absent in older stores: none).
+    #[serde(default)]
+    pub left_out: crate::io::LeftOut,
     /// Points that repeat another point's coordinates exactly (as stored).
     pub duplicates: u64,
     /// Coordinates are stored as f32 relative to this f64 origin.

@@ -36,7 +36,7 @@ pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use exact::Coordinates;
-pub use export::export_points;
+pub use export::{export_points, export_points_keeping};
 pub use manifest::{GridSpec, Manifest, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
 pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
@@ -81,6 +81,15 @@ pub enum StoreError {
     Empty {
         /// The input read.
         path: PathBuf,
+    },
+    /// The input holds points, but the selection (classes, returns)
+    /// kept none of them.
+    #[error("{path}: the selection kept no point ({unselected} points not selected)")]
+    NoneSelected {
+        /// The input read.
+        path: PathBuf,
+        /// Points the selection left out.
+        unselected: u64,
     },
     /// The input holds more points than a store can index.
     #[error("{path}: {count} points exceed the supported {max}")]

@@ -51,6 +51,9 @@ impl Field {
 pub struct PcdHeader {
     pub fields: Vec<Field>,
     pub points: u64,
+    /// Rows: an organised cloud (a depth camera's frame) has `height > 1`,
+    /// its points row after row, `WIDTH` a row.
+    pub height: u64,
     pub data: Data,
     /// Header lines read (for error messages in ASCII bodies).
     pub lines: u64,
@@ -62,11 +65,18 @@ impl PcdHeader {
         self.fields.iter().map(Field::bytes).sum()
     }
 
-    /// Index of the field called `name` holding one value.
+    /// Index of the field called `name` holding one value, the name's
+    /// case ignored (PDAL writes `X Y Z`, PCL `x y z`).
     pub fn scalar_field(&self, name: &str) -> Option<usize> {
         self.fields
             .iter()
-            .position(|f| f.name == name && f.count == 1)
+            .position(|f| f.name.eq_ignore_ascii_case(name) && f.count == 1)
+    }
+
+    /// Whether the cloud is organised: rows of a sensor's pixel grid,
+    /// where NaN coordinates mark a pixel without a return.
+    pub fn organised(&self) -> bool {
+        self.height > 1
     }
 
     /// Byte offset of field `i` within a binary record.
@@ -129,9 +139,15 @@ pub fn parse_header(input: &mut dyn BufRead) -> Result<PcdHeader, String> {
                 };
                 let fields = fields(&names, &sizes, &types, counts.as_deref())?;
                 let points = point_count(width, height, points)?;
+                // PCL's reader makes a cloud without WIDTH unorganised.
+                let height = match (width, height) {
+                    (Some(w), Some(h)) if w.checked_mul(h) == Some(points) => h,
+                    _ => 1,
+                };
                 return Ok(PcdHeader {
                     fields,
                     points,
+                    height,
                     data,
                     lines,
                 });
@@ -238,6 +254,22 @@ mod tests {
         assert_eq!(h.scalar_field("z"), Some(2));
         assert_eq!(h.offset(3), 12);
         assert_eq!(h.fields[3].scalar, Scalar::U(4));
+        assert!(!h.organised());
+    }
+
+    #[test]
+    fn names_match_in_any_case_and_a_grid_is_organised() {
+        let h = parse(
+            "FIELDS X Y Z Intensity\nSIZE 8 8 8 4\nTYPE F F F F\n\
+             WIDTH 4\nHEIGHT 3\nPOINTS 12\nDATA binary\n",
+        )
+        .unwrap();
+        assert_eq!(
+            ["x", "Y", "z", "intensity"].map(|n| h.scalar_field(n)),
+            [Some(0), Some(1), Some(2), Some(3)]
+        );
+        assert!(h.organised());
+        assert_eq!(h.height, 3);
     }
 
     #[test]

@@ -13,6 +13,12 @@
 //! cloud's size, disk is the uncompressed size. PCD's `VIEWPOINT` is not
 //! applied to the points, as PCL does not apply it when loading.
 //!
+//! Field names are matched whatever their case (PDAL writes `X Y Z`). An
+//! organised cloud (`HEIGHT` > 1, a sensor's pixel grid) marks a pixel
+//! without a return with NaN coordinates: such records are left out and
+//! counted ([`LeftOut::no_return`]) under every policy, while NaN in an
+//! unorganised cloud stays an invalid record (an error unless skipped).
+//!
 //! After the declared points the file must end: blank lines may follow an
 //! ASCII body and zero bytes a binary one (PCL pads its binary and
 //! binary_compressed files with zeros), anything else is
@@ -26,7 +32,7 @@ use crate::io::policy::Admitter;
 use crate::io::source::{binary_tail, read_full, Input, Tail};
 use crate::io::text::{self, Line};
 use crate::io::{
-    Attribute, AttributeSet, AttributeValues, Format, InvalidPolicy, IoError, PointChunk,
+    Attribute, AttributeSet, AttributeValues, Format, InvalidPolicy, IoError, LeftOut, PointChunk,
     PointReader, SourceInfo,
 };
 use byteorder::{ByteOrder, LittleEndian};
@@ -67,6 +73,9 @@ pub struct PcdReader {
     next: u64,
     /// Whether the end of the file has been checked (after the last record).
     ended: bool,
+    /// Whether the cloud is organised (`HEIGHT` > 1): NaN coordinates are
+    /// then a pixel without a return, left out under every policy.
+    organised: bool,
 }
 
 impl PcdReader {
@@ -99,6 +108,7 @@ impl PcdReader {
                 }
             }
         };
+        let organised = header.organised();
         let info = SourceInfo {
             path: path.to_path_buf(),
             format: Format::Pcd,
@@ -116,6 +126,7 @@ impl PcdReader {
             header,
             // A compressed body's end was checked above.
             ended: matches!(body, Body::Columns { .. }),
+            organised,
             wanted,
             body,
             next: 0,
@@ -167,8 +178,13 @@ impl PcdReader {
             }
             v[RGB_SLOT] = f64::from(ascii_rgb_bits(v[RGB_SLOT]));
             let (p, n) = point(&v);
-            self.admit
-                .push_with(chunk, self.next, p, n, &attribute_values(&v))?;
+            match self.organised && is_no_return(p) {
+                true => self.admit.no_return(chunk),
+                false => {
+                    let a = attribute_values(&v);
+                    self.admit.push_with(chunk, self.next, p, n, &a)?
+                }
+            }
             self.next += 1;
         }
         Ok(())
@@ -192,6 +208,10 @@ impl PcdReader {
                 v[RGB_SLOT] = f64::from(rgb_bits(&rec[o..], s));
             }
             let (p, nrm) = point(&v);
+            if self.organised && is_no_return(p) {
+                self.admit.no_return(chunk);
+                continue;
+            }
             let a = attribute_values(&v);
             self.admit
                 .push_with(chunk, self.next + k as u64, p, nrm, &a)?;
@@ -228,6 +248,10 @@ impl PcdReader {
         }
         for (k, vals) in v.iter().enumerate() {
             let (p, nrm) = point(vals);
+            if self.organised && is_no_return(p) {
+                self.admit.no_return(chunk);
+                continue;
+            }
             let a = attribute_values(vals);
             self.admit
                 .push_with(chunk, self.next + k as u64, p, nrm, &a)?;
@@ -452,6 +476,19 @@ impl PointReader for PcdReader {
     fn skipped(&self) -> u64 {
         self.admit.skipped()
     }
+
+    fn left_out(&self) -> LeftOut {
+        LeftOut {
+            no_return: self.admit.no_return_count(),
+            unselected: 0,
+        }
+    }
+}
+
+/// A pixel of an organised cloud where the sensor saw nothing: PCL marks
+/// it with NaN coordinates (an infinite one is not that, but invalid).
+fn is_no_return(p: DVec3) -> bool {
+    p.is_nan()
 }
 
 #[cfg(test)]
