@@ -115,7 +115,7 @@ enum Orient {
     Auto,
     /// Minimum spanning tree over the Riemannian graph (paper 1).
     Mst,
-    /// Up (+z) unless near horizontal, the spanning tree there (aerial).
+    /// Up (+z), the spanning tree where a surface turns past vertical (aerial).
     Aerial,
     /// Toward each point's own scan station (E57 scan poses).
     Stations,

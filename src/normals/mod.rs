@@ -54,9 +54,9 @@ pub enum Orientation {
     /// The paper's minimum spanning tree over the Riemannian graph, each
     /// component signed by a vote of its columns' highest points.
     SpanningTree,
-    /// Aerial: every normal that is not near horizontal faces up, and the
-    /// spanning tree, anchored there, signs the rest (walls, overhangs;
-    /// `orient::anchors`).
+    /// Aerial: level normals face up, and the spanning tree, anchored to
+    /// "up" by edges that cost more the steeper the normal, signs the rest
+    /// (walls, overhangs; `orient::anchors`).
     Aerial,
     /// Each point toward its own scan's station (the store's stations:
     /// E57 scan poses).
