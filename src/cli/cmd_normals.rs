@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use scanmesh::io::{format_from_name, AttributeSet, Format, WriterSpec};
 use scanmesh::normals::{
-    compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation,
+    compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation, Sensor,
 };
 use scanmesh::spatial::KnnBackend;
 use scanmesh::store::{export_points_keeping, NORMALS};
@@ -28,9 +28,17 @@ pub struct NormalsArgs {
     knn: Knn,
     #[command(flatten)]
     hood: HoodArgs,
-    /// How normals get their sign.
-    #[arg(long, value_enum, default_value_t = Orient::Mst)]
+    /// How normals get their sign. `auto` (default): toward each scan's
+    /// station when the input names them (E57 poses), up for aerial data
+    /// (a LAS/LAZ wider than tall, or --sensor aerial) with the spanning
+    /// tree past vertical, else the spanning tree.
+    #[arg(long, value_enum, default_value_t = Orient::Auto)]
     orient: Orient,
+    /// What took the scan, a hint to --orient auto: `aerial` (normals face
+    /// up), `terrestrial` (never taken for aerial), `auto` (judge from the
+    /// data).
+    #[arg(long, value_enum, default_value_t = SensorArg::Auto)]
+    sensor: SensorArg,
     /// Spanning-tree edge cost: `offset` (default) adds the tangent-plane
     /// offset to the paper's `1 - |ni.nj|` so the tree does not cross thin parts
     /// (for --orient sources|single-source: subtracts it from `w`).
@@ -92,9 +100,25 @@ enum Cost {
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum SensorArg {
+    /// Judge from the data.
+    Auto,
+    /// Airborne lidar.
+    Aerial,
+    /// Ground-based scanner, or an object.
+    Terrestrial,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
 enum Orient {
+    /// From what the scan knows: stations, up (aerial), else the spanning tree.
+    Auto,
     /// Minimum spanning tree over the Riemannian graph (paper 1).
     Mst,
+    /// Up (+z), the spanning tree where a surface turns past vertical (aerial).
+    Aerial,
+    /// Toward each point's own scan station (E57 scan poses).
+    Stations,
     /// Toward --viewpoint.
     Viewpoint,
     /// Six sources at the extreme points along +-X, +-Y, +-Z (paper 5).
@@ -119,12 +143,29 @@ fn parse_point(s: &str) -> Result<DVec3, String> {
 
 impl NormalsArgs {
     fn params(&self) -> Result<NormalParams> {
+        if self.sensor != SensorArg::Auto && self.orient != Orient::Auto {
+            bail!("--sensor goes with --orient auto only");
+        }
         let orientation = match (self.orient, self.viewpoint) {
             (Orient::Viewpoint, None) => bail!("--orient viewpoint needs --viewpoint x,y,z"),
-            (Orient::Mst | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
+            (Orient::Auto | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
+            (Orient::Auto, None) => Orientation::Auto(match self.sensor {
+                SensorArg::Auto => Sensor::Auto,
+                SensorArg::Aerial => Sensor::Aerial,
+                SensorArg::Terrestrial => Sensor::Terrestrial,
+            }),
             (Orient::Mst, None) => Orientation::SpanningTree,
+            (Orient::Aerial, None) => Orientation::Aerial,
+            (Orient::Stations, None) => Orientation::Stations,
             (Orient::None, _) => Orientation::None,
-            (Orient::Sources | Orient::SingleSource, Some(_)) => {
+            (
+                Orient::Mst
+                | Orient::Aerial
+                | Orient::Stations
+                | Orient::Sources
+                | Orient::SingleSource,
+                Some(_),
+            ) => {
                 bail!("--viewpoint goes with --orient viewpoint only")
             }
             (Orient::Sources, None) => Orientation::SixSources { tau: self.tau },
@@ -251,15 +292,37 @@ pub fn carried_attributes(
 
 pub fn print_summary(r: &NormalsReport, secs: f64, out: &Path) {
     super::report::summary(format!(
-        "normals: {} points, {} tiles ({} reloaded with a wider margin), {} degenerate, {} unoriented, {} components, {:.2} s, peak {} -> {}",
+        "normals: {} points, {} tiles ({} reloaded with a wider margin), {} degenerate, {} unoriented, {}, oriented by {}, {} components, {:.2} s, peak {} -> {}",
         r.points,
         r.tiles,
         r.run.retries,
         r.degenerate,
         r.unoriented,
+        evidence_summary(r),
+        r.oriented_by.describe(),
         r.components,
         secs,
         super::peak(),
         out.display()
     ));
+}
+
+/// How many normals disagree with the scan's own evidence, for the
+/// summary: "0 unoriented" must not read as "all right" when they face
+/// the wrong way.
+pub fn evidence_summary(r: &NormalsReport) -> String {
+    match r.evidence {
+        Some(e) => format!(
+            "{} of {} checked {} ({:.2} %)",
+            e.against,
+            e.checked,
+            e.evidence.describe(),
+            if e.checked > 0 {
+                100.0 * e.against as f64 / e.checked as f64
+            } else {
+                0.0
+            }
+        ),
+        None => "no orientation evidence in the input (no station, not aerial)".into(),
+    }
 }

@@ -10,6 +10,7 @@ pub struct MemoryReader {
     xyz: Vec<DVec3>,
     normals: Option<Vec<Vec3>>,
     pos: usize,
+    stations: Vec<super::ScanStation>,
 }
 
 impl MemoryReader {
@@ -30,13 +31,25 @@ impl MemoryReader {
             xyz,
             normals,
             pos: 0,
+            stations: Vec::new(),
         }
+    }
+
+    /// The same reader, saying where the scanner stood for each run of
+    /// its points (as an E57 file's scans do).
+    pub fn with_stations(mut self, stations: Vec<super::ScanStation>) -> Self {
+        self.stations = stations;
+        self
     }
 }
 
 impl PointReader for MemoryReader {
     fn info(&self) -> &SourceInfo {
         &self.info
+    }
+
+    fn stations(&self) -> Vec<super::ScanStation> {
+        self.stations.clone()
     }
 
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {

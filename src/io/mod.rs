@@ -231,6 +231,25 @@ pub trait PointReader: Send {
     fn left_out(&self) -> LeftOut {
         LeftOut::default()
     }
+    /// Where the scanner stood for each run of records: an E57 file's
+    /// scans by their poses' translations (ASTM E2807: the pose maps the
+    /// scanner's own frame, whose origin is the scanner, into the world),
+    /// in record order. Empty for a source that does not know (the
+    /// default).
+    fn stations(&self) -> Vec<ScanStation> {
+        Vec::new()
+    }
+}
+
+/// A run of consecutive input records one scanner position took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanStation {
+    /// File-wide record number of the run's first record.
+    pub first_record: u64,
+    /// Records in the run, valid or not.
+    pub records: u64,
+    /// The scanner's position in the world frame (absolute coordinates).
+    pub position: DVec3,
 }
 
 /// What a point writer is asked to produce.

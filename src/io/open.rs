@@ -105,6 +105,9 @@ impl PointReader for Streamed {
     fn left_out(&self) -> super::LeftOut {
         self.0.left_out()
     }
+    fn stations(&self) -> Vec<super::ScanStation> {
+        self.0.stations()
+    }
 }
 
 /// The reader for a front-to-back format, by content (PLY, PCD) or, for

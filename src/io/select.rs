@@ -244,6 +244,12 @@ impl PointReader for Selecting {
             unselected: self.unselected,
         })
     }
+
+    /// The inner reader's stations: they are runs of input records, which
+    /// a selection keeps their numbers.
+    fn stations(&self) -> Vec<super::ScanStation> {
+        self.inner.stations()
+    }
 }
 
 /// Keeps the points of `chunk` whose `keep` is true, with their indices.

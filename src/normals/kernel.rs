@@ -59,6 +59,8 @@ pub struct NormalsKernel {
     pub initial_margin: f64,
     /// Scale of the sampling histograms (the same for every tile).
     pub histogram_scale: f64,
+    /// The store's stations (relative), for [`Orientation::Stations`].
+    pub stations: super::evidence::StationTable,
 }
 
 /// A fitted (and, toward a viewpoint, oriented) unit normal.
@@ -81,8 +83,18 @@ impl NormalsKernel {
     fn normal_of(&self, tile: &TilePoints, i: usize, nbrs: &[Neighbour]) -> Option<Fitted> {
         let fit = fit_plane(&tile.points, i, nbrs).ok()?;
         let n = fit.normal;
+        let toward = |v: DVec3| {
+            if n.dot(v - tile.points[i]) < 0.0 {
+                -n
+            } else {
+                n
+            }
+        };
         let n = match self.params.orientation {
-            Orientation::Viewpoint(v) if n.dot(v - self.origin - tile.points[i]) < 0.0 => -n,
+            Orientation::Viewpoint(v) => toward(v - self.origin),
+            // A point no station's run holds keeps the PCA sign (and is
+            // counted by no check); every E57 point has its scan's.
+            Orientation::Stations => self.stations.of(tile.ids[i]).map_or(n, toward),
             _ => n,
         };
         let residual = (fit.eigenvalues[0].max(0.0) / (nbrs.len() + 1) as f64).sqrt();
@@ -140,7 +152,7 @@ impl TileKernel for NormalsKernel {
             sampling: sampling(&fits, self.histogram_scale),
             nn_slots: Vec::new(),
         };
-        if self.params.orientation == Orientation::SpanningTree {
+        if self.params.orientation.by_tree() {
             out.nn_slots = fits
                 .iter()
                 .map(|f| f.nn.map_or(ZERO_SLOT, |nn| out.sampling.nn.slot(nn)))

@@ -51,6 +51,9 @@ pub struct ForestLabels {
     pub node_components: usize,
     /// Label and parity of the virtual root, when extra nodes were given.
     root: Option<(u64, bool)>,
+    /// Label and parity of the sky (`orient::anchors`), when the runs
+    /// reach the slot one past the last point.
+    sky: Option<(u64, bool)>,
 }
 
 impl ForestLabels {
@@ -75,9 +78,24 @@ impl ForestLabels {
         progress.end();
         let nodes = boundary.len() as u64 + branches.last().copied().unwrap_or(0) + 1;
         let root = nodes as u32 - 1;
-        let (comps, accepted) = kruskal(&mut supers, nodes, root, extra, &boundary, progress)?;
+        // The sky (`orient::anchors`), when the runs tie anchors to it, has
+        // the slot one past the last point; with sources it is their root.
+        let sky_rank = u32::try_from(store.len())
+            .ok()
+            .and_then(|s| boundary.binary_search(&s).ok())
+            .map(|r| r as u32);
+        let joined = Joined {
+            root,
+            extra,
+            sky: sky_rank,
+        };
+        let (comps, accepted) = kruskal(&mut supers, nodes, &joined, &boundary, progress)?;
         let root = (!extra.is_empty()).then(|| {
             let (l, p) = comps.get(root);
+            (store.len() + u64::from(l), p)
+        });
+        let sky = sky_rank.map(|r| {
+            let (l, p) = comps.get(r);
             (store.len() + u64::from(l), p)
         });
         let labels = ForestLabels {
@@ -86,6 +104,7 @@ impl ForestLabels {
             points: store.len(),
             node_components: comps.count(),
             root,
+            sky,
         };
         progress.begin("orient: resolve", tiles.len() as u64);
         let solved = Solved {
@@ -114,6 +133,12 @@ impl ForestLabels {
     /// to (`None` without extra nodes).
     pub fn root(&self) -> Option<(u64, bool)> {
         self.root
+    }
+
+    /// Label and parity of the sky the runs tie anchors to (`None` when
+    /// they do not reach its slot, one past the last point).
+    pub fn sky(&self) -> Option<(u64, bool)> {
+        self.sky
     }
 
     fn resolve_all(
@@ -275,17 +300,28 @@ fn write_supers(
 
 /// Pass 3: Kruskal over the super-edges; the extra nodes are joined to the
 /// virtual `root` first. Returns the node components and the taken edges.
+/// The nodes joined before any super-edge: the extra nodes to the virtual
+/// root, and the sky (a boundary node, by rank) to it too when there are
+/// extra nodes (one virtual node, as in the in-memory passes).
+struct Joined<'a> {
+    root: u32,
+    extra: &'a [(u32, bool)],
+    sky: Option<u32>,
+}
+
 fn kruskal(
     supers: &mut EdgeRuns,
     nodes: u64,
-    root: u32,
-    extra: &[(u32, bool)],
+    joined: &Joined,
     boundary: &[u32],
     progress: &dyn Progress,
 ) -> Result<(Components, Vec<u64>), NormalsError> {
     let mut uf = ParityUnionFind::new(nodes as usize);
-    for &(s, parity) in extra {
-        uf.union(rank(boundary, s), root, parity);
+    for &(s, parity) in joined.extra {
+        uf.union(rank(boundary, s), joined.root, parity);
+    }
+    if let (Some(sky), false) = (joined.sky, joined.extra.is_empty()) {
+        uf.union(sky, joined.root, false);
     }
     let mut accepted = vec![0u64; supers.edges().div_ceil(64) as usize];
     progress.begin("orient: spanning tree", supers.edges());

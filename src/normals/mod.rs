@@ -11,6 +11,7 @@ mod components;
 mod contract;
 pub mod eigen;
 pub mod evaluate;
+pub mod evidence;
 pub mod forest;
 pub(crate) mod hood;
 pub(crate) mod kernel;
@@ -45,8 +46,21 @@ pub const FLAG_UNORIENTED: u8 = 2;
 /// How normals get their sign.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Orientation {
-    /// The paper's minimum spanning tree over the Riemannian graph.
+    /// From what the scan knows (the default, [`evidence::resolve`]):
+    /// toward each point's own scan station when the input names stations
+    /// (E57 poses), [`Orientation::Aerial`] for aerial data, else the
+    /// spanning tree. The sensor hint overrides the guess.
+    Auto(Sensor),
+    /// The paper's minimum spanning tree over the Riemannian graph, each
+    /// component signed by a vote of its columns' highest points.
     SpanningTree,
+    /// Aerial: level normals face up, and the spanning tree, anchored to
+    /// "up" by edges that cost more the steeper the normal, signs the rest
+    /// (walls, overhangs; `orient::anchors`).
+    Aerial,
+    /// Each point toward its own scan's station (the store's stations:
+    /// E57 scan poses).
+    Stations,
     /// Toward a scanner position (absolute coordinates): single-station scans.
     Viewpoint(DVec3),
     /// Paper 5's six sources (extreme points along +-X, +-Y, +-Z), spread
@@ -66,6 +80,15 @@ pub enum Orientation {
     /// Leave the canonical PCA sign (largest component positive).
     None,
 }
+
+impl Orientation {
+    /// Whether the spanning tree's global pass signs the normals.
+    pub(crate) fn by_tree(&self) -> bool {
+        matches!(self, Orientation::SpanningTree | Orientation::Aerial)
+    }
+}
+
+pub use evidence::{Evidence, EvidenceCheck, Sensor};
 
 /// Cost of a Riemannian-graph edge for the spanning tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -132,7 +155,7 @@ impl Default for NormalParams {
             k: 12,
             backend: KnnBackend::default(),
             neighbourhood: NormalHood::default(),
-            orientation: Orientation::SpanningTree,
+            orientation: Orientation::Auto(Sensor::Auto),
             cost: EdgeCost::default(),
         }
     }
@@ -193,7 +216,7 @@ impl NormalParams {
     pub fn cost(&self) -> KernelCost {
         let global = !matches!(
             self.orientation,
-            Orientation::None | Orientation::Viewpoint(_)
+            Orientation::None | Orientation::Viewpoint(_) | Orientation::Stations
         );
         KernelCost {
             bytes_per_point: self.bytes_per_point(),
@@ -265,6 +288,64 @@ pub struct NormalsReport {
     pub sampling: SamplingStats,
     /// Tiles, retries and margins of the run.
     pub run: RunStats,
+    /// How the normals were signed (what [`Orientation::Auto`] chose).
+    #[serde(default)]
+    pub oriented_by: OrientedBy,
+    /// How many normals disagree with the scan's own evidence, when it
+    /// has any ([`evidence`]).
+    #[serde(default)]
+    pub evidence: Option<EvidenceCheck>,
+}
+
+/// Which orientation a run used, once [`Orientation::Auto`] is resolved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum OrientedBy {
+    /// Not recorded (a report of an earlier version).
+    #[default]
+    Unknown,
+    /// The spanning tree.
+    SpanningTree,
+    /// Up, the spanning tree anchored there (aerial).
+    Aerial,
+    /// Each point toward its scan's station.
+    Stations,
+    /// Toward one viewpoint.
+    Viewpoint,
+    /// Paper 5's six sources.
+    SixSources,
+    /// One source direction.
+    SingleSource,
+    /// Not oriented.
+    None,
+}
+
+impl OrientedBy {
+    fn of(o: Orientation) -> Self {
+        match o {
+            Orientation::Auto(_) => OrientedBy::Unknown,
+            Orientation::SpanningTree => OrientedBy::SpanningTree,
+            Orientation::Aerial => OrientedBy::Aerial,
+            Orientation::Stations => OrientedBy::Stations,
+            Orientation::Viewpoint(_) => OrientedBy::Viewpoint,
+            Orientation::SixSources { .. } => OrientedBy::SixSources,
+            Orientation::SingleSource { .. } => OrientedBy::SingleSource,
+            Orientation::None => OrientedBy::None,
+        }
+    }
+
+    /// What the summary calls it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            OrientedBy::Unknown => "unknown",
+            OrientedBy::SpanningTree => "spanning tree",
+            OrientedBy::Aerial => "aerial: up, tree past vertical",
+            OrientedBy::Stations => "toward each scan's station",
+            OrientedBy::Viewpoint => "toward the viewpoint",
+            OrientedBy::SixSources => "six sources",
+            OrientedBy::SingleSource => "single source",
+            OrientedBy::None => "none",
+        }
+    }
 }
 
 /// First margin to try: two neighbourhood radii (core and ring points) for
@@ -283,10 +364,22 @@ pub fn compute_normals(
     progress: &dyn Progress,
 ) -> Result<NormalsReport, NormalsError> {
     params.validate()?;
+    let resolved = NormalParams {
+        orientation: evidence::resolve(params.orientation, store)?,
+        ..*params
+    };
     let spacing = crate::store::spacing::ensure_spacing(store)?;
     let normals = store.create_column(&NORMALS)?;
     let flags = store.create_column(&FLAGS)?;
-    let report = normals_into(store, params, spacing, opts, progress, &normals, &flags)?;
+    let mut report = normals_into(store, &resolved, spacing, opts, progress, &normals, &flags)?;
+    report.oriented_by = OrientedBy::of(resolved.orientation);
+    let sensor = match params.orientation {
+        Orientation::Auto(sensor) => sensor,
+        _ => Sensor::Auto,
+    };
+    if let Some(e) = Evidence::of(store, sensor) {
+        report.evidence = Some(evidence::check(store, e, &normals, &flags)?);
+    }
     store.set_sampling(report.sampling)?;
     store.finish_column(&FLAGS, &flags, params.provenance())?;
     store.finish_column(&NORMALS, &normals, params.provenance())?;
@@ -315,7 +408,8 @@ pub(crate) fn ensure_normals(
     compute_normals(store, params, opts, progress).map(Some)
 }
 
-/// The kernel pass and, for the spanning tree, the global orientation.
+/// The kernel pass and, for the spanning tree, the global orientation
+/// (`params` resolved: no [`Orientation::Auto`]).
 fn normals_into(
     store: &PointStore,
     params: &NormalParams,
@@ -334,10 +428,16 @@ fn normals_into(
         origin: store.origin(),
         initial_margin: params.initial_margin(spacing),
         histogram_scale: scale,
+        stations: evidence::StationTable::new(&store.manifest().stations, store.origin()),
     };
     let mut sampling = SamplingHistograms::new(scale);
     let mut runs = EdgeRuns::create(&store.dir().join(".forest.edges"))?;
-    let by_tree = params.orientation == Orientation::SpanningTree;
+    let by_tree = params.orientation.by_tree();
+    let anchoring = match params.orientation {
+        Orientation::Aerial => orient::anchors::Anchoring::new(DVec3::Z, store.len()),
+        _ => None,
+    };
+    let mut ids = Vec::new();
     let mut isolated = by_tree
         .then(|| orient::Isolated::create(store))
         .transpose()?;
@@ -360,7 +460,15 @@ fn normals_into(
             isolated.write(start, &out.nn_slots)?;
         }
         let tile = &store.tiles()[t];
-        runs.push_tile_run(&out.forest, tile.start..tile.start + tile.count)?;
+        let core = tile.start..tile.start + tile.count;
+        match &anchoring {
+            Some(a) => {
+                store.read_indices(tile.start, tile.count, &mut ids)?;
+                let forest = a.forest(out.forest, core.clone(), &ids, &flat, &out.flags);
+                runs.push_tile_run(&forest, core)?;
+            }
+            None => runs.push_tile_run(&out.forest, core)?,
+        }
         sampling.merge(&out.sampling);
         Ok(())
     })?;
@@ -368,10 +476,13 @@ fn normals_into(
     report.forest_edges = runs.edges();
     if let Some(isolated) = &mut isolated {
         isolated.settle(&sampling.nn, sampling.isolation_limit());
+        let b = store.relative_bounds();
         let columns = orient::Columns {
             normals,
             flags,
             isolated,
+            grid: orient::ColumnGrid::new([b.min.x, b.min.y], [b.max.x, b.max.y]),
+            sky: anchoring.is_some(),
         };
         let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
             orient::orient_by_forest(store, runs, columns, progress)?

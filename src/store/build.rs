@@ -138,7 +138,8 @@ fn build_columns(
     let coordinates = Coordinates::for_input(reader.info().las_transform);
     let mut sink = AttributeSink::create(dir, attributes)?;
     let mut exact = ExactSink::create(dir, coordinates)?;
-    let (count, bounds) = first_pass(reader, &mut exact, &mut sink, progress)?;
+    let ingested = first_pass(reader, &mut exact, &mut sink, progress)?;
+    let (count, bounds) = (ingested.count, ingested.bounds);
     sink.finish()?;
     exact.finish()?;
     if count == 0 {
@@ -182,6 +183,7 @@ fn build_columns(
         sampling: None,
         provenance: Default::default(),
         checksums: Default::default(),
+        stations: ingested.stations,
         crc32: None,
     })
 }

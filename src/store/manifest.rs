@@ -64,9 +64,25 @@ pub struct Manifest {
     /// by file name; checked when the store is opened.
     #[serde(default)]
     pub checksums: std::collections::BTreeMap<String, Vec<u32>>,
+    /// Where the scanner stood for each run of points (an E57 file's scan
+    /// poses), in input order; empty when the input does not say.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stations: Vec<Station>,
     /// CRC-32 of this manifest's JSON without this field (set when saved).
     #[serde(default)]
     pub crc32: Option<u32>,
+}
+
+/// A run of points (by input index, as `index.u64` numbers them) that one
+/// scanner position took.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Station {
+    /// Input index of the run's first point.
+    pub first: u64,
+    /// One past the input index of its last point.
+    pub end: u64,
+    /// The scanner's position (absolute coordinates).
+    pub position: [f64; 3],
 }
 
 /// The coarse histogram grid the planner split; tile cores are integer boxes

@@ -37,7 +37,7 @@ pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use exact::Coordinates;
 pub use export::{export_points, export_points_keeping};
-pub use manifest::{GridSpec, Manifest, TileEntry};
+pub use manifest::{GridSpec, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
 pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
 

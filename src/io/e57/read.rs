@@ -24,7 +24,7 @@ use crate::io::attributes::to_unsigned;
 use crate::io::policy::Admitter;
 use crate::io::{
     Attribute, AttributeSet, AttributeValues, Format, IoError, PointChunk, PointReader,
-    ReadOptions, SourceInfo,
+    ReadOptions, ScanStation, SourceInfo,
 };
 use ::e57::{CartesianCoordinate, PointCloud};
 use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
@@ -73,6 +73,8 @@ pub struct E57Reader {
     declared: u64,
     consumed: u64,
     flagged: u64,
+    /// The selected scans' record runs and scanner positions.
+    stations: Vec<ScanStation>,
 }
 
 /// An e57 crate error as ours (its message already holds its source's).
@@ -140,6 +142,7 @@ impl E57Reader {
         let picked = selected(path, &scans, read.scans.as_deref())?;
         let clouds = file.pointclouds();
         let mut plan = Vec::with_capacity(picked.len());
+        let mut stations = Vec::with_capacity(picked.len());
         let mut declared = 0u64;
         for &i in &picked {
             let base = scans[..i]
@@ -147,6 +150,11 @@ impl E57Reader {
                 .map(|s| s.records)
                 .fold(0u64, u64::saturating_add);
             declared = declared.saturating_add(scans[i].records);
+            stations.push(ScanStation {
+                first_record: base,
+                records: scans[i].records,
+                position: DVec3::from_array(scans[i].pose.translation),
+            });
             plan.push(Planned {
                 cloud: clouds[i].clone(),
                 index: i,
@@ -183,6 +191,7 @@ impl E57Reader {
             declared,
             consumed: 0,
             flagged: 0,
+            stations,
         })
     }
 
@@ -325,6 +334,10 @@ fn ended_early() -> ::e57::Error {
 impl PointReader for E57Reader {
     fn info(&self) -> &SourceInfo {
         &self.info
+    }
+
+    fn stations(&self) -> Vec<ScanStation> {
+        self.stations.clone()
     }
 
     /// `max` of 0 is taken as 1, since 0 points read means end of input.

@@ -7,8 +7,8 @@
 //! index lies in one tile, so its facts are complete once that tile is read
 //! and nothing about it is kept: the passes below recompute them per tile
 //! and settle its sign there. Only node components (which may span tiles)
-//! keep their facts in memory, one entry each, with up to 64 voters while
-//! the census gathers them (12 bytes each), settled to a sign after it. The
+//! keep their facts in memory, one entry each, with their columns' voters while
+//! the census gathers them (16 bytes each), settled to a sign after it. The
 //! island rule (orient the component of the highest point, then the others
 //! by size while at least 1/1000 of the points are left) needs only the
 //! census of sizes, and, when the cut falls inside one size class, which
@@ -163,11 +163,23 @@ impl Census {
             Ok::<_, NormalsError>(())
         })?;
         let (mut census, spanning) = folded.into_inner().unwrap_or_else(|e| e.into_inner());
-        let spanning: Vec<Component> = spanning.iter().map(Gathered::settle).collect();
+        let mut spanning: Vec<Component> = spanning.iter().map(Gathered::settle).collect();
+        // The sky's component faces as its anchors do (`super::anchors`).
+        let sky = labels.sky();
+        if let Some((label, parity)) = sky {
+            if let Some(k) = labels.node_component(label) {
+                spanning[k].sign = parity;
+            }
+        }
         for (k, c) in spanning.iter().enumerate() {
             census.add(store.len() + k as u64, *c);
         }
         census.spanning = spanning;
+        if let Some((label, _)) = sky {
+            if let Some(k) = labels.node_component(label) {
+                census.first = Some((label, census.spanning[k]));
+            }
+        }
         if let Some((_, c)) = census.first {
             if let Some(n) = census.sizes.get_mut(&c.size) {
                 *n -= 1;

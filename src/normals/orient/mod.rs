@@ -4,8 +4,10 @@
 //!    global edge order, with a parity union-find: each point learns whether
 //!    it flips relative to its component's root.
 //! 2. Per component, the sign. Deviation: paper 1 turns the normal of the
-//!    highest point (largest z) to face +z; here the component's 64 highest
-//!    points vote, isolated outliers left out ([`vote`] says why).
+//!    highest point (largest z) to face +z; here the highest points of each
+//!    column of a grid over the cloud vote, isolated outliers left out
+//!    ([`vote`] says why). With aerial anchors ([`anchors`]) the component
+//!    of the sky faces as its anchors do, and comes first.
 //! 3. The paper's island rule: if fewer than 1/1000 of the points lie outside
 //!    the component of the highest point, they stay unoriented (flagged).
 //!    Deviation: each such island is still signed by its own vote
@@ -26,16 +28,18 @@
 //! labels (`Components`), so steps 2 and 3 are sequential array reads over
 //! the tiles, in parallel; per-component facts live in a `Vec` by label.
 //! Every per-component fact is order-free (a count, a maximum under a total
-//! order over input ids, the 64 largest under it), so neither the thread
+//! order over input ids, the largest under it per column), so neither the thread
 //! count nor the tiling (which moves store indices, labels and roots) can
 //! change a result.
 
+pub(crate) mod anchors;
 mod external;
 pub(crate) mod isolated;
 mod vote;
 
 pub use external::orient_external;
 pub(crate) use isolated::Isolated;
+pub(crate) use vote::ColumnGrid;
 use vote::{Rank, Voter, Voters};
 
 use super::components::Components;
@@ -74,13 +78,13 @@ struct Gathered {
 impl Gathered {
     /// Adds one non-degenerate point: height `z`, input id `id`, normal
     /// z `nz`, parity to the root `parity`.
-    fn add(&mut self, z: f32, id: u32, nz: f32, parity: bool, isolated: bool) {
+    fn add(&mut self, column: u16, z: f32, id: u32, nz: f32, parity: bool, isolated: bool) {
         let rank = Rank::new(z, id, isolated);
         if self.size == 0 || rank > self.top {
             (self.top, self.top_sign) = (rank, parity ^ (nz < 0.0));
         }
         if !isolated {
-            self.voters.offer(Voter::new(z, id, nz, parity));
+            self.voters.offer(Voter::new(column, z, id, nz, parity));
         }
         self.size += 1;
     }
@@ -123,6 +127,11 @@ pub(crate) struct Columns<'a> {
     pub normals: &'a Column,
     pub flags: &'a Column,
     pub isolated: &'a Isolated,
+    /// The sign vote's columns.
+    pub grid: ColumnGrid,
+    /// Whether the runs tie anchors to the sky ([`anchors`]): its slot is
+    /// one past the last point, and its component faces as the sky says.
+    pub sky: bool,
 }
 
 pub fn orient_by_forest(
@@ -131,14 +140,20 @@ pub fn orient_by_forest(
     columns: Columns,
     progress: &dyn Progress,
 ) -> Result<OrientStats, NormalsError> {
-    let mut uf = ParityUnionFind::new(store.len() as usize);
+    let mut uf = ParityUnionFind::new(store.len() as usize + usize::from(columns.sky));
     runs.union_all(&mut uf, "orient: spanning tree", progress)?;
     progress.begin("orient: components", store.len());
     let comps = uf.into_components();
-    let facts = components(store, &comps, columns, progress)?;
+    let mut facts = components(store, &comps, columns, progress)?;
     progress.end();
     let (normals, flags) = (columns.normals, columns.flags);
-    let reached = island_rule(&facts);
+    // The sky's component faces as its anchors do: each anchor's parity to
+    // the sky is its own flip, so the component's sign is the sky's parity.
+    let sky = columns.sky.then(|| comps.get(store.len() as u32));
+    if let Some((label, parity)) = sky {
+        facts[label as usize].sign = parity;
+    }
+    let reached = island_rule(&facts, sky.map(|s| s.0));
     let unoriented = apply(store, &comps, &facts, &reached, normals, flags, progress)?;
     Ok(OrientStats {
         components: facts.iter().filter(|c| c.size > 0).count(),
@@ -207,20 +222,24 @@ fn tile_components(
         };
         last = Some((label, slot));
         let (z, nz) = (xyz[3 * i + 2], nrm[3 * i + 2]);
-        part[slot].1.add(z, id as u32, nz, parity, isolated[i]);
+        let column = columns.grid.column(xyz[3 * i], xyz[3 * i + 1]);
+        part[slot]
+            .1
+            .add(column, z, id as u32, nz, parity, isolated[i]);
     }
     Ok(part)
 }
 
 /// Whether the island rule orients each component (by label) with the
-/// rest; the others are islands, signed by their own root rule.
-fn island_rule(facts: &[Component]) -> Vec<bool> {
+/// rest; the others are islands, signed by their own root rule. The sky's
+/// component (`sky`), when there is one, comes first.
+fn island_rule(facts: &[Component], sky: Option<u32>) -> Vec<bool> {
     let total: u64 = facts.iter().map(|c| u64::from(c.size)).sum();
     let mut order: Vec<u32> = (0..facts.len() as u32)
-        .filter(|&l| facts[l as usize].size > 0)
+        .filter(|&l| facts[l as usize].size > 0 || Some(l) == sky)
         .collect();
     // The component of the highest point first, then by size.
-    let first = order.iter().copied().max_by_key(|&l| facts[l as usize].top);
+    let first = sky.or_else(|| order.iter().copied().max_by_key(|&l| facts[l as usize].top));
     order.sort_by_key(|&l| {
         let c = &facts[l as usize];
         (Some(l) != first, Reverse(c.size), c.top.id())
@@ -333,19 +352,19 @@ mod tests {
     fn an_isolated_point_neither_votes_nor_tops_its_component() {
         // Parities all 0: a point "says" flip when its normal faces down.
         let mut c = Gathered::default();
-        c.add(1.0, 7, 0.3, false, false);
-        c.add(0.9, 8, 0.2, false, false);
+        c.add(0, 1.0, 7, 0.3, false, false);
+        c.add(0, 0.9, 8, 0.2, false, false);
         // Far above, facing down firmly: it would win the top and the vote.
-        c.add(50.0, 9, -1.0, false, true);
+        c.add(0, 50.0, 9, -1.0, false, true);
         let settled = c.settle();
         assert_eq!(settled.top.id(), 7);
         assert!(!settled.sign, "two voters face up: keep");
         assert_eq!(settled.size, 3);
         // Merged in the other order, the same facts.
         let (mut a, mut b) = (Gathered::default(), Gathered::default());
-        a.add(50.0, 9, -1.0, false, true);
-        b.add(0.9, 8, 0.2, false, false);
-        b.add(1.0, 7, 0.3, false, false);
+        a.add(0, 50.0, 9, -1.0, false, true);
+        b.add(0, 0.9, 8, 0.2, false, false);
+        b.add(0, 1.0, 7, 0.3, false, false);
         a.absorb(&b);
         let again = a.settle();
         assert_eq!((again.top, again.sign, again.size), (settled.top, false, 3));
@@ -354,8 +373,8 @@ mod tests {
     #[test]
     fn a_component_of_isolated_points_falls_back_to_its_top() {
         let mut c = Gathered::default();
-        c.add(2.0, 3, -0.5, true, true);
-        c.add(1.0, 4, 0.9, false, true);
+        c.add(0, 2.0, 3, -0.5, true, true);
+        c.add(0, 1.0, 4, 0.9, false, true);
         // No voter: the paper's rule at the highest point. It faces down
         // but has parity 1, so its own flip already turns it up: keep.
         let settled = c.settle();
