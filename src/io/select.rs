@@ -3,7 +3,7 @@
 //! them), and the count of records left out, by why ([`LeftOut`]: pixels
 //! of an organised cloud without a return, points not selected).
 //!
-//! A selection is applied while the input is read ([`Selecting`] wraps
+//! A selection is applied while the input is read (`Selecting` wraps
 //! any reader): points not selected never reach a store, so every kernel
 //! sees only the selected ones, memory stays what the selected points
 //! need, and the store's exact coordinates are the selected points'
