@@ -264,6 +264,7 @@ fn normals_of_file(
     let read = ReadOptions {
         policy: InvalidPolicy::Reject,
         scans,
+        ..ReadOptions::default()
     };
     let mut reader = open_reader(path, read).expect("open");
     normals_of_reader(reader.as_mut(), dir.path(), tile_points, params)
@@ -368,6 +369,7 @@ fn e57_points(path: &Path, scans: &[usize]) -> Vec<DVec3> {
     let read = ReadOptions {
         policy: InvalidPolicy::Reject,
         scans: Some(scans.to_vec()),
+        ..ReadOptions::default()
     };
     let mut r = open_reader(path, read).expect("open");
     let mut xyz = Vec::new();
