@@ -6,8 +6,8 @@
 use glam::DVec3;
 use scanmesh::io::convert::convert;
 use scanmesh::io::{
-    create_writer, open_reader, Attribute, AttributeSet, AttributeValues, Attributes, Format,
-    InvalidPolicy, PointChunk, WriterSpec,
+    create_writer, create_writer_with, open_reader, Attribute, AttributeSet, AttributeValues,
+    Attributes, Format, InvalidPolicy, LasOutput, PointChunk, WriterSpec,
 };
 use scanmesh::pipeline::NoProgress;
 use scanmesh::synth::Rng;
@@ -173,6 +173,7 @@ fn las_classes_beyond_formats_0_to_3_are_an_error_not_truncated() {
     let dir = tempfile::tempdir().unwrap();
     let mut src = cloud(10, 1, true);
     src.attrs.classification[4] = 40;
+    src.attrs.return_number[6] = 12;
     let spec = WriterSpec {
         attributes: AttributeSet::all(),
         las_transform: Some(scanmesh::io::LasTransform {
@@ -181,9 +182,34 @@ fn las_classes_beyond_formats_0_to_3_are_an_error_not_truncated() {
         }),
         ..WriterSpec::new(Format::Las)
     };
-    let mut w = create_writer(&dir.path().join("x.las"), &spec).unwrap();
+    // Format 3 asked for: class 40 does not fit its 5 bits.
+    let asked = LasOutput {
+        point_format: Some(3),
+        ..LasOutput::default()
+    };
+    let mut w = create_writer_with(&dir.path().join("x.las"), &spec, &asked).unwrap();
     let e = w.write_chunk(&src, None).unwrap_err().to_string();
-    assert!(e.contains("point 4 has class 40"), "{e}");
+    assert!(
+        e.contains("point 4 has class 40; LAS point format 3 holds up to 31: point format 7 (LAS 1.4) holds it"),
+        "{e}"
+    );
+    // Unasked, the values are unknown before the first point: LAS 1.4
+    // format 7 (GPS time and colour), which holds both.
+    let out = dir.path().join("y.las");
+    let mut w = create_writer(&out, &spec).unwrap();
+    w.write_chunk(&src, None).unwrap();
+    w.finish().unwrap();
+    let back = read(&out).1;
+    assert_eq!(back.classification, src.attrs.classification);
+    assert_eq!(back.return_number, src.attrs.return_number);
+    let header = las::Reader::from_path(&out).unwrap().header().clone();
+    assert_eq!(
+        (
+            header.version().minor,
+            header.point_format().to_u8().unwrap()
+        ),
+        (4, 7)
+    );
 }
 
 #[test]

@@ -1,14 +1,20 @@
 //! Streaming format conversion: any readable format to any writable one,
 //! chunk by chunk, in input order. LAS output needs its quantisation before
-//! the first point, so a source without header bounds is read twice.
+//! the first point, so a source without header bounds is read twice. A LAS
+//! input written to LAS is written as it came (its own records, header
+//! fields, VLRs and EVLRs: [`super::LasOutput::source`]); written to any
+//! other format, its colour is first read whole to tell 8-bit colour in
+//! 16-bit fields from 16-bit colour, as it must be known before the first
+//! point is written.
 
 use super::{
-    create_writer, format_from_name, open_reader, AttributeSet, Format, IoError, PointChunk,
-    ReadOptions, WriterSpec, DEFAULT_CHUNK,
+    create_writer_with, format_from_name, open_reader, Attribute, AttributeMaxima, AttributeSet,
+    Format, IoError, LasOutput, LasSource, PointChunk, ReadOptions, WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
 use crate::progress::Progress;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What a conversion did.
 #[derive(Clone, Copy, Debug, Default)]
@@ -49,11 +55,27 @@ pub fn convert(
         bounds,
         las_transform: info.las_transform,
     };
-    let mut writer = create_writer(output, &spec)?;
+    let las_in = matches!(info.format, Format::Las | Format::Laz);
+    let las = match (las_in, is_las) {
+        (true, true) => LasOutput {
+            source: Some(Arc::new(LasSource::read(input)?)),
+            ..LasOutput::default()
+        },
+        _ => LasOutput::default(),
+    };
+    // LAS colour of at most 255 everywhere is 8-bit colour (PDAL's rule).
+    let widen = las_in
+        && !is_las
+        && spec.attributes.contains(Attribute::Rgb)
+        && scan_maxima(input, &read, progress)?.eight_bit_colour();
+    let mut writer = create_writer_with(output, &spec, &las)?;
     let mut chunk = PointChunk::default();
     let mut points = 0;
     progress.begin("convert", info.declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        if widen {
+            chunk.attrs.widen_8bit_colour();
+        }
         writer.write_chunk(&chunk, None)?;
         points += chunk.len() as u64;
         progress.advance(chunk.len() as u64);
@@ -67,6 +89,24 @@ pub fn convert(
         carried: spec.attributes,
         dropped: info.attributes.without(spec.attributes),
     })
+}
+
+/// The largest attribute values of `path`'s points, by one streaming pass.
+pub(crate) fn scan_maxima(
+    path: &Path,
+    read: impl Into<ReadOptions>,
+    progress: &dyn Progress,
+) -> Result<AttributeMaxima, IoError> {
+    let mut reader = open_reader(path, read)?;
+    let mut chunk = PointChunk::default();
+    let mut maxima = AttributeMaxima::default();
+    progress.begin("colour", reader.info().declared_count.unwrap_or(0));
+    while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        maxima.add(&chunk.attrs);
+        progress.advance(chunk.len() as u64);
+    }
+    progress.end();
+    Ok(maxima)
 }
 
 /// Bounding box of all points of `path`, by one streaming pass.
