@@ -220,7 +220,20 @@ fn assert_kept(input: &Path, output: &Path, normals: bool, what: &str) {
     }
     assert_eq!(ha.system_identifier(), hb.system_identifier(), "{what}");
     assert_eq!(ha.has_wkt_crs(), hb.has_wkt_crs(), "{what}: WKT bit");
-    assert_eq!(ha.bounds(), hb.bounds(), "{what}: bounds");
+    // Bounds: within a quantum of the input's (some writers bound the
+    // points before quantising them); exact ones are checked below.
+    let (ba, bb) = (ha.bounds(), hb.bounds());
+    let t = ha.transforms();
+    for (a, b, q) in [
+        (ba.min.x, bb.min.x, t.x.scale),
+        (ba.min.y, bb.min.y, t.y.scale),
+        (ba.min.z, bb.min.z, t.z.scale),
+        (ba.max.x, bb.max.x, t.x.scale),
+        (ba.max.y, bb.max.y, t.y.scale),
+        (ba.max.z, bb.max.z, t.z.scale),
+    ] {
+        assert!((a - b).abs() <= q, "{what}: bounds {ba:?} -> {bb:?}");
+    }
     // VLRs: the input's, in its order (CRS first); only the Extra Bytes
     // VLR may grow, and only by descriptors appended after its own.
     // LASzip's VLR describes the compression: the output's own.
@@ -273,6 +286,19 @@ fn assert_kept(input: &Path, output: &Path, normals: bool, what: &str) {
             .collect()
     };
     assert_eq!(ints(&da), ints(&db), "{what}: integer coordinates");
+    // The output's bounds are its points' (scale x integer + offset).
+    let lo = |v: Vec<f64>| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = |v: Vec<f64>| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let exact = [
+        lo(db.x().collect()),
+        lo(db.y().collect()),
+        lo(db.z().collect()),
+        hi(db.x().collect()),
+        hi(db.y().collect()),
+        hi(db.z().collect()),
+    ];
+    let stated = [bb.min.x, bb.min.y, bb.min.z, bb.max.x, bb.max.y, bb.max.z];
+    assert_eq!(stated, exact, "{what}: bounds of the points");
     let pa: Vec<Point> = da.points().map(|p| p.unwrap()).collect();
     let pb: Vec<Point> = db.points().map(|p| p.unwrap()).collect();
     for (i, (p, q)) in pa.iter().zip(&pb).enumerate() {
@@ -331,11 +357,146 @@ fn real_files_keep_every_field() {
 }
 
 fn fixtures() -> Vec<&'static str> {
-    vec!["autzen.las", "32-1-472-150-76.laz"]
+    vec![
+        "autzen.las",
+        "32-1-472-150-76.laz",
+        "pdal-test1_4.las",
+        "autzen-trim-7-crop.las",
+        "warsaw_small.las",
+        "extrabytes.las",
+    ]
 }
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/las")
         .join(name)
+}
+
+/// Red, green, blue of every vertex of a binary little-endian PLY whose
+/// vertex properties are scalars (the test's own parser).
+fn ply_rgb(path: &Path) -> Vec<[u8; 3]> {
+    let bytes = std::fs::read(path).unwrap();
+    let end = b"end_header\n";
+    let at = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = String::from_utf8_lossy(&bytes[..at]).into_owned();
+    let mut n = 0;
+    let (mut props, mut stride) = (Vec::new(), 0);
+    for line in header.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.as_slice() {
+            ["element", "vertex", count] => n = count.parse().unwrap(),
+            ["property", t, name] => {
+                let size = match *t {
+                    "char" | "uchar" => 1,
+                    "short" | "ushort" => 2,
+                    "int" | "uint" | "float" => 4,
+                    _ => 8,
+                };
+                props.push((name.to_string(), *t == "uchar", stride));
+                stride += size;
+            }
+            _ => {}
+        }
+    }
+    let at_of = |c: &str| {
+        let p = props.iter().find(|p| p.0 == c).unwrap();
+        assert!(p.1, "{c} is not uchar");
+        p.2
+    };
+    let rgb = [at_of("red"), at_of("green"), at_of("blue")];
+    (0..n)
+        .map(|i| rgb.map(|o| bytes[at + i * stride + o]))
+        .collect()
+}
+
+/// Colour of every point of a LAS file, read by the `las` crate.
+fn las_rgb(path: &Path) -> Vec<(u16, u16, u16)> {
+    let data = Reader::from_path(path).unwrap().read_all().unwrap();
+    data.rgb().unwrap().collect()
+}
+
+/// 8-bit colour in LAS's 16-bit fields (every channel <= 255, as in PDAL's
+/// autzen) reaches 8-bit PLY as it is, not black; true 16-bit colour
+/// reaches it by its high byte; a LAS output keeps either, 16 bits wide.
+#[test]
+fn eight_and_sixteen_bit_colour_reach_ply_and_las() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, eight) in [
+        ("autzen-trim-7-crop.las", true),
+        ("warsaw_small.las", false),
+    ] {
+        let input = fixture(name);
+        let want = las_rgb(&input);
+        assert_eq!(
+            want.iter().all(|c| c.0 <= 255 && c.1 <= 255 && c.2 <= 255),
+            eight,
+            "{name}: the fixture's colour depth"
+        );
+        assert!(want.iter().any(|c| c.0 > 0), "{name}: not all black");
+        let expect: Vec<[u8; 3]> = want
+            .iter()
+            .map(|&(r, g, b)| match eight {
+                true => [r as u8, g as u8, b as u8],
+                false => [(r >> 8) as u8, (g >> 8) as u8, (b >> 8) as u8],
+            })
+            .collect();
+        let conv = dir.path().join(format!("{name}_c.ply"));
+        scanmesh(&["convert", s(&input), s(&conv)]);
+        assert_eq!(ply_rgb(&conv), expect, "{name}: convert to PLY");
+        let norm = dir.path().join(format!("{name}_n.ply"));
+        scanmesh(&["normals", s(&input), "-o", s(&norm)]);
+        assert_eq!(ply_rgb(&norm), expect, "{name}: normals to PLY");
+        for (cmd, out) in [("convert", "c.laz"), ("normals", "n.las")] {
+            let out = dir.path().join(format!("{name}_{out}"));
+            match cmd {
+                "convert" => scanmesh(&["convert", s(&input), s(&out)]),
+                _ => scanmesh(&["normals", s(&input), "-o", s(&out)]),
+            };
+            assert_eq!(las_rgb(&out), want, "{name}: {cmd} to LAS");
+        }
+    }
+}
+
+/// A COPC file is read as the LAZ it is; `info` says it is a COPC; a LAS
+/// output keeps its points and CRS but not the COPC records (their byte
+/// offsets index the input's octree chunks, which the output does not have).
+#[test]
+fn copc_is_named_by_info_and_read_as_laz() {
+    let input = fixture("1.2-with-color.copc.laz");
+    let out = scanmesh(&["info", s(&input), "--json"]);
+    let info: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(info["las"]["copc"], true, "{info}");
+    assert_eq!(info["las"]["version"], "1.4", "{info}");
+    assert_eq!(info["las"]["point_format"], 7, "{info}");
+    assert_eq!(info["points"], 1065, "{info}");
+    let text = scanmesh(&["info", s(&input)]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("copc: \"yes"));
+    let plain = scanmesh(&["info", s(&fixture("autzen.las")), "--json"]);
+    let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert_eq!(plain["las"]["copc"], false, "{plain}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let conv = dir.path().join("c.laz");
+    scanmesh(&["convert", s(&input), s(&conv)]);
+    let (mut a, mut b) = (
+        Reader::from_path(&input).unwrap(),
+        Reader::from_path(&conv).unwrap(),
+    );
+    let ids = |h: &las::Header| -> Vec<(String, u16)> {
+        h.all_vlrs()
+            .filter(|v| v.user_id != "laszip encoded")
+            .map(vlr_key)
+            .collect()
+    };
+    assert_eq!(
+        ids(b.header()),
+        [("LASF_Projection".to_string(), 2112)],
+        "only the CRS kept"
+    );
+    let wkt = |h: &las::Header| h.vlrs().iter().find(|v| v.record_id == 2112).cloned();
+    assert_eq!(wkt(a.header()), wkt(b.header()));
+    assert_eq!(a.header().transforms(), b.header().transforms());
+    let (da, db) = (a.read_all().unwrap(), b.read_all().unwrap());
+    assert_eq!(da.raw_bytes(), db.raw_bytes(), "records byte for byte");
 }

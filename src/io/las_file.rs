@@ -335,6 +335,16 @@ impl LasSource {
         vlr.chain(evlr).any(|h| h.user() == PROJECTION.as_bytes())
     }
 
+    /// Each VLR's and then each EVLR's user id and record id, in the
+    /// file's order.
+    pub fn record_ids(&self) -> Vec<(String, u16)> {
+        let vlr = self.vlrs.iter().map(|v| &v.header);
+        let evlr = self.evlrs.iter().map(|e| &e.header);
+        vlr.chain(evlr)
+            .map(|h| (String::from_utf8_lossy(h.user()).into_owned(), h.record_id))
+            .collect()
+    }
+
     /// The input's bytes before its points.
     pub(crate) fn head(&self) -> &[u8] {
         &self.head
