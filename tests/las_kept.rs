@@ -500,3 +500,70 @@ fn copc_is_named_by_info_and_read_as_laz() {
     let (da, db) = (a.read_all().unwrap(), b.read_all().unwrap());
     assert_eq!(da.raw_bytes(), db.raw_bytes(), "records byte for byte");
 }
+
+/// A VLR or EVLR that runs past its place is an error naming the file and
+/// the record, from every command that reads the file; no output is left.
+#[test]
+fn a_record_running_past_its_place_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.las");
+    synthetic(&good, (1, 4), 6, 100);
+    let bytes = std::fs::read(&good).unwrap();
+    let u16_at = |at: usize| usize::from(u16::from_le_bytes([bytes[at], bytes[at + 1]]));
+    let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
+    // LAS 1.4 R15 table 3: header size at 94, first EVLR at 235, their
+    // count at 243; a VLR's length at 20 into it, an EVLR's at 20 (u64).
+    let header_size = u16_at(94);
+    let first_evlr = u64_at(235);
+    let cases: [(&str, usize, Vec<u8>, &str); 3] = [
+        (
+            "vlr",
+            header_size + 20,
+            60000u16.to_le_bytes().to_vec(),
+            "VLR 0 of 2 runs past the start of the points",
+        ),
+        (
+            "evlr_count",
+            243,
+            2u32.to_le_bytes().to_vec(),
+            "EVLR 1 of 2 (its header) runs past the end of the file",
+        ),
+        (
+            "evlr_len",
+            first_evlr + 20,
+            1_000_000_000u64.to_le_bytes().to_vec(),
+            "EVLR 0 of 1 (1000000000 bytes of data) runs past the end of the file",
+        ),
+    ];
+    for (name, at, patch, says) in cases {
+        let mut bad = bytes.clone();
+        bad[at..at + patch.len()].copy_from_slice(&patch);
+        let input = dir.path().join(format!("{name}.las"));
+        std::fs::write(&input, bad).unwrap();
+        let outs = [
+            dir.path().join(format!("{name}_c.las")),
+            dir.path().join(format!("{name}_n.ply")),
+        ];
+        let runs: [Vec<&str>; 3] = [
+            vec!["convert", s(&input), s(&outs[0])],
+            vec!["normals", s(&input), "-o", s(&outs[1])],
+            vec!["info", s(&input)],
+        ];
+        for args in runs {
+            let out = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+                .args(&args)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "{name}: {args:?} succeeded");
+            assert!(
+                err.contains(s(&input)) && err.contains(says),
+                "{name}: {args:?}: {err}"
+            );
+            assert!(!err.contains("panicked"), "{err}");
+        }
+        for o in &outs {
+            assert!(!o.exists(), "{name}: {} left behind", o.display());
+        }
+    }
+}

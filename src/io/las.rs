@@ -375,7 +375,10 @@ impl LasReader {
             })
             .map_err(|e| IoError::os(path, e))?;
         let (info, record_len) = match info_rx.recv() {
-            Ok(info) => info?,
+            Ok(Ok(info)) => info,
+            // The las crate reports a record that runs past the file as the
+            // points ending early; the frame's own reading names the record.
+            Ok(Err(e)) => return Err(super::LasSource::read(path).err().unwrap_or(e)),
             Err(_) => return Err(worker_died(path)),
         };
         Ok(LasReader {
