@@ -3,7 +3,7 @@
 //! packets (LAS 1.3, one record of the EVLR layout). A LAS output of a LAS
 //! input is written from these ([`LasSource::frame`]): the input's version,
 //! point format, scale, offset, global encoding, system identifier, every
-//! VLR and EVLR byte for byte (CRS first among them), with only what
+//! VLR and EVLR byte for byte in the input's order, with only what
 //! describes the new file changed: the counts, bounds and offsets, the
 //! generating software, the LASzip VLR (it describes the compression) and
 //! the Extra Bytes VLR (extended by the columns scanmesh appends). A COPC
