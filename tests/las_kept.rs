@@ -567,3 +567,48 @@ fn a_record_running_past_its_place_is_named() {
         }
     }
 }
+
+/// A LAS 1.3 file's waveform data packets (one record of the EVLR layout
+/// after the points, LAS 1.3 R11 sec. 2.2) come after the output's points
+/// byte for byte, and the header points at them.
+#[test]
+fn las_1_3_waveform_packets_are_copied_after_the_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("w.las");
+    synthetic(&input, (1, 3), 4, 400);
+    // Append the packets: a 60-byte EVLR-layout header, then the data.
+    let mut bytes = std::fs::read(&input).unwrap();
+    let at = bytes.len() as u64;
+    let data: Vec<u8> = (0..5000u32).map(|i| (i * 13 % 251) as u8).collect();
+    bytes.extend(0u16.to_le_bytes());
+    let mut user = [0u8; 16];
+    user[..9].copy_from_slice(b"LASF_Spec");
+    bytes.extend(user);
+    bytes.extend(65535u16.to_le_bytes());
+    bytes.extend((data.len() as u64).to_le_bytes());
+    bytes.extend([0u8; 32]);
+    bytes.extend(&data);
+    // Start of waveform data packet record (u64 at 227); global encoding
+    // bit 1: the packets are in this file.
+    bytes[227..235].copy_from_slice(&at.to_le_bytes());
+    bytes[6] |= 2;
+    std::fs::write(&input, &bytes).unwrap();
+    for (cmd, name) in [("convert", "c.las"), ("normals", "n.laz")] {
+        let out = dir.path().join(name);
+        match cmd {
+            "convert" => scanmesh(&["convert", s(&input), s(&out)]),
+            _ => scanmesh(&["normals", s(&input), "-o", s(&out)]),
+        };
+        let got = std::fs::read(&out).unwrap();
+        let raw = las::raw::Header::read_from(&got[..]).unwrap();
+        let start = raw.start_of_waveform_data_packet_record.unwrap() as usize;
+        assert!(start > 0, "{cmd}: no waveform start");
+        assert_eq!(
+            got[start..],
+            bytes[at as usize..],
+            "{cmd}: packets byte for byte"
+        );
+        assert_eq!(got[6] & 2, 2, "{cmd}: global encoding");
+        assert_kept(&input, &out, cmd == "normals", cmd);
+    }
+}
