@@ -388,3 +388,50 @@ fn a_las_keeps_its_attributes_after_gaining_normals_in_las() {
     convert(&out, &back, InvalidPolicy::Reject, &NoProgress).unwrap();
     assert!(normals_of(&back) == a);
 }
+
+/// A LAS output of another format's points is the smallest LAS point
+/// format that holds their attributes and values, the same from `convert`
+/// and from a store (`normals`), compressed or not: LAS 1.2 format 3 for
+/// classes up to 31, LAS 1.4 format 7 once a class needs 8 bits; every
+/// point and class written as it is.
+#[test]
+fn other_inputs_get_the_smallest_las_format_that_holds_their_values() {
+    let dir = tempfile::tempdir().unwrap();
+    for (class, want) in [(31u8, (2u8, 3u8)), (200, (4, 7))] {
+        let mut src = sheet(2000);
+        src.attrs.classification[7] = class;
+        let ply = dir.path().join(format!("c{class}.ply"));
+        write(&ply, &src, Format::PlyBinaryLe, AttributeSet::all());
+        for (cmd, ext) in [
+            ("convert", "las"),
+            ("convert", "laz"),
+            ("normals", "las"),
+            ("normals", "laz"),
+        ] {
+            let out = dir.path().join(format!("c{class}_{cmd}.{ext}"));
+            let mut args = vec![cmd, ply.to_str().unwrap()];
+            if cmd == "normals" {
+                args.push("-o");
+            }
+            args.push(out.to_str().unwrap());
+            let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+                .args(&args)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let header = las::Reader::from_path(&out).unwrap().header().clone();
+            let got = (
+                header.version().minor,
+                header.point_format().to_u8().unwrap(),
+            );
+            assert_eq!(got, want, "{cmd} .{ext}, largest class {class}");
+            assert_eq!(header.number_of_points(), 2000, "{cmd} .{ext}");
+            let (xyz, attrs) = read(&out);
+            assert_eq!(xyz.len(), 2000, "{cmd} .{ext}");
+            assert_eq!(
+                attrs.classification, src.attrs.classification,
+                "{cmd} .{ext}"
+            );
+        }
+    }
+}

@@ -43,9 +43,15 @@ pub fn convert(
     let mut reader = open_reader(input, &read)?;
     let info = reader.info().clone();
     let is_las = matches!(format, Format::Las | Format::Laz);
-    let bounds = match (is_las, info.header_bounds, info.las_transform) {
-        (true, None, None) => Some(scan_bounds(input, &read, progress)?),
-        (_, b, _) => b,
+    // A LAS output of another format needs its quantisation, and its
+    // point format is the smallest that holds the largest values: one
+    // pass finds both (a header's bounds spare it).
+    let (bounds, largest) = match (is_las, info.header_bounds, info.las_transform) {
+        (true, None, None) => {
+            let (b, m) = scan_bounds_and_maxima(input, &read, progress)?;
+            (Some(b), Some(m))
+        }
+        (_, b, _) => (b, None),
     };
     let spec = WriterSpec {
         format,
@@ -61,13 +67,18 @@ pub fn convert(
             source: Some(Arc::new(LasSource::read(input)?)),
             ..LasOutput::default()
         },
-        _ => LasOutput::default(),
+        _ => LasOutput {
+            largest,
+            ..LasOutput::default()
+        },
     };
     // LAS colour of at most 255 everywhere is 8-bit colour (PDAL's rule).
     let widen = las_in
         && !is_las
         && spec.attributes.contains(Attribute::Rgb)
-        && scan_maxima(input, &read, progress)?.eight_bit_colour();
+        && scan_bounds_and_maxima(input, &read, progress)?
+            .1
+            .eight_bit_colour();
     let mut writer = create_writer_with(output, &spec, &las)?;
     let mut chunk = PointChunk::default();
     let mut points = 0;
@@ -91,38 +102,23 @@ pub fn convert(
     })
 }
 
-/// The largest attribute values of `path`'s points, by one streaming pass.
-pub(crate) fn scan_maxima(
+/// Bounding box and largest attribute values of all points of `path`, by
+/// one streaming pass.
+pub(crate) fn scan_bounds_and_maxima(
     path: &Path,
     read: impl Into<ReadOptions>,
     progress: &dyn Progress,
-) -> Result<AttributeMaxima, IoError> {
+) -> Result<(Aabb, AttributeMaxima), IoError> {
     let mut reader = open_reader(path, read)?;
     let mut chunk = PointChunk::default();
+    let mut bounds = Aabb::EMPTY;
     let mut maxima = AttributeMaxima::default();
-    progress.begin("colour", reader.info().declared_count.unwrap_or(0));
+    progress.begin("bounds", reader.info().declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        chunk.xyz.iter().for_each(|p| bounds.add(*p));
         maxima.add(&chunk.attrs);
         progress.advance(chunk.len() as u64);
     }
     progress.end();
-    Ok(maxima)
-}
-
-/// Bounding box of all points of `path`, by one streaming pass.
-pub(crate) fn scan_bounds(
-    path: &Path,
-    read: impl Into<ReadOptions>,
-    progress: &dyn Progress,
-) -> Result<Aabb, IoError> {
-    let mut reader = open_reader(path, read)?;
-    let mut chunk = PointChunk::default();
-    let mut bounds = Aabb::EMPTY;
-    progress.begin("bounds", reader.info().declared_count.unwrap_or(0));
-    while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
-        chunk.xyz.iter().for_each(|p| bounds.add(*p));
-        progress.advance(chunk.len() as u64);
-    }
-    progress.end();
-    Ok(bounds)
+    Ok((bounds, maxima))
 }

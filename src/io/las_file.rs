@@ -513,9 +513,11 @@ pub(crate) struct Frame {
 
 impl Frame {
     /// A new file's frame (no input to follow): `version`, point format
-    /// `format`, records `record_len` bytes, these VLRs.
+    /// byte `format` (with LAZ's bit), records `record_len` bytes, these
+    /// VLRs.
     pub(crate) fn new(version: Version, format: u8, record_len: u16, vlrs: Vec<Vlr>) -> Self {
-        let extended = format >= 6;
+        // Without LAZ's compression bits (0x80, 0x40).
+        let extended = format & 0x3f >= 6;
         let (year, day) = today();
         let header = raw::Header {
             version,
