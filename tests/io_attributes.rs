@@ -6,8 +6,8 @@
 use glam::DVec3;
 use scanmesh::io::convert::convert;
 use scanmesh::io::{
-    create_writer, open_reader, Attribute, AttributeSet, AttributeValues, Attributes, Format,
-    InvalidPolicy, PointChunk, WriterSpec,
+    create_writer, create_writer_with, open_reader, Attribute, AttributeSet, AttributeValues,
+    Attributes, Format, InvalidPolicy, LasOutput, PointChunk, WriterSpec,
 };
 use scanmesh::pipeline::NoProgress;
 use scanmesh::synth::Rng;
@@ -173,6 +173,7 @@ fn las_classes_beyond_formats_0_to_3_are_an_error_not_truncated() {
     let dir = tempfile::tempdir().unwrap();
     let mut src = cloud(10, 1, true);
     src.attrs.classification[4] = 40;
+    src.attrs.return_number[6] = 12;
     let spec = WriterSpec {
         attributes: AttributeSet::all(),
         las_transform: Some(scanmesh::io::LasTransform {
@@ -181,9 +182,34 @@ fn las_classes_beyond_formats_0_to_3_are_an_error_not_truncated() {
         }),
         ..WriterSpec::new(Format::Las)
     };
-    let mut w = create_writer(&dir.path().join("x.las"), &spec).unwrap();
+    // Format 3 asked for: class 40 does not fit its 5 bits.
+    let asked = LasOutput {
+        point_format: Some(3),
+        ..LasOutput::default()
+    };
+    let mut w = create_writer_with(&dir.path().join("x.las"), &spec, &asked).unwrap();
     let e = w.write_chunk(&src, None).unwrap_err().to_string();
-    assert!(e.contains("point 4 has class 40"), "{e}");
+    assert!(
+        e.contains("point 4 has class 40; LAS point format 3 holds up to 31: point format 7 (LAS 1.4) holds it"),
+        "{e}"
+    );
+    // Unasked, the values are unknown before the first point: LAS 1.4
+    // format 7 (GPS time and colour), which holds both.
+    let out = dir.path().join("y.las");
+    let mut w = create_writer(&out, &spec).unwrap();
+    w.write_chunk(&src, None).unwrap();
+    w.finish().unwrap();
+    let back = read(&out).1;
+    assert_eq!(back.classification, src.attrs.classification);
+    assert_eq!(back.return_number, src.attrs.return_number);
+    let header = las::Reader::from_path(&out).unwrap().header().clone();
+    assert_eq!(
+        (
+            header.version().minor,
+            header.point_format().to_u8().unwrap()
+        ),
+        (4, 7)
+    );
 }
 
 #[test]
@@ -361,4 +387,51 @@ fn a_las_keeps_its_attributes_after_gaining_normals_in_las() {
     let back = dir.path().join("back.ply");
     convert(&out, &back, InvalidPolicy::Reject, &NoProgress).unwrap();
     assert!(normals_of(&back) == a);
+}
+
+/// A LAS output of another format's points is the smallest LAS point
+/// format that holds their attributes and values, the same from `convert`
+/// and from a store (`normals`), compressed or not: LAS 1.2 format 3 for
+/// classes up to 31, LAS 1.4 format 7 once a class needs 8 bits; every
+/// point and class written as it is.
+#[test]
+fn other_inputs_get_the_smallest_las_format_that_holds_their_values() {
+    let dir = tempfile::tempdir().unwrap();
+    for (class, want) in [(31u8, (2u8, 3u8)), (200, (4, 7))] {
+        let mut src = sheet(2000);
+        src.attrs.classification[7] = class;
+        let ply = dir.path().join(format!("c{class}.ply"));
+        write(&ply, &src, Format::PlyBinaryLe, AttributeSet::all());
+        for (cmd, ext) in [
+            ("convert", "las"),
+            ("convert", "laz"),
+            ("normals", "las"),
+            ("normals", "laz"),
+        ] {
+            let out = dir.path().join(format!("c{class}_{cmd}.{ext}"));
+            let mut args = vec![cmd, ply.to_str().unwrap()];
+            if cmd == "normals" {
+                args.push("-o");
+            }
+            args.push(out.to_str().unwrap());
+            let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+                .args(&args)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let header = las::Reader::from_path(&out).unwrap().header().clone();
+            let got = (
+                header.version().minor,
+                header.point_format().to_u8().unwrap(),
+            );
+            assert_eq!(got, want, "{cmd} .{ext}, largest class {class}");
+            assert_eq!(header.number_of_points(), 2000, "{cmd} .{ext}");
+            let (xyz, attrs) = read(&out);
+            assert_eq!(xyz.len(), 2000, "{cmd} .{ext}");
+            assert_eq!(
+                attrs.classification, src.attrs.classification,
+                "{cmd} .{ext}"
+            );
+        }
+    }
 }

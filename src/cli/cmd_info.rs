@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::e57::is_e57_magic;
 use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
-use scanmesh::io::{InvalidPolicy, ReadOptions};
+use scanmesh::io::{Format, InvalidPolicy, LasSource, ReadOptions};
 use scanmesh::memory::plan::MIN_TILE_POINTS;
 use scanmesh::neighbours::NeighbourParams;
 use scanmesh::normals::NormalParams;
@@ -103,6 +103,8 @@ pub fn run(a: InfoArgs) -> Result<()> {
             }
             false => (inspect(&a.input, a.policy(), progress.as_ref())?, None),
         };
+        let las = las_json(&a.input, r.info.format)?;
+        let copc = las["copc"].as_bool() == Some(true);
         json!({
             "path": a.input.display().to_string(),
             "format": format!("{:?}", r.info.format),
@@ -120,6 +122,8 @@ pub fn run(a: InfoArgs) -> Result<()> {
             "las_scale": r.info.las_transform.map(|t| t.scale.to_array()),
             "las_offset": r.info.las_transform.map(|t| t.offset.to_array()),
             "scans": scans.as_deref().map(scans_json),
+            "las": las,
+            "copc": copc.then_some("yes: a cloud-optimised LAZ (COPC info VLR), read as LAZ"),
         })
     };
     if a.json {
@@ -128,6 +132,32 @@ pub fn run(a: InfoArgs) -> Result<()> {
         print_text(&report)?;
     }
     Ok(())
+}
+
+/// A LAS/LAZ file's frame: version, point format, its VLRs and EVLRs
+/// (user id / record id), whether it carries a CRS and whether it is a COPC
+/// (a COPC info VLR, user id "copc", record 1: read as LAZ).
+fn las_json(path: &std::path::Path, format: Format) -> Result<serde_json::Value> {
+    if !matches!(format, Format::Las | Format::Laz) {
+        return Ok(serde_json::Value::Null);
+    }
+    let src = LasSource::read(path)?;
+    let (major, minor) = src.version();
+    let records: Vec<String> = src
+        .record_ids()
+        .iter()
+        .map(|(user, id)| format!("{user}/{id}"))
+        .collect();
+    Ok(json!({
+        "version": format!("{major}.{minor}"),
+        "point_format": src.point_format(),
+        "record_length": src.record_len(),
+        "vlrs": src.vlr_count(),
+        "evlrs": src.evlr_count(),
+        "records": records,
+        "crs": src.has_crs(),
+        "copc": src.is_copc(),
+    }))
 }
 
 fn store_report(dir: &std::path::Path) -> Result<serde_json::Value> {

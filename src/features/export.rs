@@ -75,7 +75,7 @@ pub fn write_curvature_ply_keeping(
         // the input has no selected point left.
         let mut unselected_first = |out: &mut BufWriter<_>| -> Result<bool, StoreError> {
             match &mut rows {
-                Some(r) => r.up_to_selected(|p, _| write_record(out, path, p, &none)),
+                Some(r) => r.up_to_selected(|p, _, _| write_record(out, path, p, &none)),
                 None => Ok(true),
             }
         };
@@ -104,7 +104,7 @@ pub fn write_curvature_ply_keeping(
         })?;
         // The unselected points after the last selected one.
         if let Some(r) = &mut rows {
-            if r.up_to_selected(|p, _| write_record(&mut out, path, p, &none))? {
+            if r.up_to_selected(|p, _, _| write_record(&mut out, path, p, &none))? {
                 return Err(not_the_input(path).into());
             }
         }

@@ -150,6 +150,38 @@ pub struct AttributeValues {
     pub gps_time: f64,
 }
 
+/// The largest value of some attributes over a set of points: what a LAS
+/// output needs before its first point (the point format that holds the
+/// classes and return numbers) and what tells 8-bit colour stored in
+/// 16-bit fields (every channel at most 255) from 16-bit colour.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AttributeMaxima {
+    /// Largest colour channel (0 without colour).
+    pub rgb: u16,
+    /// Largest classification code.
+    pub classification: u8,
+    /// Largest return number.
+    pub return_number: u8,
+}
+
+impl AttributeMaxima {
+    /// Takes in the values of `a`'s points.
+    pub fn add(&mut self, a: &Attributes) {
+        let max_u8 = |v: &[u8]| v.iter().copied().max().unwrap_or(0);
+        let rgb = a.rgb.iter().flatten().copied().max().unwrap_or(0);
+        self.rgb = self.rgb.max(rgb);
+        self.classification = self.classification.max(max_u8(&a.classification));
+        self.return_number = self.return_number.max(max_u8(&a.return_number));
+    }
+
+    /// Whether every colour channel is at most 255: 8-bit colour in
+    /// 16-bit fields, as many LAS files hold it (the rule PDAL's and
+    /// CloudCompare's readers apply, per file).
+    pub fn eight_bit_colour(&self) -> bool {
+        self.rgb <= 255
+    }
+}
+
 /// Widens an 8-bit colour channel to 16 bits (0 -> 0, 255 -> 65535).
 pub fn widen_8bit(v: u8) -> u16 {
     u16::from(v) * 257
@@ -183,6 +215,64 @@ pub struct Attributes {
     pub return_number: Vec<u8>,
     /// GPS times in seconds, one per point when the set has [`Attribute::GpsTime`].
     pub gps_time: Vec<f64>,
+    /// The input's own LAS point records, one per point, when the input
+    /// is LAS/LAZ (else empty): what a LAS output of it writes.
+    pub las: LasRecords,
+}
+
+/// LAS point records byte for byte (every standard field and the extra
+/// bytes), `record_len` bytes each: a LAS input's points as its file holds
+/// them, so that a LAS output keeps every field, not only the attributes
+/// scanmesh knows by name.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LasRecords {
+    /// Bytes of one record (the input's point data record length).
+    pub record_len: usize,
+    /// The records, `record_len` bytes a point.
+    pub bytes: Vec<u8>,
+}
+
+impl LasRecords {
+    /// Records held.
+    pub fn len(&self) -> usize {
+        self.bytes.len().checked_div(self.record_len).unwrap_or(0)
+    }
+
+    /// Whether no record is held.
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+
+    /// Record `i`.
+    pub fn get(&self, i: usize) -> &[u8] {
+        &self.bytes[i * self.record_len..(i + 1) * self.record_len]
+    }
+
+    /// Record `i`, when one is held for every one of `points` points.
+    pub fn record(&self, i: usize, points: usize) -> Option<&[u8]> {
+        (self.record_len > 0 && self.len() == points).then(|| self.get(i))
+    }
+
+    /// Appends `record` (its length sets the records').
+    pub fn push(&mut self, record: &[u8]) {
+        self.record_len = record.len();
+        self.bytes.extend_from_slice(record);
+    }
+
+    /// Keeps the records whose `keep` is true, in order; records not
+    /// held for every point of `keep` stay as they are.
+    pub(crate) fn retain(&mut self, keep: &[bool]) {
+        let len = self.record_len;
+        if len == 0 || self.len() != keep.len() || self.bytes.len() != len * keep.len() {
+            return;
+        }
+        let mut kept = 0;
+        for (i, _) in keep.iter().enumerate().filter(|(_, &k)| k) {
+            self.bytes.copy_within(i * len..(i + 1) * len, kept * len);
+            kept += 1;
+        }
+        self.bytes.truncate(kept * len);
+    }
 }
 
 impl Attributes {
@@ -200,6 +290,17 @@ impl Attributes {
         self.classification.clear();
         self.return_number.clear();
         self.gps_time.clear();
+        self.las.bytes.clear();
+    }
+
+    /// Widens 8-bit colour held in 16-bit fields (a LAS file whose every
+    /// channel is at most 255, [`AttributeMaxima::eight_bit_colour`]) to
+    /// true 16-bit values, so that every writer narrows or keeps it as it
+    /// does any 16-bit colour.
+    pub fn widen_8bit_colour(&mut self) {
+        for c in self.rgb.iter_mut().flatten() {
+            *c = widen_8bit(*c as u8);
+        }
     }
 
     /// The attributes the columns hold.

@@ -1,14 +1,20 @@
 //! Streaming format conversion: any readable format to any writable one,
 //! chunk by chunk, in input order. LAS output needs its quantisation before
-//! the first point, so a source without header bounds is read twice.
+//! the first point, so a source without header bounds is read twice. A LAS
+//! input written to LAS is written as it came (its own records, header
+//! fields, VLRs and EVLRs: [`super::LasOutput::source`]); written to any
+//! other format, its colour is first read whole to tell 8-bit colour in
+//! 16-bit fields from 16-bit colour, as it must be known before the first
+//! point is written.
 
 use super::{
-    create_writer, format_from_name, open_reader, AttributeSet, Format, IoError, PointChunk,
-    ReadOptions, WriterSpec, DEFAULT_CHUNK,
+    create_writer_with, format_from_name, open_reader, Attribute, AttributeMaxima, AttributeSet,
+    Format, IoError, LasOutput, LasSource, PointChunk, ReadOptions, WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
 use crate::progress::Progress;
 use std::path::Path;
+use std::sync::Arc;
 
 /// What a conversion did.
 #[derive(Clone, Copy, Debug, Default)]
@@ -54,9 +60,15 @@ pub fn convert_keeping(
     let mut reader = open_reader(input, &read)?;
     let info = reader.info().clone();
     let is_las = matches!(format, Format::Las | Format::Laz);
-    let bounds = match (is_las, info.header_bounds, info.las_transform) {
-        (true, None, None) => Some(scan_bounds(input, &read, progress)?),
-        (_, b, _) => b,
+    // A LAS output of another format needs its quantisation, and its
+    // point format is the smallest that holds the largest values: one
+    // pass finds both (a header's bounds spare it).
+    let (bounds, largest) = match (is_las, info.header_bounds, info.las_transform) {
+        (true, None, None) => {
+            let (b, m) = scan_bounds_and_maxima(input, &read, progress)?;
+            (Some(b), Some(m))
+        }
+        (_, b, _) => (b, None),
     };
     let spec = WriterSpec {
         format,
@@ -66,7 +78,25 @@ pub fn convert_keeping(
         bounds,
         las_transform: info.las_transform,
     };
-    let mut writer = create_writer(output, &spec)?;
+    let las_in = matches!(info.format, Format::Las | Format::Laz);
+    let las = match (las_in, is_las) {
+        (true, true) => LasOutput {
+            source: Some(Arc::new(LasSource::read(input)?)),
+            ..LasOutput::default()
+        },
+        _ => LasOutput {
+            largest,
+            ..LasOutput::default()
+        },
+    };
+    // LAS colour of at most 255 everywhere is 8-bit colour (PDAL's rule).
+    let widen = las_in
+        && !is_las
+        && spec.attributes.contains(Attribute::Rgb)
+        && scan_bounds_and_maxima(input, &read, progress)?
+            .1
+            .eight_bit_colour();
+    let mut writer = create_writer_with(output, &spec, &las)?;
     if keep {
         writer = Box::new(super::keep::KeepUnselected::wrap(
             writer,
@@ -81,6 +111,9 @@ pub fn convert_keeping(
     let mut chunk = PointChunk::default();
     progress.begin("convert", info.declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
+        if widen {
+            chunk.attrs.widen_8bit_colour();
+        }
         writer.write_chunk(&chunk, None)?;
         progress.advance(chunk.len() as u64);
     }
@@ -97,20 +130,23 @@ pub fn convert_keeping(
     })
 }
 
-/// Bounding box of all points of `path`, by one streaming pass.
-pub(crate) fn scan_bounds(
+/// Bounding box and largest attribute values of all points of `path`, by
+/// one streaming pass.
+pub(crate) fn scan_bounds_and_maxima(
     path: &Path,
     read: impl Into<ReadOptions>,
     progress: &dyn Progress,
-) -> Result<Aabb, IoError> {
+) -> Result<(Aabb, AttributeMaxima), IoError> {
     let mut reader = open_reader(path, read)?;
     let mut chunk = PointChunk::default();
     let mut bounds = Aabb::EMPTY;
+    let mut maxima = AttributeMaxima::default();
     progress.begin("bounds", reader.info().declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
         chunk.xyz.iter().for_each(|p| bounds.add(*p));
+        maxima.add(&chunk.attrs);
         progress.advance(chunk.len() as u64);
     }
     progress.end();
-    Ok(bounds)
+    Ok((bounds, maxima))
 }

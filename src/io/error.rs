@@ -113,6 +113,24 @@ pub enum IoError {
         /// The LAS library's message.
         reason: String,
     },
+    /// A point's value does not fit the LAS point format written.
+    #[error("{path}: point {record} has {field} {value}; LAS point format {format} holds up to {max}: {}", holder(*.holds))]
+    LasValue {
+        /// The output file.
+        path: PathBuf,
+        /// 0-based index of the point in the output.
+        record: u64,
+        /// The field: "class" or "return number".
+        field: &'static str,
+        /// The point's value.
+        value: u32,
+        /// The point format written.
+        format: u8,
+        /// The largest value that format holds.
+        max: u32,
+        /// A point format that holds the value (LAS 1.4), if any does.
+        holds: Option<u8>,
+    },
     /// The E57 library reported an error, or the file's structure is unusable.
     #[error("{path}: E57: {reason}")]
     E57 {
@@ -127,6 +145,14 @@ pub enum IoError {
         /// The empty file.
         path: PathBuf,
     },
+}
+
+/// Where a LAS value that does not fit goes instead.
+fn holder(holds: Option<u8>) -> String {
+    match holds {
+        Some(f) => format!("point format {f} (LAS 1.4) holds it"),
+        None => "no LAS point format holds it".into(),
+    }
 }
 
 impl IoError {

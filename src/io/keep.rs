@@ -71,19 +71,21 @@ impl UnselectedRows {
         Ok(Some(self.pos - 1))
     }
 
-    /// Calls `f` with each unselected point (position, attributes) up to
+    /// Calls `f` with each unselected point (position, attributes, and its
+    /// LAS record when the input is LAS) up to
     /// the input's next selected one, which it passes over; `false` when
     /// the input ended first.
     pub fn up_to_selected<E: From<IoError>>(
         &mut self,
-        mut f: impl FnMut(DVec3, &AttributeValues) -> Result<(), E>,
+        mut f: impl FnMut(DVec3, &AttributeValues, Option<&[u8]>) -> Result<(), E>,
     ) -> Result<bool, E> {
         while let Some(i) = self.next_record()? {
             if self.selector.selects(&self.current, i) {
                 return Ok(true);
             }
             self.kept += 1;
-            f(self.current.xyz[i], &self.current.attrs.get(i))?;
+            let c = &self.current;
+            f(c.xyz[i], &c.attrs.get(i), c.attrs.las.record(i, c.len()))?;
         }
         Ok(false)
     }
@@ -133,7 +135,7 @@ impl KeepUnselected {
         let Some(mut rows) = self.rows.take() else {
             return Ok(false);
         };
-        let more = rows.up_to_selected(|p, a| self.push(p, Vec3::NAN, a, UNSELECTED));
+        let more = rows.up_to_selected(|p, a, r| self.push(p, Vec3::NAN, a, r, UNSELECTED));
         self.rows = Some(rows);
         more
     }
@@ -143,6 +145,7 @@ impl KeepUnselected {
         p: DVec3,
         normal: Vec3,
         a: &AttributeValues,
+        record: Option<&[u8]>,
         flag: u8,
     ) -> Result<(), IoError> {
         if self.out.xyz.is_empty() {
@@ -156,6 +159,9 @@ impl KeepUnselected {
             n.push(normal);
         }
         self.out.attrs.push(a);
+        if let Some(r) = record {
+            self.out.attrs.las.push(r);
+        }
         if self.with_flags {
             self.out_flags.push(flag);
         }
@@ -191,7 +197,8 @@ impl PointWriter for KeepUnselected {
             }
             let n = chunk.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
             let f = flags.map_or(0, |f| f[i]);
-            self.push(chunk.xyz[i], n, &chunk.attrs.get(i), f)?;
+            let record = chunk.attrs.las.record(i, chunk.len());
+            self.push(chunk.xyz[i], n, &chunk.attrs.get(i), record, f)?;
         }
         Ok(())
     }

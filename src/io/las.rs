@@ -47,6 +47,8 @@ struct Decoded {
     attrs: Attributes,
     /// Each point's number of returns (for a selection of last returns).
     returns: Vec<u8>,
+    /// The block's records as the file holds them (decompressed).
+    records: Vec<u8>,
 }
 
 type Block = Result<Decoded, IoError>;
@@ -61,6 +63,8 @@ pub struct LasReader {
     admit: Admitter,
     declared: u64,
     next: u64,
+    /// Bytes of one point record.
+    record_len: usize,
 }
 
 pub(crate) fn las_error(path: &Path, e: las::Error) -> IoError {
@@ -286,6 +290,8 @@ fn decode_blocks(
                 decode_attributes(&data, set, &mut d.attrs);
                 d.returns.clear();
                 d.returns.extend(data.number_of_returns());
+                d.records.clear();
+                d.records.extend_from_slice(data.raw_bytes());
                 d.normals.clear();
                 if let Some(at) = normals {
                     let records = data.raw_bytes().chunks_exact(data.record_len());
@@ -353,7 +359,7 @@ fn truncated(path: &Path, declared: u64, found: u64) -> IoError {
 
 impl LasReader {
     pub(crate) fn open(path: &Path, policy: InvalidPolicy) -> Result<Self, IoError> {
-        let (info_tx, info_rx) = bounded::<Result<SourceInfo, IoError>>(1);
+        let (info_tx, info_rx) = bounded::<Result<(SourceInfo, u16), IoError>>(1);
         let (block_tx, block_rx) = bounded::<Block>(AHEAD);
         let (recycle_tx, recycle_rx) = unbounded::<Decoded>();
         let owned = path.to_path_buf();
@@ -365,17 +371,22 @@ impl LasReader {
                 }
                 Ok((reader, info)) => {
                     let set = info.attributes;
-                    if info_tx.send(Ok(info)).is_ok() {
+                    let record_len = reader.header().point_format().len();
+                    if info_tx.send(Ok((info, record_len))).is_ok() {
                         decode_blocks(owned, reader, set, block_tx, recycle_rx);
                     }
                 }
             })
             .map_err(|e| IoError::os(path, e))?;
-        let info = match info_rx.recv() {
-            Ok(info) => info?,
+        let (info, record_len) = match info_rx.recv() {
+            Ok(Ok(info)) => info,
+            // The las crate reports a record that runs past the file as the
+            // points ending early; the frame's own reading names the record.
+            Ok(Err(e)) => return Err(super::LasSource::read(path).err().unwrap_or(e)),
             Err(_) => return Err(worker_died(path)),
         };
         Ok(LasReader {
+            record_len: usize::from(record_len),
             declared: info.declared_count.unwrap_or(0),
             info,
             blocks: block_rx,
@@ -421,6 +432,8 @@ impl PointReader for LasReader {
     fn read_chunk(&mut self, chunk: &mut PointChunk, max: usize) -> Result<usize, IoError> {
         let max = max.max(1);
         self.admit.begin(chunk, self.next, &self.info);
+        chunk.attrs.las.record_len = self.record_len;
+        let len = self.record_len;
         while chunk.len() < max && self.next < self.declared {
             if self.pos == self.current.xyz.len() {
                 self.refill()?;
@@ -429,9 +442,15 @@ impl PointReader for LasReader {
             for k in self.pos..self.pos + take {
                 let (p, a) = (self.current.xyz[k], self.current.attrs.get(k));
                 let n = self.current.normals.get(k).copied().unwrap_or(Vec3::ZERO);
+                let before = chunk.len();
                 self.admit.push_with(chunk, self.next, p, n, &a)?;
                 if chunk.number_of_returns.len() < chunk.len() {
                     chunk.number_of_returns.push(self.current.returns[k]);
+                }
+                // The record goes with its point, whether it was taken.
+                if chunk.len() > before {
+                    let record = &self.current.records[k * len..(k + 1) * len];
+                    chunk.attrs.las.bytes.extend_from_slice(record);
                 }
                 self.next += 1;
             }

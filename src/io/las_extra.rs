@@ -1,50 +1,93 @@
-//! Normals in LAS "extra bytes": the Extra Bytes VLR (`LASF_Spec`, record
-//! 4; ASPRS LAS 1.4 R15 sec. 2.5.3.2) describes fields that follow the
-//! standard point record, 192 bytes a field. scanmesh writes normals as three
-//! float fields named `NormalX`, `NormalY`, `NormalZ` (PDAL's names for the
-//! same dimensions) and reads them back from any file that describes them so.
+//! LAS "extra bytes": the Extra Bytes VLR (`LASF_Spec`, record 4; ASPRS
+//! LAS 1.4 R15 sec. 2.5.3.2) describes fields that follow the standard
+//! point record, 192 bytes a field. scanmesh writes normals as three float
+//! fields named `NormalX`, `NormalY`, `NormalZ` (PDAL's names for the same
+//! dimensions) and its flags as one unsigned byte, `scanmesh_flags`, and
+//! reads normals back from any file that describes them so. A LAS output
+//! of a LAS input keeps the input's extra bytes and their descriptions and
+//! appends its own after them ([`plan`]), or writes into the input's own
+//! fields of those names (a file scanmesh wrote, processed again).
 
-use las::{Header, Vlr};
+use super::las_file::{RecordHeader, Vlr, EXTRA_BYTES};
+use las::Header;
 
-const USER: &str = "LASF_Spec";
-const RECORD: u16 = 4;
 const DESCRIPTOR: usize = 192;
 const NAME_AT: usize = 4;
 const NAME_LEN: usize = 32;
-/// Data type 9: f32.
+const DESCRIPTION_AT: usize = 160;
+/// Data type 1: u8; 9: f32.
+const U8: u8 = 1;
 const FLOAT: u8 = 9;
-const NAMES: [&str; 3] = ["NormalX", "NormalY", "NormalZ"];
+const NORMAL_NAMES: [&str; 3] = ["NormalX", "NormalY", "NormalZ"];
+/// The name of scanmesh's flags byte.
+const FLAGS_NAME: &str = "scanmesh_flags";
 
 /// Bytes the normals take at the end of each record.
-pub(crate) const NORMAL_BYTES: u16 = 12;
+const NORMAL_BYTES: usize = 12;
 
-/// The VLR describing three float normal fields.
-pub(crate) fn normals_vlr() -> Vlr {
-    let mut data = vec![0u8; DESCRIPTOR * 3];
-    for (d, name) in data.chunks_exact_mut(DESCRIPTOR).zip(NAMES) {
-        d[2] = FLOAT;
-        d[NAME_AT..NAME_AT + name.len()].copy_from_slice(name.as_bytes());
-        let desc = b"unit normal (scanmesh)";
-        d[160..160 + desc.len()].copy_from_slice(desc);
-    }
-    Vlr {
-        user_id: USER.into(),
-        record_id: RECORD,
-        description: "Extra Bytes Record".into(),
-        data,
+/// Byte size of a described field: type 0 is `options` undocumented
+/// bytes, 1-10 the scalar types, 11-30 LAS 1.4's deprecated arrays of two
+/// or three of them.
+fn field_size(data_type: u8, options: u8) -> Option<usize> {
+    let scalar = |t: u8| match t {
+        1 | 2 => Some(1),
+        3 | 4 => Some(2),
+        5 | 6 | 9 => Some(4),
+        7 | 8 | 10 => Some(8),
+        _ => None,
+    };
+    match data_type {
+        0 => Some(usize::from(options)),
+        1..=10 => scalar(data_type),
+        11..=20 => scalar(data_type - 10).map(|s| 2 * s),
+        21..=30 => scalar(data_type - 20).map(|s| 3 * s),
+        _ => None,
     }
 }
 
-/// Byte size of a described field (type 0: `options` bytes, undocumented).
-fn field_size(data_type: u8, options: u8) -> Option<usize> {
-    Some(match data_type {
-        0 => usize::from(options),
-        1 | 2 => 1,
-        3 | 4 => 2,
-        5 | 6 | 9 => 4,
-        7 | 8 | 10 => 8,
-        _ => return None,
-    })
+/// One described field: its name, type and offset within the extra bytes.
+struct Field {
+    name: String,
+    data_type: u8,
+    at: usize,
+    size: usize,
+}
+
+/// The fields an Extra Bytes VLR's `data` describes, in order; `Err`
+/// names the data type of a field whose size is unknown.
+fn fields(data: &[u8]) -> Result<Vec<Field>, u8> {
+    let mut at = 0;
+    let mut out = Vec::new();
+    for d in data.chunks_exact(DESCRIPTOR) {
+        let size = field_size(d[2], d[3]).ok_or(d[2])?;
+        let raw = &d[NAME_AT..NAME_AT + NAME_LEN];
+        let name = raw.split(|&b| b == 0).next().unwrap_or(raw);
+        out.push(Field {
+            name: String::from_utf8_lossy(name).into_owned(),
+            data_type: d[2],
+            at,
+            size,
+        });
+        at += size;
+    }
+    Ok(out)
+}
+
+/// Offset of the field named `name` of type `data_type` within `extra`
+/// bytes.
+fn find(fields: &[Field], name: &str, data_type: u8, extra: usize) -> Option<usize> {
+    fields
+        .iter()
+        .find(|f| f.name.eq_ignore_ascii_case(name) && f.data_type == data_type)
+        .filter(|f| f.at + f.size <= extra)
+        .map(|f| f.at)
+}
+
+fn find_normal_fields(fields: &[Field], extra: usize) -> Option<[usize; 3]> {
+    match NORMAL_NAMES.map(|n| find(fields, n, FLOAT, extra)) {
+        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+        _ => None,
+    }
 }
 
 /// Offsets of `NormalX/Y/Z` within the extra bytes, when the header
@@ -53,22 +96,187 @@ pub(crate) fn find_normals(header: &Header) -> Option<[usize; 3]> {
     let extra = usize::from(header.point_format().extra_bytes);
     let vlr = header
         .all_vlrs()
-        .find(|v| v.user_id == USER && v.record_id == RECORD)?;
-    let mut at = 0usize;
-    let mut found = [None; 3];
-    for d in vlr.data.chunks_exact(DESCRIPTOR) {
-        let size = field_size(d[2], d[3])?;
-        let raw = &d[NAME_AT..NAME_AT + NAME_LEN];
-        let name = String::from_utf8_lossy(raw.split(|&b| b == 0).next().unwrap_or(raw));
-        if let Some(k) = NAMES.iter().position(|n| n.eq_ignore_ascii_case(&name)) {
-            if d[2] == FLOAT && at + 4 <= extra {
-                found[k] = Some(at);
+        .find(|v| v.user_id == EXTRA_BYTES.0 && v.record_id == EXTRA_BYTES.1)?;
+    find_normal_fields(&fields(&vlr.data).ok()?, extra)
+}
+
+/// A 192-byte field descriptor.
+fn descriptor(data_type: u8, options: u8, name: &str, description: &str) -> [u8; DESCRIPTOR] {
+    let mut d = [0u8; DESCRIPTOR];
+    d[2] = data_type;
+    d[3] = options;
+    d[NAME_AT..NAME_AT + name.len()].copy_from_slice(name.as_bytes());
+    d[DESCRIPTION_AT..DESCRIPTION_AT + description.len()].copy_from_slice(description.as_bytes());
+    d
+}
+
+/// Where scanmesh's columns go in a LAS output's records, and the Extra
+/// Bytes VLR that describes the record's extra bytes.
+#[derive(Debug)]
+pub(crate) struct ExtraPlan {
+    /// Offsets of the normal's x, y, z floats in the record.
+    pub(crate) normals_at: Option<usize>,
+    /// Offset of the flags byte in the record.
+    pub(crate) flags_at: Option<usize>,
+    /// Bytes of an output record.
+    pub(crate) record_len: u16,
+    /// The output's Extra Bytes VLR, when it is not the input's as it was.
+    pub(crate) vlr: Option<Vlr>,
+}
+
+/// Plans records of `base` standard bytes followed by the input's `extra`
+/// bytes described by `input` (its Extra Bytes VLR, if any), with normals
+/// and flags when asked: into fields of their names where the input has
+/// them, else appended and described. Undescribed input bytes are
+/// described as undocumented (type 0) so that what follows them is
+/// found. `Err` says why the input's description cannot be extended.
+pub(crate) fn plan(
+    base: usize,
+    extra: usize,
+    input: Option<&Vlr>,
+    normals: bool,
+    flags: bool,
+) -> Result<ExtraPlan, String> {
+    let described = match input {
+        Some(v) => fields(&v.data)
+            .map_err(|t| format!("its Extra Bytes VLR describes a field of unknown type {t}"))?,
+        None => Vec::new(),
+    };
+    let in_place = find_normal_fields(&described, extra).filter(|_| normals);
+    let flags_in_place = find(&described, FLAGS_NAME, U8, extra).filter(|_| flags);
+    let add_normals = normals && in_place.is_none();
+    let add_flags = flags && flags_in_place.is_none();
+    let mut plan = ExtraPlan {
+        normals_at: in_place.map(|n| base + n[0]),
+        flags_at: flags_in_place.map(|f| base + f),
+        record_len: 0,
+        vlr: None,
+    };
+    // In place, the normals must be x, y, z in a row, as they are written.
+    if let Some(n) = in_place.filter(|n| n[1] != n[0] + 4 || n[2] != n[0] + 8) {
+        return Err(format!(
+            "its NormalX/Y/Z extra bytes are not consecutive (at {n:?})"
+        ));
+    }
+    let mut len = base + extra;
+    if add_normals || add_flags {
+        let total: usize = described.iter().map(|f| f.size).sum();
+        if total > extra {
+            return Err(format!(
+                "its Extra Bytes VLR describes {total} bytes, its records hold {extra}"
+            ));
+        }
+        let mut data = input.map_or_else(Vec::new, |v| v.data.clone());
+        let mut undescribed = extra - total;
+        while undescribed > 0 {
+            let n = undescribed.min(255);
+            data.extend(descriptor(
+                0,
+                n as u8,
+                "undescribed",
+                "bytes the input left undescribed",
+            ));
+            undescribed -= n;
+        }
+        if add_normals {
+            plan.normals_at = Some(len);
+            len += NORMAL_BYTES;
+            for name in NORMAL_NAMES {
+                data.extend(descriptor(FLOAT, 0, name, "unit normal (scanmesh)"));
             }
         }
-        at += size;
+        if add_flags {
+            plan.flags_at = Some(len);
+            len += 1;
+            data.extend(descriptor(U8, 0, FLAGS_NAME, "1 degenerate, 2 unoriented"));
+        }
+        if data.len() > usize::from(u16::MAX) {
+            return Err(format!(
+                "its Extra Bytes VLR would hold {} bytes, more than a VLR can",
+                data.len()
+            ));
+        }
+        let header = input.map_or_else(
+            || RecordHeader::new(EXTRA_BYTES, "Extra Bytes Record"),
+            |v| v.header.clone(),
+        );
+        plan.vlr = Some(Vlr { header, data });
     }
-    match found {
-        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
-        _ => None,
+    plan.record_len = u16::try_from(len)
+        .map_err(|_| format!("its records would be {len} bytes, more than LAS allows"))?;
+    Ok(plan)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn described(names: &[(&str, u8)]) -> Vlr {
+        let mut data = Vec::new();
+        for (name, t) in names {
+            data.extend(descriptor(*t, 0, name, ""));
+        }
+        Vlr {
+            header: RecordHeader::new(EXTRA_BYTES, "Extra Bytes Record"),
+            data,
+        }
+    }
+
+    #[test]
+    fn new_fields_follow_the_inputs_extra_bytes() {
+        let input = described(&[("Amplitude", 9), ("Deviation", 3)]);
+        let p = plan(34, 6, Some(&input), true, true).unwrap();
+        assert_eq!(
+            (p.normals_at, p.flags_at, p.record_len),
+            (Some(40), Some(52), 53)
+        );
+        let f = fields(&p.vlr.unwrap().data).unwrap();
+        let names: Vec<&str> = f.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "Amplitude",
+                "Deviation",
+                "NormalX",
+                "NormalY",
+                "NormalZ",
+                "scanmesh_flags"
+            ]
+        );
+    }
+
+    #[test]
+    fn fields_of_scanmeshs_names_are_written_in_place() {
+        let input = described(&[
+            ("NormalX", 9),
+            ("NormalY", 9),
+            ("NormalZ", 9),
+            ("scanmesh_flags", 1),
+        ]);
+        let p = plan(30, 13, Some(&input), true, true).unwrap();
+        assert_eq!(
+            (p.normals_at, p.flags_at, p.record_len),
+            (Some(30), Some(42), 43)
+        );
+        assert!(p.vlr.is_none(), "the input's VLR is kept as it is");
+    }
+
+    #[test]
+    fn undescribed_bytes_are_described_before_new_fields() {
+        let p = plan(20, 300, None, true, false).unwrap();
+        assert_eq!((p.normals_at, p.record_len), (Some(320), 332));
+        let f = fields(&p.vlr.unwrap().data).unwrap();
+        let sizes: Vec<usize> = f.iter().map(|f| f.size).collect();
+        assert_eq!(sizes, [255, 45, 4, 4, 4]);
+    }
+
+    #[test]
+    fn a_description_longer_than_the_bytes_is_not_extended() {
+        let input = described(&[("A", 10)]);
+        let e = plan(20, 4, Some(&input), true, false).unwrap_err();
+        assert!(e.contains("describes 8 bytes"), "{e}");
+        // Nothing to add: the input's records are written as they are.
+        let p = plan(20, 4, Some(&input), false, false).unwrap();
+        assert_eq!((p.record_len, p.vlr.is_none()), (24, true));
     }
 }

@@ -16,6 +16,7 @@ pub mod inspect;
 pub mod keep;
 pub(crate) mod las;
 mod las_extra;
+pub(crate) mod las_file;
 pub mod memory;
 pub(crate) mod obj;
 pub(crate) mod open;
@@ -32,13 +33,16 @@ pub mod write;
 pub(crate) mod xyz;
 
 pub use atomic::AtomicFile;
-pub use attributes::{Attribute, AttributeSet, AttributeValues, Attributes};
+pub use attributes::{
+    Attribute, AttributeMaxima, AttributeSet, AttributeValues, Attributes, LasRecords,
+};
 pub use error::IoError;
+pub use las_file::LasSource;
 pub use obj::read_obj_mesh;
 pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
 pub use ply::read_mesh;
 pub use select::{LeftOut, Returns, Selection};
-pub use write::create_writer;
+pub use write::{create_writer, create_writer_with, LasOutput};
 
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};

@@ -293,6 +293,7 @@ impl Attributes {
         retain_vec(&mut self.classification, keep);
         retain_vec(&mut self.return_number, keep);
         retain_vec(&mut self.gps_time, keep);
+        self.las.retain(keep);
     }
 }
 

@@ -5,8 +5,9 @@
 //! it writes in input order, so a window of output is one sequential read
 //! of each column and the build never sorts or scatters them.
 
+use super::las_kept::RecordSink;
 use super::{Column, PointStore, StoreError};
-use crate::io::{Attribute, AttributeSet, Attributes, PointChunk};
+use crate::io::{Attribute, AttributeMaxima, AttributeSet, Attributes, PointChunk};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -16,28 +17,47 @@ pub fn column_file(a: Attribute) -> String {
     format!("{}.input", a.name())
 }
 
-/// Writes the attribute columns as the input's chunks arrive.
+/// Writes the attribute columns (and a LAS input's records) as the
+/// input's chunks arrive, and finds the largest values.
 pub(super) struct AttributeSink {
     columns: Vec<(Attribute, PathBuf, BufWriter<File>)>,
+    records: Option<RecordSink>,
+    maxima: AttributeMaxima,
     bytes: Vec<u8>,
 }
 
 impl AttributeSink {
-    pub fn create(dir: &Path, set: AttributeSet) -> Result<Self, StoreError> {
+    /// Columns for `set`, and for a LAS input's records of `las_record`
+    /// bytes.
+    pub fn create(
+        dir: &Path,
+        set: AttributeSet,
+        las_record: Option<u16>,
+    ) -> Result<Self, StoreError> {
         let mut columns = Vec::new();
         for a in set.iter() {
             let path = dir.join(column_file(a));
             let file = File::create(&path).map_err(|e| StoreError::os(&path, e))?;
             columns.push((a, path, BufWriter::with_capacity(1 << 16, file)));
         }
+        let records = match las_record {
+            Some(len) => Some(RecordSink::create(dir, len)?),
+            None => None,
+        };
         Ok(AttributeSink {
             columns,
+            records,
+            maxima: AttributeMaxima::default(),
             bytes: Vec::new(),
         })
     }
 
     /// Appends the chunk's values (its points are the next in input order).
     pub fn write(&mut self, chunk: &PointChunk) -> Result<(), StoreError> {
+        self.maxima.add(&chunk.attrs);
+        if let Some(r) = &mut self.records {
+            r.write(chunk)?;
+        }
         for (a, path, out) in &mut self.columns {
             self.bytes.clear();
             chunk.attrs.encode_le(*a, &mut self.bytes);
@@ -53,12 +73,16 @@ impl AttributeSink {
         Ok(())
     }
 
-    pub fn finish(self) -> Result<(), StoreError> {
+    /// Flushes the columns; returns the largest values.
+    pub fn finish(self) -> Result<AttributeMaxima, StoreError> {
         for (_, path, out) in self.columns {
             out.into_inner()
                 .map_err(|e| StoreError::os(&path, e.into_error()))?;
         }
-        Ok(())
+        if let Some(r) = self.records {
+            r.finish()?;
+        }
+        Ok(self.maxima)
     }
 }
 

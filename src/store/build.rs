@@ -121,6 +121,10 @@ fn seal(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
     for a in &manifest.attributes {
         columns.push((super::attributes::column_file(*a), a.item_bytes()));
     }
+    if let Some(las) = manifest.las {
+        let name = super::las_kept::LAS_RECORDS_FILE.to_string();
+        columns.push((name, usize::from(las.record_len)));
+    }
     for (name, bytes) in columns {
         let sums = super::integrity::sums_in(dir, manifest, &name, bytes)?;
         manifest.checksums.insert(name, sums);
@@ -136,11 +140,17 @@ fn build_columns(
 ) -> Result<Manifest, StoreError> {
     let attributes = reader.info().attributes;
     let coordinates = Coordinates::for_input(reader.info().las_transform);
-    let mut sink = AttributeSink::create(dir, attributes)?;
+    let las = match reader.info().format {
+        crate::io::Format::Las | crate::io::Format::Laz => {
+            Some(super::las_kept::keep_frame(dir, &reader.info().path)?)
+        }
+        _ => None,
+    };
+    let mut sink = AttributeSink::create(dir, attributes, las.map(|l| l.record_len))?;
     let mut exact = ExactSink::create(dir, coordinates)?;
     let ingested = first_pass(reader, &mut exact, &mut sink, progress)?;
     let (count, bounds) = (ingested.count, ingested.bounds);
-    sink.finish()?;
+    let maxima = sink.finish()?;
     exact.finish()?;
     if count == 0 {
         let path = reader.info().path.clone();
@@ -178,6 +188,8 @@ fn build_columns(
         tiles,
         columns: Vec::new(),
         attributes: attributes.to_vec(),
+        maxima: Some(maxima),
+        las,
         source: String::new(),
         source_has_normals: reader.info().has_normals,
         sampling: None,

@@ -5,8 +5,13 @@
 //! Tiles are in spatial order, the output is in input order: the export
 //! fills windows of consecutive input indices, each by one pass over the
 //! tiles, so memory is one window plus one tile per thread whatever the
-//! store size. A LAS output of a LAS input keeps the input's scale and
-//! offset, so it holds the input's integers.
+//! store size. A LAS output of a LAS input is written as the input came:
+//! its own records (read from the store's `las.input` like any input-order
+//! column), version, point format, scale, offset, VLRs and EVLRs, the
+//! normals and flags appended as extra bytes (`crate::io::LasOutput`).
+//! Any other output of a LAS input whose colour channels are all at most
+//! 255 gets that colour widened to 16 bits first (8-bit colour in 16-bit
+//! fields, as PDAL reads it), so 8-bit formats do not write it black.
 //!
 //! A window is split into one id range per thread; each thread passes over
 //! the tiles and places the points of its range. The placement is a random
@@ -21,7 +26,9 @@
 
 use super::reorder::Reorder;
 use super::{Column, PointStore, StoreError, TileEntry, FLAGS, NORMALS};
-use crate::io::{create_writer, PointChunk, PointWriter, WriterSpec};
+use crate::io::{
+    create_writer_with, Attribute, Format, LasOutput, PointChunk, PointWriter, WriterSpec,
+};
 use crate::progress::Progress;
 use crossbeam::channel::{bounded, Receiver, Sender};
 use glam::{DVec3, Vec3};
@@ -72,7 +79,21 @@ pub fn export_points_keeping(
             DVec3::from_array(store.manifest.bounds_max),
         ));
     }
-    let mut writer = create_writer(path, &spec)?;
+    let las_out = matches!(spec.format, Format::Las | Format::Laz);
+    let las = LasOutput {
+        source: match las_out {
+            true => store.las_source()?.map(std::sync::Arc::new),
+            false => None,
+        },
+        point_format: None,
+        largest: store.manifest.maxima,
+    };
+    let records = las.source.is_some();
+    let widen = store.manifest.las.is_some()
+        && !las_out
+        && spec.attributes.contains(Attribute::Rgb)
+        && store.manifest.maxima.is_some_and(|m| m.eight_bit_colour());
+    let mut writer = create_writer_with(path, &spec, &las)?;
     if let Some((input, read)) = keep {
         writer = Box::new(crate::io::keep::KeepUnselected::wrap(
             writer,
@@ -85,8 +106,13 @@ pub fn export_points_keeping(
         )?);
     }
     let n = store.len();
+    let record_bytes = match (records, store.manifest.las) {
+        (true, Some(l)) => u64::from(l.record_len),
+        _ => 0,
+    };
     // Two windows of half the size: one filled while the other is written.
-    let window = (attribute_window(window_points, spec.attributes) / 2).clamp(1, n.max(1));
+    let window =
+        (attribute_window(window_points, spec.attributes, record_bytes) / 2).clamp(1, n.max(1));
     progress.begin("write", n);
     let buckets = if window < n && cols.any() {
         Some(Reorder::build(store, &cols, window)?)
@@ -106,6 +132,8 @@ pub fn export_points_keeping(
             cols: &cols,
             buckets: buckets.as_ref(),
             attributes: spec.attributes,
+            records,
+            widen,
             window,
         };
         let filled = fill_windows(store, &fill, empty_rx, full_tx);
@@ -133,9 +161,14 @@ struct Window {
 const WINDOW_BYTES_PER_POINT: u64 = 48;
 
 /// Points of a window planned at `window_points` without attributes, shrunk
-/// so that a window carrying `attributes` takes no more memory.
-fn attribute_window(window_points: u64, attributes: crate::io::AttributeSet) -> u64 {
-    let extra = attributes.bytes_per_point() as u64;
+/// so that a window carrying `attributes` and LAS records of
+/// `record_bytes` takes no more memory.
+fn attribute_window(
+    window_points: u64,
+    attributes: crate::io::AttributeSet,
+    record_bytes: u64,
+) -> u64 {
+    let extra = attributes.bytes_per_point() as u64 + record_bytes;
     window_points * WINDOW_BYTES_PER_POINT / (WINDOW_BYTES_PER_POINT + extra)
 }
 
@@ -144,6 +177,10 @@ struct Fill<'a> {
     cols: &'a Columns,
     buckets: Option<&'a Reorder>,
     attributes: crate::io::AttributeSet,
+    /// Whether the output is written from the LAS input's own records.
+    records: bool,
+    /// Whether the colour is 8-bit in 16-bit fields, widened for output.
+    widen: bool,
     window: u64,
 }
 
@@ -190,6 +227,12 @@ fn fill_windows(
         }
         // Input-order columns are in input order already: read, not placed.
         store.read_attributes(w0, len as u64, fill.attributes, &mut chunk.attrs)?;
+        if fill.widen {
+            chunk.attrs.widen_8bit_colour();
+        }
+        if fill.records {
+            store.read_las_records(w0, len as u64, &mut chunk.attrs.las)?;
+        }
         if full.send(win).is_err() {
             return Err(writer_gone());
         }

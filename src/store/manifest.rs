@@ -45,6 +45,14 @@ pub struct Manifest {
     /// The input's own per-point attributes, kept in input order.
     #[serde(default)]
     pub attributes: Vec<crate::io::Attribute>,
+    /// The largest attribute values of the input's points (classes,
+    /// return numbers, colour channels), found as it was read.
+    #[serde(default)]
+    pub maxima: Option<crate::io::AttributeMaxima>,
+    /// A LAS/LAZ input's records and frame, kept for a LAS output written
+    /// as the input came (`super::las_kept`).
+    #[serde(default)]
+    pub las: Option<super::las_kept::LasKept>,
     /// The input file the store was built from.
     pub source: String,
     /// Whether the input carried normals (kept in the normals column).

@@ -8,7 +8,8 @@
 //! (`normal.f32`, `flags.u8`). The store index is the global point id.
 //! The input's own attributes (intensity, colour, ...) and its exact
 //! coordinates are kept in input order beside them (`intensity.input`,
-//! ..., `xyz.input`; see `attributes` and `exact`). Every column carries
+//! ..., `xyz.input`; see `attributes` and `exact`), and a LAS input's
+//! records and frame (`las.input`, `las.head`, `las.tail`; `las_kept`). Every column carries
 //! checksums, checked on open (`integrity`).
 
 mod attributes;
@@ -21,6 +22,7 @@ mod exact;
 pub(crate) mod export;
 mod ingest;
 pub mod integrity;
+mod las_kept;
 pub(crate) mod lock;
 pub mod manifest;
 mod reorder;
@@ -37,6 +39,7 @@ pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use exact::Coordinates;
 pub use export::{export_points, export_points_keeping};
+pub use las_kept::LasKept;
 pub use manifest::{GridSpec, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
 pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
@@ -205,6 +208,7 @@ impl PointStore {
         };
         store.validate()?;
         store.check_attribute_columns()?;
+        store.check_las_frame()?;
         let exact_bytes = store.manifest.coordinates.item_bytes() as u64;
         if exact.items()? != store.manifest.count * exact_bytes {
             return Err(store.corrupt(format!(

@@ -7,7 +7,7 @@ mod las;
 mod ply;
 mod xyz;
 
-pub use las::choose_las_transform;
+pub use las::{choose_las_transform, LasOutput};
 
 use super::{AtomicFile, Attributes, Format, IoError, PointChunk, PointWriter, WriterSpec};
 use glam::Vec3;
@@ -21,6 +21,17 @@ const OUT_BUF: usize = 1 << 20;
 /// Creates a writer for `spec.format` at `path` (a `.laz` path, or
 /// `Format::Laz`, gives compressed LAS). gzip output is not offered.
 pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWriter>, IoError> {
+    create_writer_with(path, spec, &LasOutput::default())
+}
+
+/// [`create_writer`], with what a LAS/LAZ output is made from (a LAS input
+/// written as it came, a point format, the largest values); other formats
+/// ignore `las`.
+pub fn create_writer_with(
+    path: &Path,
+    spec: &WriterSpec,
+    las: &LasOutput,
+) -> Result<Box<dyn PointWriter>, IoError> {
     let name = path.to_string_lossy().to_ascii_lowercase();
     if name.ends_with(".gz") {
         return Err(IoError::Unsupported {
@@ -42,7 +53,7 @@ pub fn create_writer(path: &Path, spec: &WriterSpec) -> Result<Box<dyn PointWrit
         Format::Xyz => Box::new(xyz::XyzWriter::create(path, spec)?),
         Format::Las | Format::Laz => {
             let compressed = spec.format == Format::Laz || name.ends_with(".laz");
-            Box::new(las::LasWriter::create(path, spec, compressed)?)
+            Box::new(las::LasWriter::create(path, spec, las, compressed)?)
         }
         Format::E57 => Box::new(super::e57::E57Writer::create(path, spec)?),
     })

@@ -1,0 +1,180 @@
+"""laspy's side of tests/las_laspy.rs: an independent reader (and writer)
+for LAS files scanmesh writes.
+
+    las_laspy.py gen DIR            write the synthetic matrix into DIR
+    las_laspy.py check              for each line IN<tab>OUT<tab>N of stdin,
+                                    check OUT against IN; N=1: OUT gained
+                                    normals and flags as extra bytes
+
+`gen` writes LAS 1.2 (point formats 0-3), 1.3 (0-5) and 1.4 (0-10) with
+every field over its legal range as laspy reads it: return numbers 0-7 in
+formats 0-5 (3 bits), 0-15 in 6-10; classes 0-31 in 0-5 (5 bits), 0-255 in
+6-10; two described extra bytes fields, a CRS VLR (GeoTIFF keys, or WKT
+in LAS 1.4) and in LAS 1.4 an EVLR. `check` exits non-zero naming the
+file and its first difference."""
+
+import sys
+
+import numpy as np
+import laspy
+from laspy.vlrs.vlrlist import VLRList
+
+SIDE = 20
+
+
+def matrix():
+    for f in range(4):
+        yield "1.2", f
+    for f in range(6):
+        yield "1.3", f
+    for f in range(11):
+        yield "1.4", f
+
+
+def geotiff_vlr():
+    keys = np.array([1, 1, 0, 1, 3072, 0, 1, 26910], dtype="<u2").tobytes()
+    return laspy.VLR("LASF_Projection", 34735, "GeoTIFF GeoKeyDirectoryTag", keys)
+
+
+def wkt_vlr():
+    wkt = b'PROJCS["NAD83 / UTM zone 10N",GEOGCS["NAD83"],UNIT["metre",1]]\0'
+    return laspy.VLR("LASF_Projection", 2112, "OGC WKT", wkt)
+
+
+def gen(out_dir):
+    rng = np.random.default_rng(38)
+    for version, fmt in matrix():
+        header = laspy.LasHeader(point_format=fmt, version=version)
+        header.scales = np.array([0.001, 0.001, 0.0025])
+        header.offsets = np.array([512000.0, 5403000.0, -10.0])
+        header.add_extra_dims(
+            [
+                laspy.ExtraBytesParams("amp", np.uint8, description="amplitude"),
+                laspy.ExtraBytesParams("dev", np.int16, description="deviation"),
+            ]
+        )
+        if version == "1.4":
+            header.vlrs.append(wkt_vlr())
+            header.global_encoding.wkt = True
+            evlr = laspy.VLR("test_user", 77, "an EVLR kept whole", bytes(range(256)) * 2)
+            header.evlrs = VLRList([evlr])
+        else:
+            header.vlrs.append(geotiff_vlr())
+        n = SIDE * SIDE
+        las = laspy.LasData(header)
+        u = np.arange(n) % SIDE
+        v = np.arange(n) // SIDE
+        las.x = 512000.0 + 0.25 * u
+        las.y = 5403000.0 + 0.25 * v
+        las.z = 0.02 * np.hypot(u, v) + 0.0025 * rng.integers(0, 5, n)
+        extended = fmt >= 6
+        returns = 16 if extended else 8
+        classes = 256 if extended else 32
+        las.intensity = rng.integers(0, 65536, n, dtype=np.uint16)
+        las.return_number = rng.integers(0, returns, n)
+        las.number_of_returns = rng.integers(0, returns, n)
+        las.classification = rng.integers(0, classes, n)
+        las.synthetic = rng.integers(0, 2, n).astype(bool)
+        las.key_point = rng.integers(0, 2, n).astype(bool)
+        las.withheld = rng.integers(0, 2, n).astype(bool)
+        las.scan_direction_flag = rng.integers(0, 2, n).astype(bool)
+        las.edge_of_flight_line = rng.integers(0, 2, n).astype(bool)
+        las.user_data = rng.integers(0, 256, n, dtype=np.uint8)
+        las.point_source_id = rng.integers(0, 65536, n, dtype=np.uint16)
+        if extended:
+            las.overlap = rng.integers(0, 2, n).astype(bool)
+            las.scanner_channel = rng.integers(0, 4, n)
+            las.scan_angle = rng.integers(-30000, 30001, n, dtype=np.int16)
+        else:
+            las.scan_angle_rank = rng.integers(-90, 91, n, dtype=np.int8)
+        dims = set(las.point_format.dimension_names)
+        if "gps_time" in dims:
+            las.gps_time = 3.0e8 + rng.random(n) * 100.0
+        if "red" in dims:
+            for c in ("red", "green", "blue"):
+                las[c] = rng.integers(0, 65536, n, dtype=np.uint16)
+        if "nir" in dims:
+            las.nir = rng.integers(0, 65536, n, dtype=np.uint16)
+        if "wavepacket_index" in dims:
+            las.wavepacket_index = rng.integers(0, 256, n, dtype=np.uint8)
+            las.wavepacket_offset = rng.integers(0, 1 << 40, n, dtype=np.uint64)
+            las.wavepacket_size = rng.integers(0, 1 << 32, n, dtype=np.uint32)
+            las.return_point_wave_location = rng.random(n).astype(np.float32)
+            las.x_t = rng.random(n).astype(np.float32)
+            las.y_t = rng.random(n).astype(np.float32)
+            las.z_t = rng.random(n).astype(np.float32)
+        las.amp = rng.integers(0, 256, n, dtype=np.uint8)
+        las.dev = rng.integers(-32768, 32768, n, dtype=np.int16)
+        las.write(f"{out_dir}/v{version.replace('.', '')}_f{fmt}.las")
+
+
+def vlr_bytes(vlr):
+    data = vlr.record_data_bytes() if hasattr(vlr, "record_data_bytes") else vlr.record_data
+    return (vlr.user_id, vlr.record_id, vlr.description, bytes(data))
+
+
+CURRENT = [""]
+
+
+def fail(what):
+    print(f"{CURRENT[0]}: {what}")
+    sys.exit(1)
+
+
+def check(inp, out, normals):
+    CURRENT[0] = out
+    a, b = laspy.read(inp), laspy.read(out)
+    ha, hb = a.header, b.header
+    if str(ha.version) != str(hb.version):
+        fail(f"version {ha.version} -> {hb.version}")
+    if ha.point_format.id != hb.point_format.id:
+        fail(f"point format {ha.point_format.id} -> {hb.point_format.id}")
+    if not (np.array_equal(ha.scales, hb.scales) and np.array_equal(ha.offsets, hb.offsets)):
+        fail(f"scale/offset {ha.scales} {ha.offsets} -> {hb.scales} {hb.offsets}")
+    if ha.point_count != hb.point_count:
+        fail(f"count {ha.point_count} -> {hb.point_count}")
+    for d in ("X", "Y", "Z"):
+        if not np.array_equal(np.asarray(a[d]), np.asarray(b[d])):
+            fail(f"integer {d} differs")
+    for d in a.point_format.dimension_names:
+        if not np.array_equal(np.asarray(a[d]), np.asarray(b[d])):
+            i = int(np.argmax(np.asarray(a[d]) != np.asarray(b[d])))
+            fail(f"{d} differs first at point {i}: {a[d][i]} -> {b[d][i]}")
+    # VLRs byte for byte, in order; LASzip's describes the output's own
+    # compression, the Extra Bytes VLR may only grow by new descriptors.
+    va = [vlr_bytes(v) for v in ha.vlrs if v.user_id != "laszip encoded"]
+    vb = [vlr_bytes(v) for v in hb.vlrs if v.user_id != "laszip encoded"]
+    eb = ("LASF_Spec", 4)
+    grew = normals and not any(v[:2] == eb for v in va)
+    if len(vb) != len(va) + int(grew):
+        fail(f"VLRs {[v[:2] for v in va]} -> {[v[:2] for v in vb]}")
+    for x, y in zip(va, vb):
+        if x[:2] == eb and normals:
+            if x[:3] != y[:3] or y[3][: len(x[3])] != x[3] or len(y[3]) != len(x[3]) + 4 * 192:
+                fail("Extra Bytes VLR: the input's descriptors are not kept first")
+        elif x != y:
+            fail(f"VLR {x[:2]} differs")
+    ea = [vlr_bytes(v) for v in (ha.evlrs or [])]
+    ebs = [vlr_bytes(v) for v in (hb.evlrs or [])]
+    if ea != ebs:
+        fail(f"EVLRs {[v[:2] for v in ea]} -> {[v[:2] for v in ebs]}")
+    if normals:
+        extra = list(hb.point_format.extra_dimension_names)
+        for name in ("NormalX", "NormalY", "NormalZ", "scanmesh_flags"):
+            if name not in extra:
+                fail(f"no {name} among {extra}")
+        n = np.stack([b.NormalX, b.NormalY, b.NormalZ], axis=1)
+        length = np.linalg.norm(n, axis=1)
+        if np.abs(length - 1.0).max() > 1e-5:
+            fail(f"normals not unit: {length.min()} .. {length.max()}")
+    print(f"ok {out}: {hb.point_count} points, format {hb.point_format.id}, LAS {hb.version}")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "gen":
+        gen(sys.argv[2])
+    else:
+        for line in sys.stdin:
+            if line.strip():
+                inp, out, n = line.rstrip("\n").split("\t")
+                check(inp, out, n == "1")
