@@ -63,6 +63,9 @@ pub struct ImplicitKernel {
     pub field: Field,
     /// Mean nearest-neighbour distance of the samples (sizes the index).
     pub spacing: f64,
+    /// Peak bytes a cube of the band costs ([`BYTES_PER_CUBE`], or
+    /// [`BYTES_PER_CUBE_CLOSED`] for a closed surface).
+    pub bytes_per_cube: u64,
 }
 
 /// Edge of the signed distance's grid index, in lattice cubes. Its queries
@@ -88,9 +91,13 @@ const MLS_GRID_SPACINGS: f64 = 7.0;
 /// each, and their concatenation). Measured on 519k points of a
 /// terrestrial scan as one tile, one thread, at four cells: 213, 405, 625
 /// MiB at 0.57, 1.80, 3.15 million cubes (165 B a cube), 123 MiB with none
-/// (230 B a point).
+/// (230 B a point). A closed surface's cubes cost more (its field has no
+/// distance limit, so every corner of the band gets a value and its
+/// vertices and holes are kept): the same scan `--closed` as one tile, 608
+/// MiB at 1.21 million cubes (430 B a cube).
 const BYTES_PER_LOADED_POINT: u64 = 230;
-const BYTES_PER_CUBE: u64 = 165;
+pub(crate) const BYTES_PER_CUBE: u64 = 165;
+pub(crate) const BYTES_PER_CUBE_CLOSED: u64 = 430;
 
 /// Band cubes per core point at a cell of 2.2 mean spacings (the 1M and
 /// 200k noisy dragons: 7.8 and 7.7); a surface's band holds about
@@ -99,21 +106,22 @@ const CUBES_PER_POINT_AT_2_2: f64 = 7.7;
 
 /// Peak bytes per loaded point the plan sizes tiles by, for a cell of
 /// `cell_spacings` mean spacings (a loaded point is 2/3 of a core point
-/// with the plan's margin): 1,076 at the open default, 554 at `--closed`'s
+/// with the plan's margin): 1,076 at the open default, 1,100 at `--closed`'s
 /// 3. The plan sized tiles by 650 whatever the cell, measured at 3
 /// spacings before the open default became 2.2; each tile's own need
 /// ([`tile_bytes`], its band counted) is what holds `--mem` where density
 /// varies.
-pub(crate) fn planned_bytes_per_loaded_point(cell_spacings: f64) -> u64 {
+pub(crate) fn planned_bytes_per_loaded_point(cell_spacings: f64, per_cube: u64) -> u64 {
     let cubes = CUBES_PER_POINT_AT_2_2 * (2.2 / cell_spacings.max(0.1)).powi(3) / 1.5;
-    BYTES_PER_LOADED_POINT + (cubes * BYTES_PER_CUBE as f64) as u64
+    BYTES_PER_LOADED_POINT + (cubes * per_cube as f64) as u64
 }
 
-/// What a tile of `points` loaded points and `cubes` band cubes holds.
-pub(crate) fn tile_bytes(points: u64, cubes: u64) -> u64 {
+/// What a tile of `points` loaded points and `cubes` band cubes of
+/// `per_cube` bytes holds.
+pub(crate) fn tile_bytes(points: u64, cubes: u64, per_cube: u64) -> u64 {
     points
         .saturating_mul(BYTES_PER_LOADED_POINT)
-        .saturating_add(cubes.saturating_mul(BYTES_PER_CUBE))
+        .saturating_add(cubes.saturating_mul(per_cube))
 }
 
 /// A corner as a `u64` that sorts like the triple: its x-edge key, which
@@ -156,7 +164,8 @@ impl TileKernel for ImplicitKernel {
     /// geyser cone at 256 MiB peaked at 308 MiB).
     fn bytes_for(&self, tile: &TilePoints) -> Option<u64> {
         let cubes = band(&self.lattice, &tile.points, &tile.core, self.band).ok()?;
-        Some(tile_bytes(tile.points.len() as u64, cubes.len() as u64))
+        let n = tile.points.len() as u64;
+        Some(tile_bytes(n, cubes.len() as u64, self.bytes_per_cube))
     }
 
     fn margin(&self) -> f64 {
@@ -425,6 +434,7 @@ mod tests {
             band: 2,
             field: Field::Mls,
             spacing: 1.0,
+            bytes_per_cube: BYTES_PER_CUBE,
         };
         let (dense, sparse) = (plane(1.0, 120.0), plane(3.0, 120.0));
         let bytes = |t: &TilePoints| kernel.bytes_for(t).expect("bytes");
@@ -441,7 +451,7 @@ mod tests {
         assert!(per_point(&sparse) > 4.0 * per_point(&dense));
         // And the dense plane's need is its points' and its band's.
         let cubes = (120.0f64 / 2.2 + 1.0).powi(2) * 5.0;
-        let expected = tile_bytes(dense.points.len() as u64, cubes as u64) as f64;
+        let expected = tile_bytes(dense.points.len() as u64, cubes as u64, BYTES_PER_CUBE) as f64;
         let got = bytes(&dense) as f64;
         assert!((got / expected - 1.0).abs() < 0.2, "{got} vs {expected}");
     }

@@ -56,7 +56,23 @@ impl ImplicitParams {
 /// spacing (paper 1's cell, rho + delta, gave 0.1 to 0.17).
 const VERTICES_PER_POINT: f64 = 0.8;
 
+/// Peak bytes of a band cube ([`super::kernel`]'s measurements).
+fn bytes_per_cube(closed: bool) -> u64 {
+    match closed {
+        true => super::kernel::BYTES_PER_CUBE_CLOSED,
+        false => super::kernel::BYTES_PER_CUBE,
+    }
+}
+
 impl ImplicitParams {
+    /// The lattice cell in mean spacings the plan assumes (the MLS field's).
+    fn cell_spacings(&self) -> f64 {
+        match self.closed {
+            true => CLOSED_MLS_CELL_SPACINGS,
+            false => MLS_CELL_SPACINGS,
+        }
+    }
+
     /// What a reconstruction costs, for the memory plan: the normals run's
     /// cost, plus the small-piece filter's page tables when pieces are
     /// dropped (its per-vertex state is in scratch files behind caches of a
@@ -65,11 +81,10 @@ impl ImplicitParams {
     pub fn cost(&self) -> KernelCost {
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
         let normals = self.normals.cost();
-        let cell = match self.closed {
-            true => CLOSED_MLS_CELL_SPACINGS,
-            false => MLS_CELL_SPACINGS,
-        };
-        let marching = super::kernel::planned_bytes_per_loaded_point(cell);
+        let marching = super::kernel::planned_bytes_per_loaded_point(
+            self.cell_spacings(),
+            bytes_per_cube(self.closed),
+        );
         KernelCost {
             bytes_per_point: normals.bytes_per_point.max(marching),
             resident_per_point: if pieces {
@@ -204,6 +219,7 @@ pub fn reconstruct_implicit(
         band,
         field: params.field,
         spacing,
+        bytes_per_cube: bytes_per_cube(params.closed),
     };
     let mut writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
     if params.closed {
