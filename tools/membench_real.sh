@@ -31,7 +31,7 @@ one() {
   local peak; peak=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["peak_rss_bytes"] >> 20)' "$work/report.json" 2>/dev/null || echo "?")
   if [ $rc -eq 3 ]; then status="OVER BUDGET"; failed=1
   elif [ $rc -ne 0 ]; then
-    if grep -q "more than the budget holds\|budget .* too small\|smallest budget" "$work/err"; then status=refused
+    if grep -q "the budget holds for tiles\|more than the budget holds\|budget .* too small\|smallest budget" "$work/err"; then status=refused
     else status="FAILED rc=$rc: $(tail -1 "$work/err")"; failed=1; fi
   fi
   printf '%-40s %-7s %-11s peak %5s MiB  %s\n' "$(basename "$file")" "$budget" "$name" "$peak" "$status"

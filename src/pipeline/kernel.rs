@@ -80,6 +80,18 @@ pub trait TileKernel: Sync {
         self.bytes_per_loaded_point()
             .map(|b| b.saturating_mul(tile.points.len() as u64))
     }
+    /// Bytes a tile of `points` loaded points holds before the kernel has
+    /// looked at it, asked for before the load (the points are counted
+    /// first, `tiling::count_loaded`) so a tile whose margin grew past the
+    /// room is refused, or waits, without holding its points. `None`: the
+    /// plan's tile sizes hold. Defaults to [`Self::bytes_per_loaded_point`]
+    /// times the points; a kernel whose [`Self::bytes_for`] says more once
+    /// it sees the tile is given the rest then, or loads again when the
+    /// room has it.
+    fn bytes_to_load(&self, points: u64) -> Option<u64> {
+        self.bytes_per_loaded_point()
+            .map(|b| b.saturating_mul(points))
+    }
     /// The store columns the kernel reads: each tile carries their values
     /// for every loaded point (`TilePoints::column`).
     fn reads(&self) -> &[ColumnSpec] {

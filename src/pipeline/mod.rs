@@ -8,6 +8,9 @@ mod options;
 mod run;
 mod shares;
 
+#[cfg(test)]
+mod budget_tests;
+
 pub use codec::Codec;
 pub use kernel::{KernelError, TileKernel};
 pub use options::RunOptions;

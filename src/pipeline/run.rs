@@ -5,11 +5,11 @@
 //! a kernel with a [`Codec`] has each result saved as it finishes and read
 //! back instead of recomputed, and a tile job computes some tiles only.
 
-use super::shares::Shares;
+use super::shares::{Shares, Taken};
 use super::{Codec, KernelError, PipelineError, RunOptions, TileKernel};
 use crate::progress::Progress;
 use crate::store::{Checkpoints, Job, PointStore};
-use crate::tiling::load_tile;
+use crate::tiling::{count_loaded, load_tile};
 use crossbeam::channel;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -265,18 +265,25 @@ fn run_one<K: TileKernel>(
 ) -> Result<(K::Output, f64, usize), PipelineError> {
     let mut margin = kernel.margin();
     let mut retries = 0;
+    // The points and bytes the tile at this margin was found to need.
+    let mut known: Option<(u64, u64)> = None;
     loop {
-        let tile = load_tile(store, t, margin, kernel.reads())?;
-        let _memory = match (shares, kernel.bytes_for(&tile)) {
-            (Some(s), Some(bytes)) => Some(s.take(bytes).ok_or(PipelineError::OverBudget {
-                tile: t,
-                margin,
-                points: tile.points.len(),
-                need_mib: bytes.div_ceil(1 << 20),
-                room_mib: s.room() >> 20,
-            })?),
-            _ => None,
+        let mut memory = match shares {
+            Some(s) => take_before_load(store, kernel, s, t, margin, known)?,
+            None => None,
         };
+        let tile = load_tile(store, t, margin, kernel.reads())?;
+        if let (Some(s), Some(taken), Some(need)) = (shares, &mut memory, kernel.bytes_for(&tile)) {
+            if need > s.room() {
+                return Err(over_budget(s, t, margin, tile.points.len() as u64, need));
+            }
+            if !taken.try_grow_to(need) {
+                // Give back the points and the bytes, then wait for the
+                // whole need holding nothing: no worker waits holding memory.
+                known = Some((tile.points.len() as u64, need));
+                continue;
+            }
+        }
         match kernel.run(&tile) {
             Ok(out) => return Ok((out, margin, retries)),
             Err(KernelError::MarginTooSmall { needed })
@@ -285,6 +292,7 @@ fn run_one<K: TileKernel>(
                 // Grow geometrically so a tile is loaded O(log) times at most.
                 margin = needed.max(margin * 1.5);
                 retries += 1;
+                known = None;
             }
             Err(KernelError::MarginTooSmall { needed }) => {
                 return Err(PipelineError::MarginStuck {
@@ -304,5 +312,49 @@ fn run_one<K: TileKernel>(
                 return Err(PipelineError::Kernel { tile: t, source })
             }
         }
+    }
+}
+
+/// Takes the room a tile needs before it is loaded: what it was found to
+/// need (`known`: its points and bytes), else what its counted points
+/// hold loaded. `None` for a
+/// kernel whose tiles keep to the plan's sizes.
+fn take_before_load<'s, K: TileKernel>(
+    store: &PointStore,
+    kernel: &K,
+    shares: &'s Shares,
+    t: usize,
+    margin: f64,
+    known: Option<(u64, u64)>,
+) -> Result<Option<Taken<'s>>, PipelineError> {
+    if kernel.bytes_to_load(0).is_none() {
+        return Ok(None);
+    }
+    let (points, bytes) = match known {
+        Some(known) => known,
+        None => {
+            let points = count_loaded(store, t, margin)?;
+            (points, kernel.bytes_to_load(points).unwrap_or(0))
+        }
+    };
+    shares
+        .take(bytes)
+        .map(Some)
+        .ok_or_else(|| over_budget(shares, t, margin, points, bytes))
+}
+
+fn over_budget(
+    shares: &Shares,
+    tile: usize,
+    margin: f64,
+    points: u64,
+    bytes: u64,
+) -> PipelineError {
+    PipelineError::OverBudget {
+        tile,
+        margin,
+        points: points as usize,
+        need_mib: bytes.div_ceil(1 << 20),
+        room_mib: shares.room() >> 20,
     }
 }

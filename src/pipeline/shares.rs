@@ -1,7 +1,9 @@
 //! Memory of the tiles in flight: the plan's room for tiles (its free
-//! memory, ARCHITECTURE.md, "Memory model"), taken by each tile for the
-//! bytes it says it needs (`TileKernel::bytes_for`) and given back when it
-//! is done, so the tiles running at once never hold more than the plan. A
+//! memory, ARCHITECTURE.md, "Memory model"), taken by each tile before it
+//! is loaded for the bytes its counted points hold
+//! (`TileKernel::bytes_to_load`), grown without waiting to what it says it
+//! needs once loaded (`TileKernel::bytes_for`), and given back when it is
+//! done, so the tiles running at once never hold more than the plan. A
 //! kernel whose need varies by tile (the Delaunay surface's reloads, the
 //! marching cubes' bands in sparse regions) then waits until the room has
 //! its bytes. A tile that needs more than the whole room is an error: no
@@ -81,6 +83,25 @@ impl Shares {
     }
 }
 
+impl Taken<'_> {
+    /// Grows what is taken to `bytes` if the room has the rest free now,
+    /// without waiting: a worker never waits while holding bytes, so two
+    /// growing tiles cannot each wait for the other's.
+    pub fn try_grow_to(&mut self, bytes: u64) -> bool {
+        if bytes <= self.bytes {
+            return true;
+        }
+        let mut s = self.shares.state.lock().unwrap_or_else(|e| e.into_inner());
+        let more = bytes - self.bytes;
+        if s.free < more || s.large_waiting > 0 {
+            return false;
+        }
+        s.free -= more;
+        self.bytes = bytes;
+        true
+    }
+}
+
 impl Drop for Taken<'_> {
     fn drop(&mut self) {
         let mut s = self.shares.state.lock().unwrap_or_else(|e| e.into_inner());
@@ -118,5 +139,18 @@ mod tests {
         });
         assert!(most.load(Ordering::SeqCst) <= 250);
         assert_eq!(held.load(Ordering::SeqCst), 0);
+    }
+
+    #[test]
+    fn a_grow_takes_only_what_is_free_and_gives_all_back() {
+        let shares = Shares::new(100, 250);
+        let mut a = shares.take(100).expect("fits");
+        let b = shares.take(100).expect("fits");
+        assert!(!a.try_grow_to(151), "only 50 bytes are free");
+        assert!(a.try_grow_to(150));
+        drop(b);
+        assert!(a.try_grow_to(250));
+        drop(a);
+        assert!(shares.take(250).is_some());
     }
 }

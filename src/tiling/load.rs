@@ -284,6 +284,37 @@ pub fn load_tile(
     Ok(tp)
 }
 
+/// Points read at once while counting.
+const COUNT_CHUNK: u64 = 16 * BLOCK;
+
+/// How many points `load_tile(store, tile, margin, _)` would load, counted
+/// without holding them (the positions of the meeting blocks are read and
+/// dropped a few blocks at a time): a kernel asks for its memory before the
+/// load, so a tile whose margin grew past the budget is refused, or waits,
+/// without first holding its points.
+pub fn count_loaded(store: &PointStore, tile: usize, margin: f64) -> Result<u64, StoreError> {
+    let entry = &store.tiles()[tile];
+    let loaded = unbounded_beyond(
+        core_box(store, entry).expanded(margin),
+        &store.relative_bounds(),
+    );
+    let (mut blocks, mut pts) = (Vec::new(), Vec::new());
+    let mut n = entry.count;
+    for (i, other) in store.tiles().iter().enumerate() {
+        if i == tile || other.count == 0 || !entry_bounds(other).intersects(&loaded) {
+            continue;
+        }
+        for (first, count) in meeting_runs(store, other, &loaded, &mut blocks)? {
+            // A few blocks at a time: counting must not hold a tile's points.
+            for at in (first..first + count).step_by(COUNT_CHUNK as usize) {
+                store.read_points(at, COUNT_CHUNK.min(first + count - at), &mut pts)?;
+                n += pts.iter().filter(|p| loaded.contains(**p)).count() as u64;
+            }
+        }
+    }
+    Ok(n)
+}
+
 /// A column range as read from disk.
 enum Raw {
     F32(Vec<f32>),
@@ -356,22 +387,79 @@ fn gather_margin(
     tp: &mut TilePoints,
     s: &mut Scratch,
 ) -> Result<(), StoreError> {
+    for (first, count) in meeting_runs(store, other, loaded, &mut s.blocks)? {
+        append_range(store, first, count, Some(loaded), files, tp, s)?;
+    }
+    Ok(())
+}
+
+/// The store ranges of `other` whose blocks meet `loaded`, each run of
+/// meeting blocks coalesced into one range to read.
+fn meeting_runs(
+    store: &PointStore,
+    other: &TileEntry,
+    loaded: &Aabb,
+    blocks: &mut Vec<Aabb>,
+) -> Result<Vec<(u64, u64)>, StoreError> {
     let nblocks = other.count.div_ceil(BLOCK);
-    store.read_blocks(other.first_block, nblocks, &mut s.blocks)?;
+    store.read_blocks(other.first_block, nblocks, blocks)?;
+    let mut runs = Vec::new();
     let mut b = 0;
     while b < nblocks as usize {
-        if !s.blocks[b].intersects(loaded) {
+        if !blocks[b].intersects(loaded) {
             b += 1;
             continue;
         }
-        // Coalesce a run of meeting blocks into one read.
         let run_start = b;
-        while b < nblocks as usize && s.blocks[b].intersects(loaded) {
+        while b < nblocks as usize && blocks[b].intersects(loaded) {
             b += 1;
         }
         let first = other.start + run_start as u64 * BLOCK;
         let end = (other.start + b as u64 * BLOCK).min(other.start + other.count);
-        append_range(store, first, end - first, Some(loaded), files, tp, s)?;
+        runs.push((first, end - first));
     }
-    Ok(())
+    Ok(runs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::Rng;
+
+    #[test]
+    fn the_count_before_a_load_is_the_load() {
+        let mut rng = Rng::new(3);
+        // Dense in one corner, sparse elsewhere: margins meet blocks in part.
+        let pts: Vec<DVec3> = (0..12_000)
+            .map(|i| {
+                let s = if i % 3 == 0 { 10.0 } else { 2.0 };
+                let (x, y) = (rng.range(0.0, s), rng.range(0.0, s));
+                DVec3::new(x, y, (x * 0.7).sin())
+            })
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        let mut reader = crate::io::memory::MemoryReader::new("corner", pts, None);
+        let opts = crate::store::BuildOptions {
+            tiles: crate::store::TileTarget::Points(1500),
+            ..Default::default()
+        };
+        let store = crate::store::build_store(
+            &mut reader,
+            &dir.path().join("s"),
+            &opts,
+            &crate::progress::NoProgress,
+        )
+        .unwrap();
+        assert!(store.tiles().len() > 4);
+        for t in 0..store.tiles().len() {
+            for margin in [0.0, 0.05, 0.4, 3.0, 50.0] {
+                let loaded = load_tile(&store, t, margin, &[]).unwrap().points.len();
+                assert_eq!(
+                    count_loaded(&store, t, margin).unwrap(),
+                    loaded as u64,
+                    "tile {t} margin {margin}"
+                );
+            }
+        }
+    }
 }

@@ -6,4 +6,4 @@ pub(crate) mod beyond;
 pub(crate) mod load;
 
 pub use beyond::{Beyond, Seen};
-pub use load::{load_tile, MissingColumns, TileColumn, TilePoints, Values};
+pub use load::{count_loaded, load_tile, MissingColumns, TileColumn, TilePoints, Values};

@@ -168,6 +168,10 @@ impl TileKernel for ImplicitKernel {
         Some(tile_bytes(n, cubes.len() as u64, self.bytes_per_cube))
     }
 
+    fn bytes_to_load(&self, points: u64) -> Option<u64> {
+        Some(tile_bytes(points, 0, self.bytes_per_cube))
+    }
+
     fn margin(&self) -> f64 {
         self.initial_margin
     }
