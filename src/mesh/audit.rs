@@ -26,16 +26,17 @@
 //!
 //! How, for billions of triangles: each triangle `(a, b, c)` gives three
 //! corner records `(v, prev, next)` (`(a, c, b)`, `(b, a, c)`, `(c, b, a)`;
-//! 12 bytes each), gathered in a buffer of a fixed size, sorted, and written
-//! as a run to a scratch file; at the end the runs are merged (k-way,
-//! through a binary heap; more runs than [`Sizes::fan_in`] are merged in
-//! rounds first), so every vertex's corners arrive together, vertices in
-//! increasing order. At vertex `v` the corners name every edge `{v, w}`
-//! and how often each triangle runs it out of `v` (`next == w`) or into it
-//! (`prev == w`): an edge is counted at its smaller vertex, so exactly
-//! once, and the link's components are found by a union-find over the few
-//! neighbours. Records are sorted whole, so the merged order, and with it
-//! every sum, does not depend on the buffer size.
+//! 12 bytes each), gathered in a buffer of a fixed size, sorted by vertex,
+//! and written as a run to a scratch file; at the end the runs are merged
+//! (k-way, through a binary heap of the runs' next vertices; more runs than
+//! [`Sizes::fan_in`] are merged in rounds first), so every vertex's corners
+//! arrive together, vertices in increasing order. At vertex `v` the corners
+//! name every edge `{v, w}` and how often each triangle runs it out of `v`
+//! (`next == w`) or into it (`prev == w`): an edge is counted at its
+//! smaller vertex, so exactly once, and the link's components are found by
+//! a union-find over the few neighbours. A vertex's corners are sorted
+//! before they are counted, so every sum is the same whatever the buffer
+//! size (the order runs give them in).
 //!
 //! Components are disjoint sets over a paged scratch file
 //! ([`super::paged::ExternalSets`]), joined as triangles arrive; a set's
@@ -59,6 +60,7 @@ use super::write::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::IoError;
 use glam::DVec3;
+use rayon::slice::ParallelSliceMut;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fmt;
@@ -489,7 +491,7 @@ impl Auditor {
         if self.corners.is_empty() {
             return Ok(());
         }
-        self.corners.sort_unstable();
+        self.corners.sort_unstable_by_key(|c| c[0]);
         if self.runs.is_none() {
             let file = scratch_beside(&self.beside)?;
             self.runs = Some((BufWriter::with_capacity(1 << 20, file), Vec::new()));
@@ -534,8 +536,9 @@ impl Auditor {
         sweep.loops.grow(self.vertices);
         match self.runs.take() {
             None => {
-                // Everything fits one buffer: no run on disk.
-                self.corners.sort_unstable();
+                // Everything fits one buffer: no run on disk. The tiles are
+                // done, so the sort takes every thread.
+                self.corners.par_sort_unstable_by_key(|c| c[0]);
                 for &c in &self.corners {
                     sweep.corner(c, &mut self.sets)?;
                 }
@@ -543,7 +546,7 @@ impl Auditor {
             Some((mut w, mut runs)) => {
                 let start = runs.last().map_or(0, |r| r.start + r.len * RECORD as u64);
                 if !self.corners.is_empty() {
-                    self.corners.sort_unstable();
+                    self.corners.par_sort_unstable_by_key(|c| c[0]);
                     write_records(&mut w, &self.corners)?;
                     runs.push(Run {
                         start,
@@ -644,7 +647,11 @@ impl RunReader {
     }
 }
 
-/// Calls `each` on the records of `runs` (each sorted) in sorted order.
+/// Calls `each` on the records of `runs` (each sorted by vertex) in order
+/// of their vertices. The heap holds each run's next vertex: a run gives
+/// all its records of the smallest vertex at once (a vertex's corners are
+/// mostly in one run), so there is a heap operation per vertex and run,
+/// not per record.
 fn merge(
     file: &File,
     runs: &[Run],
@@ -653,16 +660,24 @@ fn merge(
 ) -> io::Result<()> {
     let share = buffer_bytes / runs.len().max(1);
     let mut readers: Vec<RunReader> = runs.iter().map(|&r| RunReader::new(r, share)).collect();
+    let mut heads: Vec<Option<Corner>> = Vec::with_capacity(readers.len());
     let mut heap = BinaryHeap::with_capacity(readers.len());
     for (i, r) in readers.iter_mut().enumerate() {
-        if let Some(c) = r.next(file)? {
-            heap.push(Reverse((c, i)));
+        let head = r.next(file)?;
+        if let Some(c) = head {
+            heap.push(Reverse((c[0], i)));
         }
+        heads.push(head);
     }
-    while let Some(Reverse((c, i))) = heap.pop() {
-        each(c)?;
-        if let Some(next) = readers[i].next(file)? {
-            heap.push(Reverse((next, i)));
+    while let Some(Reverse((v, i))) = heap.pop() {
+        let mut head = heads[i].take();
+        while let Some(c) = head.filter(|c| c[0] == v) {
+            each(c)?;
+            head = readers[i].next(file)?;
+        }
+        if let Some(c) = head {
+            heap.push(Reverse((c[0], i)));
+            heads[i] = Some(c);
         }
     }
     Ok(())
@@ -733,6 +748,9 @@ impl Sweep {
         };
         let a = &mut self.audit;
         a.referenced_vertices += 1;
+        // The runs give a vertex's corners in any order: in order, every
+        // sum is the same whatever the buffer's size.
+        self.link.sort_unstable();
         self.ends.clear();
         for &(prev, next) in &self.link {
             self.ends.extend([(next, 0u8), (prev, 1u8)]);

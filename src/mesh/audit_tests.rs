@@ -375,7 +375,8 @@ fn tiny_buffers_merged_in_rounds_give_the_same_audit() {
         // 3 records of every topological triangle, 6 a run: hundreds of
         // runs (the sphere's 3840 records make 640), merged 3 at a time.
         let (small, big) = (audit(&m, TINY), audit(&m, Sizes::DEFAULT));
-        // Records are sorted whole, so even the sums are the same bits.
+        // A vertex's corners are sorted before they count, so even the
+        // sums are the same bits.
         assert_eq!(small, big, "{what}");
     }
 }
