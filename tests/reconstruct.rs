@@ -7,10 +7,10 @@ mod common;
 use common::with_store;
 use glam::DVec3;
 use scanmesh::io::read_mesh_any;
-use scanmesh::mesh::{quality, Mesh, MeshFormat, QualityReport};
+use scanmesh::mesh::{quality, Failure, Mesh, MeshError, MeshFormat, QualityReport};
 use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::recon::implicit::reconstruct::{
-    reconstruct_implicit, ImplicitParams, ImplicitReport,
+    reconstruct_implicit, ImplicitParams, ImplicitReport, ReconError,
 };
 use scanmesh::spatial::{build_index, KnnBackend};
 use scanmesh::synth::{generate, Shape};
@@ -35,25 +35,68 @@ fn reconstruct_with(
     threads: usize,
     params: &ImplicitParams,
 ) -> Recon {
+    match reconstruct_or_broken(points, tile_points, threads, params) {
+        Ok(r) => r,
+        Err((_, failures)) => panic!("reconstruct: the promise broke: {failures:?}"),
+    }
+}
+
+/// The reconstruction, or when it broke its promise the mesh it wrote as
+/// incomplete and what broke.
+fn reconstruct_or_broken(
+    points: &[DVec3],
+    tile_points: u64,
+    threads: usize,
+    params: &ImplicitParams,
+) -> Result<Recon, (Mesh, Vec<Failure>)> {
     with_store(points, tile_points, threads, |store, dir| {
         let out = dir.join("mesh.ply");
-        let report = reconstruct_implicit(
+        let report = match reconstruct_implicit(
             store,
             params,
             &out,
             MeshFormat::PlyBinary,
             RunOptions::new(threads),
             &NoProgress,
-        )
-        .expect("reconstruct");
+        ) {
+            Ok(report) => report,
+            Err(ReconError::Mesh(MeshError::PromiseBroken {
+                written, failures, ..
+            })) => {
+                assert!(!out.exists());
+                let (v, t) = read_mesh_any(&written).expect("read mesh");
+                return Err((Mesh::new(v, t), failures));
+            }
+            Err(e) => panic!("reconstruct: {e}"),
+        };
         let (v, t) = read_mesh_any(&out).expect("read mesh");
         let mesh = Mesh::new(v, t);
         let quality = quality(&mesh);
-        Recon {
+        // The writer's streaming audit counts what the in-memory report does.
+        let (a, q) = (report.audit, &quality);
+        assert_eq!(
+            [
+                a.edges,
+                a.boundary_edges,
+                a.non_manifold_edges,
+                a.non_manifold_vertices
+            ],
+            [
+                q.edges,
+                q.boundary_edges,
+                q.non_manifold_edges,
+                q.non_manifold_vertices
+            ]
+        );
+        assert_eq!(
+            (a.inconsistent_edges, a.components, a.euler_characteristic),
+            (q.inconsistent_edges, q.components, q.euler_characteristic)
+        );
+        Ok(Recon {
             mesh,
             report,
             quality,
-        }
+        })
     })
 }
 
@@ -136,7 +179,17 @@ fn a_stray_point_above_does_not_turn_a_closed_torus_inside_out() {
             "stray at {stray}: volume {volume}, torus {truth}"
         );
         assert!(r.quality.watertight, "{}", r.quality);
-        assert_eq!(r.report.pieces.pieces_outward, 1, "stray at {stray}");
+        // The run promised it (`--closed`) and its audit says so.
+        let a = r.report.audit;
+        assert_eq!(
+            (a.components, a.closed_components),
+            (1, 1),
+            "stray at {stray}"
+        );
+        assert!(
+            (a.volume - volume).abs() < 1e-9 * volume,
+            "stray at {stray}"
+        );
     }
 }
 
@@ -205,7 +258,9 @@ fn plane_with_a_hole_has_two_boundary_loops() {
 /// orientation graph under a thousandth of the points, which the paper's
 /// island rule leaves unoriented. The reconstruction still closes its
 /// surface (the island is signed by its own highest points); a closed one
-/// drops it as a small piece.
+/// drops it as a small piece, and cannot close the plane: its rim is left
+/// open, so the run breaks the closed promise and writes the mesh as
+/// incomplete.
 #[test]
 fn an_island_is_kept_open_and_dropped_closed() {
     let mut points = generate(&Shape::hole_plane(2.0, 0.4), 60_000, 0.0, 4)
@@ -225,8 +280,23 @@ fn an_island_is_kept_open_and_dropped_closed() {
         on_ball(&open)
     );
     assert_eq!(open.quality.components, 2, "{}", open.quality);
-    let closed = reconstruct(&points, u64::MAX, 2, true);
-    assert_eq!(on_ball(&closed), 0);
+    let params = ImplicitParams {
+        closed: true,
+        ..ImplicitParams::default()
+    };
+    let Err((mesh, failures)) = reconstruct_or_broken(&points, u64::MAX, 2, &params) else {
+        panic!("an open plane kept the closed promise");
+    };
+    let near = |v: &&DVec3| (v.distance(centre) - 0.03).abs() < 0.01;
+    assert_eq!(mesh.vertices.iter().filter(near).count(), 0);
+    let q = quality(&mesh);
+    assert_eq!(
+        failures,
+        [Failure::BoundaryEdges {
+            edges: q.boundary_edges,
+            loops: q.boundary_loops
+        }]
+    );
 }
 
 #[test]

@@ -170,7 +170,8 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         format,
         run.opts,
         progress.as_ref(),
-    )?;
+    )
+    .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
     print_summary(
         &r,
         run.ws.store.len(),
@@ -182,8 +183,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
 }
 
 pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, out: &Path) {
+    super::report::mesh_audit(&r.audit);
     super::report::summary(format!(
-        "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles{}, {:.2} s, peak {} -> {}",
+        "reconstruct: {} points, {} tiles, rho {:.4e} ({} outliers left out), delta {:.4e}, cell {:.4e}, {} cubes -> {} vertices, {} triangles{}, {:.2} s, peak {} -> {}; checked: {}",
         points,
         tiles,
         r.rho,
@@ -196,12 +198,13 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
         changes_summary(r),
         secs,
         super::peak(),
-        out.display()
+        out.display(),
+        r.audit
     ));
 }
 
-/// " (N holes closed, M left open, P small pieces dropped, Q closed pieces
-/// outward)", the parts that apply.
+/// " (N holes closed, M left open, P small pieces dropped)", the parts
+/// that apply.
 fn changes_summary(r: &ImplicitReport) -> String {
     let (h, p) = (r.holes, r.pieces);
     let mut parts = Vec::new();
@@ -218,21 +221,6 @@ fn changes_summary(r: &ImplicitReport) -> String {
         parts.push(format!(
             "{} small pieces dropped ({} triangles)",
             p.pieces_dropped, p.triangles_dropped
-        ));
-    }
-    // `--closed` fails when a piece is inside out, so a count here is a
-    // check that passed.
-    if p.pieces_outward > 0 {
-        let n = p.pieces_outward;
-        let pieces = if n == 1 { "piece" } else { "pieces" };
-        parts.push(format!(
-            "outward check passed: {n} closed {pieces} of positive signed volume"
-        ));
-    }
-    if p.pieces_open > 0 {
-        parts.push(format!(
-            "{} pieces with open holes not checked for volume",
-            p.pieces_open
         ));
     }
     if parts.is_empty() {

@@ -32,6 +32,7 @@ pub fn run(
         prepared.opts,
         progress.as_ref(),
     )
+    .inspect_err(|e| super::report::broken_promise(e.mesh()))
     .with_context(|| format!("reconstructing {}", input.display()))?;
     print_summary(
         &r,
@@ -44,8 +45,9 @@ pub fn run(
 }
 
 fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: &Path) {
+    super::report::mesh_audit(&r.audit);
     super::report::summary(format!(
-        "reconstruct (delaunay): {points} points, {tiles} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left; triangulation {:.0} B/point; {secs:.2} s, peak {} -> {}",
+        "reconstruct (delaunay): {points} points, {tiles} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left; triangulation {:.0} B/point; {secs:.2} s, peak {} -> {}; checked: {}",
         r.run.retries,
         r.run.largest_margin,
         r.hole,
@@ -61,6 +63,7 @@ fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: 
         r.incompatible_left,
         r.triangulation_bytes_per_point,
         super::peak(),
-        out.display()
+        out.display(),
+        r.audit
     ));
 }

@@ -29,7 +29,8 @@ pub fn run(
         format,
         prepared.opts,
         progress.as_ref(),
-    )?;
+    )
+    .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
     print_summary(
         &r,
         prepared.ws.store.tiles().len(),
@@ -41,8 +42,9 @@ pub fn run(
 
 pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
     let st = &r.stitch;
+    super::report::mesh_audit(&r.audit);
     super::report::summary(format!(
-        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces, {:.2} s, peak {} -> {}",
+        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces, {:.2} s, peak {} -> {}; checked: {}",
         st.vertices,
         tiles,
         r.run.retries,
@@ -54,6 +56,7 @@ pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) 
         st.pieces,
         secs,
         super::peak(),
-        out.display()
+        out.display(),
+        r.audit
     ));
 }

@@ -13,6 +13,7 @@
 
 use super::clock::{Mark, Span};
 use scanmesh::io::LeftOut;
+use scanmesh::mesh::{MeshAudit, MeshError};
 use scanmesh::pipeline::Progress;
 use serde::Serialize;
 use std::io::Write;
@@ -26,6 +27,7 @@ static LOG: Mutex<Log> = Mutex::new(Log {
     skipped: None,
     left_out: None,
     kept: false,
+    audit: None,
 });
 
 struct Log {
@@ -37,6 +39,8 @@ struct Log {
     left_out: Option<LeftOut>,
     /// Whether the output holds the unselected points, flagged.
     kept: bool,
+    /// The audit of the mesh the run wrote (complete or not).
+    audit: Option<MeshAudit>,
 }
 
 #[derive(Clone, Serialize)]
@@ -61,6 +65,11 @@ struct Report<'a> {
     /// Input records not processed: pixels of an organised cloud without
     /// a return (NaN), points --classes / --returns did not select.
     left_out: Option<LeftOut>,
+    /// What the mesh written is (`reconstruct`): its boundary, non-manifold
+    /// and inconsistently wound edges, non-manifold vertices, components,
+    /// closed ones and their volumes; also when it broke the run's promise
+    /// and was written as `NAME.incomplete.EXT`.
+    mesh_audit: Option<MeshAudit>,
     total: Span,
     stages: Vec<Stage>,
 }
@@ -138,6 +147,21 @@ pub fn unselected_kept(kept: bool) {
     }
 }
 
+/// Records the audit of the mesh the run wrote, for the report.
+pub fn mesh_audit(audit: &MeshAudit) {
+    if let Ok(mut log) = LOG.lock() {
+        log.audit = Some(*audit);
+    }
+}
+
+/// Records the audit a broken promise carries (the mesh was written as
+/// incomplete), when `e` is one.
+pub fn broken_promise(e: Option<&MeshError>) {
+    if let Some(MeshError::PromiseBroken { audit, .. }) = e {
+        mesh_audit(audit);
+    }
+}
+
 /// The words the summary line ends with when records were left out.
 fn left_out_note(source: &str, l: &LeftOut, kept: bool) -> String {
     let records = if l.total() == 1 { "record" } else { "records" };
@@ -190,14 +214,15 @@ pub fn last_summary() -> Option<String> {
 /// Writes the report of this run to `path`: `start` is when the command
 /// began, `outcome` its result.
 pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow::Result<()> {
-    let (stages, summary, skipped, left_out) = match LOG.lock() {
+    let (stages, summary, skipped, left_out, mesh_audit) = match LOG.lock() {
         Ok(log) => (
             log.stages.clone(),
             log.summary.clone(),
             log.skipped.clone(),
             log.left_out,
+            log.audit,
         ),
-        Err(_) => (Vec::new(), None, None, None),
+        Err(_) => (Vec::new(), None, None, None, None),
     };
     let outcome = match outcome {
         Ok(()) => "ok".to_string(),
@@ -216,6 +241,7 @@ pub fn write(path: &Path, start: &Mark, outcome: &anyhow::Result<()>) -> anyhow:
         summary,
         skipped_invalid: skipped.map(|(_, n)| n),
         left_out,
+        mesh_audit,
         total: start.span(),
         stages,
     };

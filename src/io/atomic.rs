@@ -66,12 +66,17 @@ impl AtomicFile {
     }
 
     /// Flushes to disk and renames the temporary into its final name.
-    pub fn commit(mut self) -> Result<(), IoError> {
-        self.file
-            .sync_all()
-            .map_err(|e| IoError::os(&self.final_path, e))?;
-        std::fs::rename(&self.temp_path, &self.final_path)
-            .map_err(|e| IoError::os(&self.final_path, e))?;
+    pub fn commit(self) -> Result<(), IoError> {
+        let path = self.final_path.clone();
+        self.commit_to(&path)
+    }
+
+    /// Flushes to disk and renames the temporary to `path` instead of the
+    /// name it was created for (an output that is not what was asked for,
+    /// kept under a name that says so; same directory).
+    pub(crate) fn commit_to(mut self, path: &Path) -> Result<(), IoError> {
+        self.file.sync_all().map_err(|e| IoError::os(path, e))?;
+        std::fs::rename(&self.temp_path, path).map_err(|e| IoError::os(path, e))?;
         self.committed = true;
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! Errors of the mesh layer: invalid mesh data and failed mesh output, each
 //! naming the triangle, vertex or file concerned.
 
+use super::audit::{failures_text, Failure, MeshAudit, Promise};
 use crate::io::IoError;
 use std::path::PathBuf;
 
@@ -60,18 +61,21 @@ pub enum MeshError {
         /// Vertices written.
         vertex_count: u64,
     },
-    /// Pieces of a mesh that must enclose a volume enclose a negative one
-    /// (their faces are wound inward): the output was not completed.
-    #[error("{path}: {inward} of {pieces} closed pieces enclose a negative signed volume (down to {volume:.4e}): the surface is inside out (normals oriented inward), so no mesh was written")]
-    InwardPieces {
-        /// The output file (not written).
+    /// The mesh written breaks what the run promised of it (a closed
+    /// surface, or the projection's directed edges): it is written, but
+    /// under a name that says it is incomplete, never the name asked for.
+    #[error("{path}: the mesh does not keep its promise ({promise}): {failures_text}; written incomplete as {written} (checked: {audit})", failures_text = failures_text(.failures))]
+    PromiseBroken {
+        /// The output asked for (not written).
         path: PathBuf,
-        /// Pieces whose signed volume is not positive.
-        inward: u64,
-        /// Pieces checked.
-        pieces: u64,
-        /// The most negative signed volume among them.
-        volume: f64,
+        /// Where the mesh went: `NAME.incomplete.EXT`.
+        written: PathBuf,
+        /// What was promised.
+        promise: Promise,
+        /// What of it broke, with the counts.
+        failures: Vec<Failure>,
+        /// The whole audit of the mesh written.
+        audit: Box<MeshAudit>,
     },
     /// The output file could not be written.
     #[error(transparent)]

@@ -1,8 +1,9 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
 //! topology metrics (`quality`), smallest angles ([`angles`]),
 //! self-intersecting pairs (`self_intersect`), distances to a reference ([`distance`]),
-//! streaming PLY/OBJ output (`write`) and procedural shapes for tests and
-//! benches ([`shapes`]).
+//! streaming PLY/OBJ output (`write`), the audit of every mesh written
+//! (`audit`: its topology and volumes in bounded memory, and what a run
+//! promised of it) and procedural shapes for tests and benches ([`shapes`]).
 //!
 //! Mesh evaluation is not part of the five papers; the metrics follow the
 //! standard definitions named in each module (Euler characteristic, fans,
@@ -11,6 +12,7 @@
 //! nearest-neighbour distance.
 
 pub mod angles;
+pub(crate) mod audit;
 pub mod distance;
 pub(crate) mod error;
 mod paged;
@@ -29,14 +31,15 @@ mod topology;
 mod union_find;
 
 pub use angles::{angle_report, AngleReport};
+pub use audit::{audit_mesh, incomplete_path, Failure, MeshAudit, Promise};
 pub use distance::{
     compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
 };
 pub use error::MeshError;
-pub use pieces::{PieceFilter, PieceReport, PlacedTriangle};
+pub use pieces::{PieceFilter, PieceReport};
 pub use quality::{quality, ComponentQuality, QualityReport};
 pub use self_intersect::{self_intersections, SelfIntersectionReport};
-pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions};
+pub use write::{write_mesh, MeshFormat, MeshWriter, WriteOptions, Written};
 
 use error::non_finite_coordinate;
 use glam::DVec3;

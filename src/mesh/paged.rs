@@ -1,7 +1,8 @@
 //! Per-vertex state of unbounded size kept in a scratch file: an array of
-//! `u32` read and written through a cache of a fixed number of 4 KiB pages
+//! plain values (`u32` parents and counts, f64 sums, f64 positions) read
+//! and written through a cache of a fixed number of pages of 1024 elements
 //! (clock eviction, dirty pages written back), and the disjoint sets of
-//! [`super::pieces`] on top of it.
+//! [`super::pieces`] and [`super::audit`] on top of it.
 //!
 //! Why not a memory map: `--mem` is a promise about peak RSS, and mapped
 //! pages count in it once touched; with memory to spare the kernel never
@@ -19,21 +20,75 @@ use std::fs::File;
 use std::io;
 use std::os::unix::fs::FileExt;
 
-/// Elements per page (4 KiB of `u32`).
+/// Elements per page (4 KiB of `u32`, 24 KiB of positions).
 const PAGE: usize = 1024;
-const PAGE_BYTES: u64 = (PAGE * 4) as u64;
 
 /// RAM held per element: the page table's entry per page.
 pub const TABLE_BYTES_PER_ELEMENT: f64 = 4.0 / PAGE as f64;
 
-/// A growable `u32` array in a file, zero where never written.
-pub(crate) struct PagedU32 {
+/// A value a [`Paged`] array holds: a fixed number of little-endian bytes,
+/// all zero for `Default`.
+pub(crate) trait Element: Copy + Default {
+    /// Bytes of one element in the file.
+    const BYTES: usize;
+    /// The element stored in `bytes` (`BYTES` long).
+    fn load(bytes: &[u8]) -> Self;
+    /// Writes the element into `bytes` (`BYTES` long).
+    fn store(&self, bytes: &mut [u8]);
+}
+
+/// The `N` bytes at the start of `bytes` (zeros past its end; callers
+/// always pass at least `N`).
+fn array<const N: usize>(bytes: &[u8]) -> [u8; N] {
+    let mut a = [0u8; N];
+    let n = N.min(bytes.len());
+    a[..n].copy_from_slice(&bytes[..n]);
+    a
+}
+
+impl Element for u32 {
+    const BYTES: usize = 4;
+    fn load(bytes: &[u8]) -> Self {
+        u32::from_le_bytes(array(bytes))
+    }
+    fn store(&self, bytes: &mut [u8]) {
+        bytes[..4].copy_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Element for f64 {
+    const BYTES: usize = 8;
+    fn load(bytes: &[u8]) -> Self {
+        f64::from_le_bytes(array(bytes))
+    }
+    fn store(&self, bytes: &mut [u8]) {
+        bytes[..8].copy_from_slice(&self.to_le_bytes());
+    }
+}
+
+/// A position, `x, y, z`.
+impl Element for [f64; 3] {
+    const BYTES: usize = 24;
+    fn load(bytes: &[u8]) -> Self {
+        [0, 8, 16].map(|at| f64::load(&bytes[at..]))
+    }
+    fn store(&self, bytes: &mut [u8]) {
+        for (c, at) in self.iter().zip([0, 8, 16]) {
+            c.store(&mut bytes[at..]);
+        }
+    }
+}
+
+/// A growable array of `T` in a file, `T::default()` (all zero bytes)
+/// where never written.
+pub(crate) struct Paged<T: Element> {
     file: File,
-    /// Whole pages the file holds (later pages read as zeros).
+    /// Pages the file holds, the last maybe in part (later pages read as
+    /// zeros).
     file_pages: u64,
     /// Page number -> slot + 1 (0: not cached).
     table: Vec<u32>,
-    slots: Vec<Slot>,
+    slots: Vec<Slot<T>>,
     capacity: usize,
     hand: usize,
     /// The last page looked up and its slot: most accesses repeat it.
@@ -41,35 +96,49 @@ pub(crate) struct PagedU32 {
     bytes: Vec<u8>,
 }
 
-struct Slot {
+/// The `u32` array of the small-piece filter and the disjoint sets.
+pub(crate) type PagedU32 = Paged<u32>;
+
+struct Slot<T> {
     page: u64,
     dirty: bool,
     referenced: bool,
-    data: Box<[u32]>,
+    data: Box<[T]>,
 }
 
-impl PagedU32 {
+impl<T: Element> Paged<T> {
     /// An array over the scratch file `file` (empty), caching at most
     /// `cache_bytes` of pages (at least one).
     pub fn new(file: File, cache_bytes: usize) -> Self {
-        PagedU32 {
+        Self::over(file, 0, cache_bytes)
+    }
+
+    /// An array over `file`, which already holds `len` elements written
+    /// in this layout (a spool of values, read back by index).
+    pub fn over(file: File, len: u64, cache_bytes: usize) -> Self {
+        let page_bytes = PAGE * T::BYTES;
+        Paged {
             file,
-            file_pages: 0,
+            file_pages: len.div_ceil(PAGE as u64),
             table: Vec::new(),
             slots: Vec::new(),
-            capacity: (cache_bytes / PAGE_BYTES as usize).max(1),
+            capacity: (cache_bytes / page_bytes).max(1),
             hand: 0,
             last: None,
-            bytes: vec![0; PAGE_BYTES as usize],
+            bytes: vec![0; page_bytes],
         }
     }
 
-    pub fn get(&mut self, i: u64) -> io::Result<u32> {
+    fn page_bytes() -> u64 {
+        (PAGE * T::BYTES) as u64
+    }
+
+    pub fn get(&mut self, i: u64) -> io::Result<T> {
         let slot = self.slot_of(i / PAGE as u64)?;
         Ok(self.slots[slot].data[i as usize % PAGE])
     }
 
-    pub fn set(&mut self, i: u64, value: u32) -> io::Result<()> {
+    pub fn set(&mut self, i: u64, value: T) -> io::Result<()> {
         let slot = self.slot_of(i / PAGE as u64)?;
         let s = &mut self.slots[slot];
         s.data[i as usize % PAGE] = value;
@@ -101,7 +170,7 @@ impl PagedU32 {
                 page,
                 dirty: false,
                 referenced: false,
-                data: vec![0; PAGE].into_boxed_slice(),
+                data: vec![T::default(); PAGE].into_boxed_slice(),
             });
             self.slots.len() - 1
         } else {
@@ -136,10 +205,11 @@ impl PagedU32 {
         if !s.dirty {
             return Ok(());
         }
-        for (b, v) in self.bytes.chunks_exact_mut(4).zip(s.data.iter()) {
-            b.copy_from_slice(&v.to_le_bytes());
+        for (b, v) in self.bytes.chunks_exact_mut(T::BYTES).zip(s.data.iter()) {
+            v.store(b);
         }
-        self.file.write_all_at(&self.bytes, s.page * PAGE_BYTES)?;
+        self.file
+            .write_all_at(&self.bytes, s.page * Self::page_bytes())?;
         self.file_pages = self.file_pages.max(s.page + 1);
         s.dirty = false;
         Ok(())
@@ -153,13 +223,26 @@ impl PagedU32 {
         s.page = page;
         s.dirty = false;
         if page >= self.file_pages {
-            s.data.fill(0);
+            s.data.fill(T::default());
             return Ok(());
         }
-        self.file
-            .read_exact_at(&mut self.bytes, page * PAGE_BYTES)?;
-        for (v, b) in s.data.iter_mut().zip(self.bytes.chunks_exact(4)) {
-            *v = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        // The last page of a spool may be short: the rest reads as zeros.
+        let mut filled = 0;
+        let at = page * Self::page_bytes();
+        while filled < self.bytes.len() {
+            match self
+                .file
+                .read_at(&mut self.bytes[filled..], at + filled as u64)
+            {
+                Ok(0) => break,
+                Ok(n) => filled += n,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        self.bytes[filled..].fill(0);
+        for (v, b) in s.data.iter_mut().zip(self.bytes.chunks_exact(T::BYTES)) {
+            *v = T::load(b);
         }
         Ok(())
     }
@@ -214,14 +297,16 @@ impl ExternalSets {
         }
     }
 
-    /// Joins the sets of `a` and `b`.
-    pub fn union(&mut self, a: u64, b: u64) -> io::Result<()> {
+    /// Joins the sets of `a` and `b`; whether they were apart (so the
+    /// sets number one fewer).
+    pub fn union(&mut self, a: u64, b: u64) -> io::Result<bool> {
         let (ra, rb) = (self.find(a)?, self.find(b)?);
-        if ra != rb {
-            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-            self.parent.set(hi, lo as u32 + 1)?;
+        if ra == rb {
+            return Ok(false);
         }
-        Ok(())
+        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+        self.parent.set(hi, lo as u32 + 1)?;
+        Ok(true)
     }
 }
 
@@ -233,7 +318,7 @@ mod tests {
     /// A tiny cache (2 pages) over 20 pages of values, against a `Vec`.
     #[test]
     fn paged_array_equals_a_vec_through_evictions() {
-        let mut paged = PagedU32::new(tempfile::tempfile().unwrap(), 2 * PAGE_BYTES as usize);
+        let mut paged = PagedU32::new(tempfile::tempfile().unwrap(), 2 * 4 * PAGE);
         let n = 20 * PAGE as u64;
         let mut plain = vec![0u32; n as usize];
         let mut state = 12345u64;
@@ -259,7 +344,7 @@ mod tests {
     fn external_sets_equal_the_in_memory_ones() {
         for seed in [1u64, 7, 99] {
             let n = 5000usize;
-            let mut ext = ExternalSets::new(tempfile::tempfile().unwrap(), PAGE_BYTES as usize);
+            let mut ext = ExternalSets::new(tempfile::tempfile().unwrap(), 4 * PAGE);
             let mut mem = DisjointSets::<u32>::new(n);
             ext.grow(n as u64);
             let mut state = seed;

@@ -14,23 +14,15 @@
 //! (`super::paged`), so that `--mem` holds at any mesh size. With a share
 //! of 0 the filter passes everything straight through and keeps nothing.
 //!
-//! Asked to ([`PieceFilter::requiring_outward`]), it also checks that every
-//! piece it keeps encloses a positive volume (its faces wound outward): the
-//! sum of the triple products `a . (b x c)` of its triangles' corners, six
-//! times the signed volume. Each triangle's term is spooled beside its face
-//! (8 bytes) and summed per kept piece on replay, one sum per kept piece in
-//! RAM. A piece that fails stops the replay before the output is complete,
-//! so no inside-out mesh is ever renamed into place. A piece with a
-//! boundary the caller names ([`PieceFilter::open_at`]) encloses nothing
-//! and is not checked: its sum depends on the frame (a closed
-//! reconstruction of an open sheet is one).
+//! Whether the pieces kept are closed, and enclose a positive volume, is
+//! the writer's audit's to count ([`super::audit`]), on the mesh as
+//! written: a `--closed` run promises it ([`super::Promise::CLOSED`]).
 
 use super::paged::{ExternalSets, PagedU32, TABLE_BYTES_PER_ELEMENT};
-use super::write::scratch_beside;
+use super::write::{scratch_beside, Written};
 use super::{MeshError, MeshWriter};
 use crate::io::IoError;
 use glam::DVec3;
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 
@@ -45,23 +37,13 @@ const CACHE_BYTES: usize = 8 << 20;
 /// Items replayed into the writer at a time.
 const BATCH: usize = 1 << 16;
 
-/// A triangle by vertex indices, with its corners in one frame for the
-/// whole mesh (the volume check sums triple products in it: a frame near
-/// the mesh keeps them exact).
-pub type PlacedTriangle = ([u32; 3], [DVec3; 3]);
-
-/// What the filter dropped, and what it checked.
+/// What the filter dropped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PieceReport {
     /// Connected pieces left out.
     pub pieces_dropped: u64,
     /// Triangles of those pieces.
     pub triangles_dropped: u64,
-    /// Pieces kept whose signed volume was found positive (0 unless the
-    /// filter was [`PieceFilter::requiring_outward`]).
-    pub pieces_outward: u64,
-    /// Pieces kept but not checked: they have a boundary.
-    pub pieces_open: u64,
 }
 
 /// A [`MeshWriter`] that drops the small pieces of the mesh written through it (see the module doc).
@@ -75,11 +57,6 @@ struct Spool {
     min_share: f64,
     vertices: BufWriter<File>,
     faces: BufWriter<File>,
-    /// Each face's triple product, when volumes are checked.
-    volumes: Option<BufWriter<File>>,
-    /// A vertex on each boundary loop the caller named: their pieces are
-    /// open, so their volumes are not checked.
-    open: Vec<u32>,
     vertex_count: u64,
     sets: ExternalSets,
     /// The counts' file, opened with the others so a full disk shows early.
@@ -97,25 +74,6 @@ impl PieceFilter {
         Ok(PieceFilter {
             spool: Some(spool),
             out,
-        })
-    }
-
-    /// Also checks that every piece kept encloses a positive volume, and
-    /// fails with [`MeshError::InwardPieces`] (the output left incomplete)
-    /// when one does not. Spools the mesh even with a share of 0, to know
-    /// its pieces.
-    pub fn requiring_outward(self) -> Result<Self, MeshError> {
-        let PieceFilter { out, spool } = self;
-        let mut spool = match spool {
-            Some(s) => s,
-            None => Spool::create(&out, 0.0)?,
-        };
-        if spool.volumes.is_none() {
-            spool.volumes = Some(BufWriter::with_capacity(1 << 20, scratch(&out)?));
-        }
-        Ok(PieceFilter {
-            out,
-            spool: Some(spool),
         })
     }
 
@@ -143,35 +101,24 @@ impl PieceFilter {
         Ok(first as u32)
     }
 
-    /// Names vertices on boundaries: the pieces holding them are open, and
-    /// the volume check passes them over.
-    pub fn open_at(&mut self, vertices: &[u32]) {
-        if let Some(spool) = &mut self.spool {
-            spool.open.extend_from_slice(vertices);
-        }
-    }
-
-    /// As [`MeshWriter::add_triangles`], each triangle with its corners.
-    pub fn add_triangles(&mut self, triangles: &[PlacedTriangle]) -> Result<(), MeshError> {
+    /// As [`MeshWriter::add_triangles`].
+    pub fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> Result<(), MeshError> {
         let Some(spool) = &mut self.spool else {
-            let faces: Vec<[u32; 3]> = triangles.iter().map(|t| t.0).collect();
-            return self.out.add_triangles(&faces);
+            return self.out.add_triangles(triangles);
         };
         let written = spool.add_triangles(triangles);
         written.map_err(|e| self.os(e))
     }
 
-    /// Replays the kept pieces and completes the file; returns the vertex
-    /// and triangle counts written and what was dropped.
-    pub fn finish(self) -> Result<(u64, u64, PieceReport), MeshError> {
+    /// Replays the kept pieces and completes the file; returns what the
+    /// writer wrote (the counts and the audit) and what was dropped.
+    pub fn finish(self) -> Result<(Written, PieceReport), MeshError> {
         let PieceFilter { mut out, spool } = self;
         let Some(spool) = spool else {
-            let (v, t) = out.finish()?;
-            return Ok((v, t, PieceReport::default()));
+            return Ok((out.finish()?, PieceReport::default()));
         };
         let report = spool.replay(&mut out)?;
-        let (v, t) = out.finish()?;
-        Ok((v, t, report))
+        Ok((out.finish()?, report))
     }
 }
 
@@ -187,8 +134,6 @@ impl Spool {
             min_share,
             vertices: buffered(scratch(out)?),
             faces: buffered(scratch(out)?),
-            volumes: None,
-            open: Vec::new(),
             vertex_count: 0,
             sets: ExternalSets::new(scratch(out)?, CACHE_BYTES),
             counts: scratch(out)?,
@@ -206,13 +151,10 @@ impl Spool {
         Ok(())
     }
 
-    fn add_triangles(&mut self, triangles: &[PlacedTriangle]) -> std::io::Result<()> {
-        for (t, [a, b, c]) in triangles {
+    fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> std::io::Result<()> {
+        for t in triangles {
             for i in t {
                 self.faces.write_all(&i.to_le_bytes())?;
-            }
-            if let Some(volumes) = &mut self.volumes {
-                volumes.write_all(&a.dot(b.cross(*c)).to_le_bytes())?;
             }
             // An index past the vertices (a caller's bug) gets a set of its
             // own here and an out-of-range number on replay, where the
@@ -242,15 +184,6 @@ impl Spool {
         .map_err(os)?;
         let least = (self.min_share * largest as f64).ceil() as u32;
         let mut report = PieceReport::default();
-        if let Some(volumes) = self.volumes.take() {
-            let kept = kept_volumes(&mut self.sets, volumes, &mut faces, &mut count, least);
-            let mut kept = kept.map_err(os)?;
-            for &v in &self.open {
-                let root = self.sets.find(u64::from(v)).map_err(os)?;
-                report.pieces_open += u64::from(kept.remove(&root).is_some());
-            }
-            report.pieces_outward = outward(kept, &path)?;
-        }
         // A root comes before its members, so `count` can turn into the new
         // numbering as it goes: at a root its own count is still there; at
         // a member the root's new number is (u32::MAX: dropped).
@@ -319,51 +252,6 @@ impl Spool {
     }
 }
 
-/// Six times the signed volume of each piece of at least `least`
-/// triangles (`count` holds each root's triangles), by root: each face's
-/// term (spooled in `volumes`) summed per piece of `sets`.
-fn kept_volumes(
-    sets: &mut ExternalSets,
-    volumes: BufWriter<File>,
-    faces: &mut BufReader<File>,
-    count: &mut PagedU32,
-    least: u32,
-) -> std::io::Result<HashMap<u64, f64>> {
-    let mut terms = rewind(volumes)?;
-    faces.seek(SeekFrom::Start(0))?;
-    let mut sums: HashMap<u64, f64> = HashMap::new();
-    try_for_each_record::<12, std::io::Error>(faces, |r| {
-        let mut term = [0u8; 8];
-        terms.read_exact(&mut term)?;
-        let a = u32::from_le_bytes([r[0], r[1], r[2], r[3]]);
-        let root = sets.find(a as u64)?;
-        if count.get(root)? >= least {
-            *sums.entry(root).or_default() += f64::from_le_bytes(term);
-        }
-        Ok(())
-    })?;
-    Ok(sums)
-}
-
-/// How many kept pieces enclose a positive volume, or the error naming
-/// those that do not (six times their volume in `sums`).
-fn outward(sums: HashMap<u64, f64>, path: &std::path::Path) -> Result<u64, MeshError> {
-    let pieces = sums.len() as u64;
-    let inward: Vec<f64> = sums
-        .into_values()
-        .filter(|&v| v <= 0.0 || v.is_nan())
-        .collect();
-    if inward.is_empty() {
-        return Ok(pieces);
-    }
-    Err(MeshError::InwardPieces {
-        path: path.to_path_buf(),
-        inward: inward.len() as u64,
-        pieces,
-        volume: inward.iter().copied().fold(f64::INFINITY, f64::min) / 6.0,
-    })
-}
-
 /// A failure while replaying into the writer: the scratch files' or the
 /// writer's own.
 enum Replay {
@@ -411,6 +299,7 @@ fn try_for_each_record<const N: usize, E: From<std::io::Error>>(
 mod tests {
     use super::*;
     use crate::io::read_mesh_any;
+    use crate::mesh::audit::{incomplete_path, Failure, Promise};
     use crate::mesh::quality::quality;
     use crate::mesh::shapes::icosphere;
     use crate::mesh::{write_mesh, Mesh, MeshFormat};
@@ -419,15 +308,10 @@ mod tests {
     #[derive(Clone, Copy)]
     struct Spheres {
         min_share: f64,
-        /// Ask the filter to check volumes.
-        outward: bool,
+        /// What the writer promises.
+        promise: Promise,
         /// Wind the small sphere inward.
         small_inward: bool,
-    }
-
-    fn placed(vertices: &[DVec3], tris: &[[u32; 3]], first: u32) -> Vec<PlacedTriangle> {
-        let at = |i: u32| vertices[(i - first) as usize];
-        tris.iter().map(|t| (*t, t.map(at))).collect()
     }
 
     /// A big sphere (1280 triangles), a small far one (20) written between its halves (so the
@@ -435,25 +319,25 @@ mod tests {
     fn write_two_spheres(path: &std::path::Path, min_share: f64) -> PieceReport {
         let how = Spheres {
             min_share,
-            outward: false,
+            promise: Promise::NOTHING,
             small_inward: false,
         };
-        write_spheres(path, how).unwrap()
+        write_spheres(path, how).unwrap().1
     }
 
-    fn write_spheres(path: &std::path::Path, how: Spheres) -> Result<PieceReport, MeshError> {
+    fn write_spheres(
+        path: &std::path::Path,
+        how: Spheres,
+    ) -> Result<(Written, PieceReport), MeshError> {
         let big = icosphere(3);
         let small = icosphere(0);
-        let writer = MeshWriter::create(path, MeshFormat::PlyBinary).unwrap();
+        let writer = MeshWriter::create(path, MeshFormat::PlyBinary)
+            .unwrap()
+            .promising(how.promise);
         let mut filter = PieceFilter::new(writer, how.min_share).unwrap();
-        if how.outward {
-            filter = filter.requiring_outward().unwrap();
-        }
         let (half, rest) = big.triangles.split_at(big.triangles.len() / 2);
         filter.add_vertices(&big.vertices).unwrap();
-        filter
-            .add_triangles(&placed(&big.vertices, half, 0))
-            .unwrap();
+        filter.add_triangles(half).unwrap();
         let far: Vec<DVec3> = small
             .vertices
             .iter()
@@ -472,78 +356,73 @@ mod tests {
                 }
             })
             .collect();
-        filter
-            .add_triangles(&placed(&far, &shifted, first))
-            .unwrap();
-        filter
-            .add_triangles(&placed(&big.vertices, rest, 0))
-            .unwrap();
-        filter.finish().map(|f| f.2)
+        filter.add_triangles(&shifted).unwrap();
+        filter.add_triangles(rest).unwrap();
+        filter.finish()
     }
 
     #[test]
-    fn kept_pieces_wound_outward_pass_the_volume_check() {
+    fn kept_pieces_wound_outward_keep_the_closed_promise() {
         let dir = tempfile::tempdir().unwrap();
         let (checked, plain) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
         for (share, kept) in [(0.0, 2), (0.05, 1)] {
             let how = Spheres {
                 min_share: share,
-                outward: true,
+                promise: Promise::CLOSED,
                 small_inward: false,
             };
-            let report = write_spheres(&checked, how).unwrap();
-            assert_eq!(report.pieces_outward, kept, "share {share}");
-            // The check changes nothing written.
+            let (written, _) = write_spheres(&checked, how).unwrap();
+            let a = written.audit;
+            assert_eq!((a.components, a.closed_components), (kept, kept));
+            assert_eq!(a.inward_components, 0, "share {share}");
+            // The promise changes nothing written.
             write_two_spheres(&plain, share);
             assert!(std::fs::read(&checked).unwrap() == std::fs::read(&plain).unwrap());
         }
     }
 
     #[test]
-    fn an_inward_piece_fails_the_check_and_nothing_is_written() {
+    fn an_inward_piece_breaks_the_closed_promise_and_is_written_incomplete() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("m.ply");
         let how = Spheres {
             min_share: 0.0,
-            outward: true,
+            promise: Promise::CLOSED,
             small_inward: true,
         };
         match write_spheres(&path, how) {
-            Err(MeshError::InwardPieces {
-                inward: 1,
-                pieces: 2,
-                volume,
-                ..
+            Err(MeshError::PromiseBroken {
+                failures, written, ..
             }) => {
+                let [Failure::Inward {
+                    components: 1,
+                    smallest,
+                }] = failures[..]
+                else {
+                    panic!("{failures:?}")
+                };
                 // The small sphere's volume, 0.1^3 of an icosahedron's 2.54.
-                assert!(volume < -0.002 && volume > -0.003, "{volume}");
+                assert!(smallest < -0.002 && smallest > -0.003, "{smallest}");
+                assert_eq!(written, incomplete_path(&path));
             }
             other => panic!("{other:?}"),
         }
         assert!(!path.exists());
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-        // Named open (a boundary runs through vertex `first`), it is not
-        // checked either.
-        let writer = MeshWriter::create(&path, MeshFormat::PlyBinary).unwrap();
-        let mut filter = PieceFilter::new(writer, 0.0)
+        let names: Vec<_> = std::fs::read_dir(dir.path())
             .unwrap()
-            .requiring_outward()
-            .unwrap();
-        let small = icosphere(0);
-        let first = filter.add_vertices(&small.vertices).unwrap();
-        let inward: Vec<[u32; 3]> = small.triangles.iter().map(|&[a, b, c]| [a, c, b]).collect();
-        filter
-            .add_triangles(&placed(&small.vertices, &inward, first))
-            .unwrap();
-        filter.open_at(&[first + 3]);
-        let report = filter.finish().unwrap().2;
-        assert_eq!((report.pieces_outward, report.pieces_open), (0, 1));
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["m.incomplete.ply"]);
+        // The incomplete file holds the whole mesh, inward piece and all.
+        let (v, t) = read_mesh_any(&incomplete_path(&path)).unwrap();
+        assert_eq!((v.len(), t.len()), (642 + 12, 1280 + 20));
         // Dropped as a small piece, it is not checked.
         let dropped = Spheres {
             min_share: 0.05,
             ..how
         };
-        assert_eq!(write_spheres(&path, dropped).unwrap().pieces_outward, 1);
+        let (written, _) = write_spheres(&path, dropped).unwrap();
+        assert_eq!(written.audit.closed_components, 1);
     }
 
     #[test]
@@ -557,8 +436,6 @@ mod tests {
             PieceReport {
                 pieces_dropped: 1,
                 triangles_dropped: small,
-                pieces_outward: 0,
-                pieces_open: 0,
             }
         );
         let (vertices, triangles) = read_mesh_any(&path).unwrap();

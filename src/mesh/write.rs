@@ -8,11 +8,17 @@
 //! faces, patches the counts in place (same width, so nothing shifts) and
 //! renames the file into place. Dropping an unfinished writer leaves nothing.
 //!
+//! Every mesh written is audited on the way ([`super::audit`]): `finish`
+//! returns the counts with the file, and a writer that was given a
+//! [`Promise`] the mesh breaks renames its file to `NAME.incomplete.EXT`
+//! instead ([`incomplete_path`]) and fails, naming what broke it.
+//!
 //! Binary PLY layout: vertex `x, y, z` as `double` (or `float` with
 //! [`WriteOptions::single_precision`]), face `list uchar int vertex_indices`
 //! (so at most 2^31 vertices). Counts are written as 20 zero-padded digits,
 //! which every PLY reader parses as the plain decimal number.
 
+use super::audit::{incomplete_path, Auditor, MeshAudit, Promise, Sizes};
 use super::error::non_finite_coordinate;
 use super::{Mesh, MeshError};
 use crate::io::{AtomicFile, IoError};
@@ -65,6 +71,26 @@ pub struct MeshWriter {
     triangles: u64,
     /// Largest index seen so far and the first triangle that used it.
     max_index: Option<(u32, u64)>,
+    audit: Auditor,
+    promise: Promise,
+}
+
+/// What [`MeshWriter::finish`] wrote: the counts and the audit of the mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Written {
+    /// Vertices written.
+    pub vertices: u64,
+    /// Triangles written.
+    pub triangles: u64,
+    /// What the mesh is: its edges, vertices, components and volumes.
+    pub audit: MeshAudit,
+}
+
+impl Written {
+    /// The vertex and triangle counts.
+    pub fn counts(&self) -> (u64, u64) {
+        (self.vertices, self.triangles)
+    }
 }
 
 impl MeshWriter {
@@ -84,6 +110,7 @@ impl MeshWriter {
         let scratch = scratch_beside(path).map_err(os)?;
         let mut vertex_sink = BufWriter::with_capacity(BUFFER, out.file().try_clone().map_err(os)?);
         let counts_at = write_header(&mut vertex_sink, format, options).map_err(os)?;
+        let audit = Auditor::new(path, Sizes::DEFAULT).map_err(os)?;
         Ok(MeshWriter {
             vertex_sink,
             face_sink: BufWriter::with_capacity(BUFFER, scratch),
@@ -94,7 +121,16 @@ impl MeshWriter {
             vertices: 0,
             triangles: 0,
             max_index: None,
+            audit,
+            promise: Promise::NOTHING,
         })
+    }
+
+    /// The writer, checking `promise` at the end: a mesh that breaks it
+    /// is written as `NAME.incomplete.EXT` and `finish` fails with
+    /// [`MeshError::PromiseBroken`].
+    pub fn promising(self, promise: Promise) -> Self {
+        MeshWriter { promise, ..self }
     }
 
     /// The final path of the output.
@@ -141,6 +177,8 @@ impl MeshWriter {
         for &p in vertices {
             self.write_vertex(p).map_err(|e| self.os(e))?;
         }
+        let audited = self.audit.add_vertices(vertices);
+        audited.map_err(|e| self.os(e))?;
         self.vertices = count;
         Ok(first_index)
     }
@@ -157,12 +195,15 @@ impl MeshWriter {
             self.write_face(t).map_err(|e| self.os(e))?;
             self.triangles += 1;
         }
-        Ok(())
+        let audited = self.audit.add_triangles(triangles);
+        audited.map_err(|e| self.os(e))
     }
 
-    /// Completes the file and renames it into place; returns the vertex and
-    /// triangle counts written.
-    pub fn finish(mut self) -> Result<(u64, u64), MeshError> {
+    /// Completes the file, audits the mesh and renames the file into
+    /// place; returns the counts written and the audit. When the mesh
+    /// breaks the writer's [`Promise`], the file goes to
+    /// [`incomplete_path`] instead and the error names what broke it.
+    pub fn finish(mut self) -> Result<Written, MeshError> {
         if let Some((index, triangle)) = self.max_index.filter(|&(m, _)| m as u64 >= self.vertices)
         {
             return Err(MeshError::DanglingIndex {
@@ -173,10 +214,36 @@ impl MeshWriter {
             });
         }
         self.assemble().map_err(|e| self.os(e))?;
-        let counts = (self.vertices, self.triangles);
-        let MeshWriter { out, .. } = self;
-        out.commit()?;
-        Ok(counts)
+        let MeshWriter {
+            out,
+            audit,
+            promise,
+            vertices,
+            triangles,
+            ..
+        } = self;
+        let path = out.final_path().to_path_buf();
+        let audit = audit
+            .finish()
+            .map_err(|e| MeshError::Io(IoError::os(&path, e)))?;
+        let failures = promise.broken_by(&audit);
+        if failures.is_empty() {
+            out.commit()?;
+            return Ok(Written {
+                vertices,
+                triangles,
+                audit,
+            });
+        }
+        let written = incomplete_path(&path);
+        out.commit_to(&written)?;
+        Err(MeshError::PromiseBroken {
+            path,
+            written,
+            promise,
+            failures,
+            audit: Box::new(audit),
+        })
     }
 
     /// Appends the faces to the vertices and patches the header counts.
@@ -299,8 +366,8 @@ fn write_header(
 }
 
 /// Writes `mesh` to `path` in one go (streamed in batches through
-/// [`MeshWriter`]); returns the vertex and triangle counts.
-pub fn write_mesh(path: &Path, mesh: &Mesh, format: MeshFormat) -> Result<(u64, u64), MeshError> {
+/// [`MeshWriter`]); returns the counts and the audit.
+pub fn write_mesh(path: &Path, mesh: &Mesh, format: MeshFormat) -> Result<Written, MeshError> {
     const BATCH: usize = 1 << 16;
     let mut writer = MeshWriter::create(path, format)?;
     for chunk in mesh.vertices.chunks(BATCH) {

@@ -16,7 +16,7 @@ use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile};
 use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
-use crate::mesh::{MeshError, MeshFormat, MeshWriter};
+use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::PointStore;
@@ -112,6 +112,9 @@ pub struct DelaunayReport {
     pub triangulation_bytes_per_point: f64,
     /// The hole-closing rule used, for the report.
     pub hole: String,
+    /// The mesh written: its edges, vertices, components and volumes
+    /// (counted only: the method promises nothing it does not build).
+    pub audit: MeshAudit,
     /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
@@ -141,6 +144,17 @@ pub enum DelaunayReconError {
     /// The scratch file of the seam triangles could not be written or read.
     #[error("triangle spool: {0}")]
     Spool(#[from] std::io::Error),
+}
+
+impl DelaunayReconError {
+    /// The mesh layer's error inside, when writing the mesh is what failed
+    /// (a broken promise carries the audit and names the incomplete file).
+    pub fn mesh(&self) -> Option<&MeshError> {
+        match self {
+            DelaunayReconError::Mesh(e) => Some(e),
+            _ => None,
+        }
+    }
 }
 
 /// Reconstructs a mesh from the points of `store` with paper 4's Delaunay-based method, tile by tile, writing it to `output` in `format`; tiled output equals untiled.
@@ -290,9 +304,9 @@ impl Seams {
             }
         }
         self.replay(&mut uf)?;
-        let (vertices, triangles) = self.writer.finish()?;
-        self.report.vertices = vertices;
-        self.report.triangles = triangles;
+        let written = self.writer.finish()?;
+        (self.report.vertices, self.report.triangles) = written.counts();
+        self.report.audit = written.audit;
         Ok(self.report)
     }
 

@@ -45,7 +45,7 @@ const MIN_TRIES: usize = 12;
 const MAX_TRIES: usize = 256;
 
 /// A triangle by output indices, with its corners.
-pub type Placed = crate::mesh::PlacedTriangle;
+pub type Placed = ([u32; 3], [DVec3; 3]);
 
 /// Mesh triangles near boundary vertices, each with the boundary vertex it
 /// was kept for (it is forgotten with that vertex).

@@ -149,8 +149,8 @@ impl BoundaryEdges {
 
     /// Chains the boundary edges into loops and triangulates each loop that
     /// can be; returns the new triangles (wound like the mesh, with their
-    /// corners), the counts, and a vertex of each loop left open.
-    pub(crate) fn fill(self) -> (Vec<Placed>, HoleReport, Vec<u32>) {
+    /// corners) and the counts.
+    pub(crate) fn fill(self) -> (Vec<Placed>, HoleReport) {
         let mut edges = self.settled;
         edges.extend(
             self.waiting
@@ -162,11 +162,10 @@ impl BoundaryEdges {
         edges.sort_unstable_by_key(|[a, b]| (a.0, b.0));
         let mut report = HoleReport::default();
         let mut triangles = Vec::new();
-        let mut open = Vec::new();
         let is_edge = |a: u32, b: u32| self.edges_near_holes.contains_key(&(a.min(b), a.max(b)));
         let mut near = self.near;
         let turns = pinch_turns(&edges, &near);
-        for (start, lp) in chain_loops(edges, &turns) {
+        for (_, lp) in chain_loops(edges, &turns) {
             let patch = lp
                 .filter(|l| l.len() <= MAX_FILLED_LOOP)
                 .and_then(|l| patch_clear_of_mesh(&l, is_edge, &near));
@@ -176,13 +175,10 @@ impl BoundaryEdges {
                     triangles.extend_from_slice(&p);
                     report.filled += 1;
                 }
-                None => {
-                    report.left_open += 1;
-                    open.push(start);
-                }
+                None => report.left_open += 1,
             }
         }
-        (triangles, report, open)
+        (triangles, report)
     }
 }
 
@@ -428,7 +424,7 @@ mod tests {
         let mut edges = BoundaryEdges::default();
         edges.add_tile(&stitched(first, seam));
         edges.add_tile(&stitched(second, seam));
-        let (patch, report, open) = edges.fill();
+        let (patch, report) = edges.fill();
         assert_eq!(
             report,
             HoleReport {
@@ -437,7 +433,6 @@ mod tests {
             }
         );
         assert_eq!(patch.len(), 2);
-        assert!(open.is_empty());
         let mut vertices = vec![DVec3::ZERO; 8];
         for x in tris.iter().flatten() {
             vertices[x.0 as usize] = x.1;

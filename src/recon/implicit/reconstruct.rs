@@ -2,14 +2,17 @@
 //! (computed unless the store has them), paper 1's rho and delta, one global
 //! lattice anchored at the store origin, the marching-cubes tile kernel, and
 //! the seam stitcher streaming into a mesh file (through a filter of small
-//! pieces; with `--closed` the stitcher also patches holes).
+//! pieces; with `--closed` the stitcher also patches holes, and the run
+//! promises a closed surface: the writer's audit checks it).
 
 use super::holes::HoleReport;
 use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
 use super::sdf::Field;
 use super::stitch::Stitcher;
-use crate::mesh::{MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport};
+use crate::mesh::{
+    MeshAudit, MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport, Promise,
+};
 use crate::normals::{ensure_normals, NormalParams, NormalsError, NormalsReport};
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::{PointStore, StoreError};
@@ -130,6 +133,8 @@ pub struct ImplicitReport {
     pub holes: HoleReport,
     /// Small pieces dropped.
     pub pieces: PieceReport,
+    /// The mesh written: its edges, vertices, components and volumes.
+    pub audit: MeshAudit,
     /// Seam entries left at the end that no hole needs (0: the seam maps
     /// forgot every vertex once complete).
     pub seam_left: u64,
@@ -167,6 +172,17 @@ pub enum ReconError {
     /// The small-piece share lies outside `[0, 1]`.
     #[error("small-piece share {0} must lie between 0 and 1")]
     BadShare(f64),
+}
+
+impl ReconError {
+    /// The mesh layer's error inside, when writing the mesh is what failed
+    /// (a broken promise carries the audit and names the incomplete file).
+    pub fn mesh(&self) -> Option<&MeshError> {
+        match self {
+            ReconError::Mesh(e) => Some(e),
+            _ => None,
+        }
+    }
 }
 
 /// Reconstructs a mesh from the points of `store` with paper 1's implicit
@@ -221,12 +237,15 @@ pub fn reconstruct_implicit(
         spacing,
         bytes_per_cube: bytes_per_cube(params.closed),
     };
-    let mut writer = PieceFilter::new(MeshWriter::create(output, format)?, min_piece)?;
-    if params.closed {
-        // A closed surface encloses a volume: its pieces must face out
-        // (positive signed volume), or the run fails without a mesh.
-        writer = writer.requiring_outward()?;
-    }
+    // A closed surface is watertight, manifold, consistently wound and
+    // encloses a positive volume in every piece; a mesh that is not is
+    // written as incomplete and the run fails (`Promise`).
+    let promise = match params.closed {
+        true => Promise::CLOSED,
+        false => Promise::NOTHING,
+    };
+    let out = MeshWriter::create(output, format)?.promising(promise);
+    let writer = PieceFilter::new(out, min_piece)?;
     let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
     let mut stitcher = Stitcher::new(writer, store.origin(), cores);
     if params.closed {
@@ -245,6 +264,7 @@ pub fn reconstruct_implicit(
     report.triangles = written.triangles;
     report.holes = written.holes;
     report.pieces = written.pieces;
+    report.audit = written.audit;
     report.seam_left = written.seam_left;
     Ok(report)
 }

@@ -15,7 +15,7 @@ use super::lattice::{edge_from_key, Lattice};
 use super::owners::TileOwners;
 use super::polygonize::CubeVertex;
 use crate::geom::Aabb;
-use crate::mesh::{MeshError, PieceFilter, PieceReport, PlacedTriangle};
+use crate::mesh::{MeshAudit, MeshError, PieceFilter, PieceReport};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -26,6 +26,8 @@ pub struct StitchReport {
     pub triangles: u64,
     pub holes: HoleReport,
     pub pieces: PieceReport,
+    /// The writer's audit of the mesh written.
+    pub audit: MeshAudit,
     /// Seam state left at the end that no hole needs: 0 unless a vertex's
     /// owners were not found (tests check it).
     pub seam_left: u64,
@@ -85,8 +87,7 @@ impl Stitcher {
         let around = self.owners.around(tile, lattice.cell);
         self.private.clear();
         let mut new_vertices = Vec::new();
-        // Corners in the store's frame, where the volume check sums them.
-        let mut faces: Vec<PlacedTriangle> = Vec::with_capacity(tris.len());
+        let mut faces: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
         let mut stitched = Vec::new();
         for t in tris {
             let mut face = [0u32; 3];
@@ -118,7 +119,7 @@ impl Stitcher {
                     last,
                 });
             }
-            faces.push((face, t.map(|v| v.pos)));
+            faces.push(face);
         }
         if let Some(holes) = &mut self.holes {
             holes.add_tile(&stitched);
@@ -140,17 +141,15 @@ impl Stitcher {
         };
         if let Some(holes) = self.holes.take() {
             report.seam_left += holes.unneeded();
-            let (patches, holes, open) = holes.fill();
+            let (patches, holes) = holes.fill();
             report.holes = holes;
-            self.writer.open_at(&open);
-            let origin = self.origin;
-            let relative: Vec<PlacedTriangle> = patches
-                .into_iter()
-                .map(|(face, corners)| (face, corners.map(|p| p - origin)))
-                .collect();
-            self.writer.add_triangles(&relative)?;
+            let faces: Vec<[u32; 3]> = patches.into_iter().map(|(face, _)| face).collect();
+            self.writer.add_triangles(&faces)?;
         }
-        (report.vertices, report.triangles, report.pieces) = self.writer.finish()?;
+        let (written, pieces) = self.writer.finish()?;
+        (report.vertices, report.triangles) = written.counts();
+        report.pieces = pieces;
+        report.audit = written.audit;
         Ok(report)
     }
 }

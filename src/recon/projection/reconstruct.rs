@@ -10,7 +10,7 @@ use super::kernel::ProjectionKernel;
 use super::lattice::Lattice;
 use super::params::{BadParameter, ProjectionParams};
 use super::stitch::{StitchError, StitchReport, Stitcher};
-use crate::mesh::{MeshError, MeshFormat, MeshWriter};
+use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter, Promise};
 use crate::normals::NormalHood;
 use crate::pipeline::{run_tiles, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::spacing::ensure_spacing;
@@ -81,6 +81,8 @@ pub struct ProjectionReport {
     pub jobs_run: u64,
     /// What joining the jobs' triangles did.
     pub stitch: StitchReport,
+    /// The mesh written: its edges, vertices, components and volumes.
+    pub audit: MeshAudit,
     /// Tiles, retries and margins of the run.
     pub run: RunStats,
 }
@@ -104,6 +106,17 @@ pub enum ProjectionError {
     /// Joining the jobs' triangles failed.
     #[error(transparent)]
     Stitch(#[from] StitchError),
+}
+
+impl ProjectionError {
+    /// The mesh layer's error inside, when writing the mesh is what failed
+    /// (a broken promise carries the audit and names the incomplete file).
+    pub fn mesh(&self) -> Option<&MeshError> {
+        match self {
+            ProjectionError::Mesh(e) | ProjectionError::Stitch(StitchError::Mesh(e)) => Some(e),
+            _ => None,
+        }
+    }
 }
 
 /// The k-th neighbour distance of a uniform planar sample with mean
@@ -140,7 +153,11 @@ pub fn reconstruct_projection(
         lattice,
         initial_margin: margin * 1.05,
     };
-    let mut stitcher = Stitcher::new(MeshWriter::create(output, format)?)?;
+    // Every directed edge is used once (ARCHITECTURE.md): no non-manifold
+    // or inconsistently wound edge, or the mesh is written as incomplete
+    // and the run fails.
+    let out = MeshWriter::create(output, format)?.promising(Promise::DIRECTED_EDGES);
+    let mut stitcher = Stitcher::new(out)?;
     let (mut processed, mut jobs, mut jobs_run) = (0, 0, 0);
     let store = &*store;
     let run = run_tiles(store, &kernel, opts, progress, |t, out| {
@@ -151,7 +168,7 @@ pub fn reconstruct_projection(
             .add_tile(store, t, &store.tiles()[t], &out)
             .map_err(PipelineError::seam)
     })?;
-    let stitch = stitcher.finish()?;
+    let (stitch, audit) = stitcher.finish()?;
     Ok(ProjectionReport {
         spacing,
         lattice,
@@ -159,6 +176,7 @@ pub fn reconstruct_projection(
         jobs,
         jobs_run,
         stitch,
+        audit,
         run,
     })
 }

@@ -14,7 +14,7 @@ use super::kernel::ProjectionTile;
 use super::orient::flipped;
 use crate::io::IoError;
 use crate::mesh::write::scratch_beside;
-use crate::mesh::{MeshError, MeshWriter};
+use crate::mesh::{MeshAudit, MeshError, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
 use crate::store::{PointStore, StoreError, TileEntry};
 use std::collections::HashMap;
@@ -130,7 +130,9 @@ impl Stitcher {
     }
 
     /// Settles the pieces and writes every triangle.
-    pub fn finish(mut self) -> Result<StitchReport, StitchError> {
+    /// Settles the orientation, replays the triangles and completes the
+    /// file; returns the counts and the writer's audit.
+    pub fn finish(mut self) -> Result<(StitchReport, MeshAudit), StitchError> {
         let pieces = self.piece_volume.len();
         let mut uf = ParityUnionFind::new(pieces);
         let mut contradictions = 0;
@@ -179,12 +181,13 @@ impl Stitcher {
             }
         }
         self.writer.add_triangles(&batch)?;
-        let (vertices, triangles) = self.writer.finish()?;
-        Ok(StitchReport {
-            vertices,
-            triangles,
+        let written = self.writer.finish()?;
+        let report = StitchReport {
+            vertices: written.vertices,
+            triangles: written.triangles,
             pieces: pieces as u64,
             contradictions,
-        })
+        };
+        Ok((report, written.audit))
     }
 }
