@@ -44,7 +44,7 @@ pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) 
     let st = &r.stitch;
     super::report::mesh_audit(&r.audit);
     super::report::summary(format!(
-        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces, {:.2} s, peak {} -> {}; checked: {}",
+        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces{}, {:.2} s, peak {} -> {}; checked: {}",
         st.vertices,
         tiles,
         r.run.retries,
@@ -54,9 +54,19 @@ pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) 
         r.jobs_run as f64 / r.jobs.max(1) as f64,
         st.triangles,
         st.pieces,
+        left_out(st.left_out, st.contradictions),
         secs,
         super::peak(),
         out.display(),
         r.audit
     ));
+}
+
+/// " (N triangles left out where M contradicting joins ran edges twice the
+/// same way)", when any were.
+fn left_out(triangles: u64, contradictions: u64) -> String {
+    if triangles == 0 {
+        return String::new();
+    }
+    format!(" ({triangles} triangles left out: {contradictions} contradicting joins of pieces ran their edges twice the same way)")
 }

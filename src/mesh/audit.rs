@@ -26,17 +26,16 @@
 //!
 //! How, for billions of triangles: each triangle `(a, b, c)` gives three
 //! corner records `(v, prev, next)` (`(a, c, b)`, `(b, a, c)`, `(c, b, a)`;
-//! 12 bytes each), gathered in a buffer of a fixed size, sorted by vertex,
-//! and written as a run to a scratch file; at the end the runs are merged
-//! (k-way, through a binary heap of the runs' next vertices; more runs than
-//! [`Sizes::fan_in`] are merged in rounds first), so every vertex's corners
-//! arrive together, vertices in increasing order. At vertex `v` the corners
-//! name every edge `{v, w}` and how often each triangle runs it out of `v`
-//! (`next == w`) or into it (`prev == w`): an edge is counted at its
-//! smaller vertex, so exactly once, and the link's components are found by
-//! a union-find over the few neighbours. A vertex's corners are sorted
-//! before they are counted, so every sum is the same whatever the buffer
-//! size (the order runs give them in).
+//! 12 bytes each), gathered in a buffer of a fixed size, sorted, and written
+//! as a run to a scratch file; at the end the runs are merged (k-way,
+//! through a binary heap; more runs than [`Sizes::fan_in`] are merged in
+//! rounds first), so every vertex's corners arrive together, vertices in
+//! increasing order. At vertex `v` the corners name every edge `{v, w}`
+//! and how often each triangle runs it out of `v` (`next == w`) or into it
+//! (`prev == w`): an edge is counted at its smaller vertex, so exactly
+//! once, and the link's components are found by a union-find over the few
+//! neighbours. Records are sorted whole, so the merged order, and with it
+//! every sum, does not depend on the buffer size.
 //!
 //! Components are disjoint sets over a paged scratch file
 //! ([`super::paged::ExternalSets`]), joined as triangles arrive; a set's
@@ -56,17 +55,14 @@
 //! vertex for each set, 9 B per vertex for the sums, 4 B per component.
 
 use super::paged::{Element, ExternalSets, Paged};
+use super::runs::{RunSizes, SortedRuns};
 use super::write::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::IoError;
 use glam::DVec3;
-use rayon::slice::ParallelSliceMut;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
 /// What the audit found in a mesh: plain data, serialised into a run's
@@ -372,12 +368,8 @@ pub(crate) fn audit_mesh_sized(
 /// The audit's buffer sizes (tests shrink them to force many runs).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sizes {
-    /// Bytes of corner records gathered before a sorted run is written.
-    pub chunk_bytes: usize,
-    /// Most runs merged at once; more are merged in rounds first.
-    pub fan_in: usize,
-    /// Bytes of read buffers shared by the runs of one merge.
-    pub merge_bytes: usize,
+    /// The sort of the corner records.
+    pub runs: RunSizes,
     /// Bytes of each page cache (the sets, the positions; the sums and the
     /// loops' sets get a quarter).
     pub cache_bytes: usize,
@@ -387,37 +379,21 @@ impl Sizes {
     /// 16 MiB of records (1.4M corners: a run per 466k triangles), 256 runs
     /// at once through 64 KiB each, 4 MiB caches (8 for positions).
     pub const DEFAULT: Sizes = Sizes {
-        chunk_bytes: 16 << 20,
-        fan_in: 256,
-        merge_bytes: 16 << 20,
+        runs: RunSizes::DEFAULT,
         cache_bytes: 4 << 20,
     };
 }
 
-/// Bytes of a corner record: `v, prev, next`.
-const RECORD: usize = 12;
-
 /// A corner: the vertex, the corner before it and the corner after it in
 /// its triangle. Sorted whole: by vertex first.
 type Corner = [u32; 3];
-
-/// A run of sorted corners in a scratch file.
-#[derive(Clone, Copy, Debug)]
-struct Run {
-    /// Byte offset of its first record.
-    start: u64,
-    /// Records it holds.
-    len: u64,
-}
 
 /// The streaming audit a [`super::MeshWriter`] feeds (see the module doc).
 pub(crate) struct Auditor {
     /// The output the scratch files go beside.
     beside: PathBuf,
     sizes: Sizes,
-    corners: Vec<Corner>,
-    /// The sorted runs written so far, once the buffer first filled.
-    runs: Option<(BufWriter<File>, Vec<Run>)>,
+    corners: SortedRuns<Corner>,
     positions: BufWriter<File>,
     /// The first vertex: the frame the volumes are summed in.
     origin: Option<DVec3>,
@@ -433,8 +409,7 @@ impl Auditor {
         Ok(Auditor {
             beside: path.to_path_buf(),
             sizes,
-            corners: Vec::new(),
-            runs: None,
+            corners: SortedRuns::new(path, sizes.runs),
             positions: BufWriter::with_capacity(1 << 16, scratch_beside(path)?),
             origin: None,
             vertices: 0,
@@ -442,11 +417,6 @@ impl Auditor {
             repeated: 0,
             sets: ExternalSets::new(scratch_beside(path)?, sizes.cache_bytes),
         })
-    }
-
-    /// Records of the buffer before a run is written (at least one).
-    fn chunk_records(&self) -> usize {
-        (self.sizes.chunk_bytes / RECORD).max(1)
     }
 
     pub fn add_vertices(&mut self, vertices: &[DVec3]) -> io::Result<()> {
@@ -470,43 +440,13 @@ impl Auditor {
                 self.repeated += 1;
                 continue;
             }
-            if self.corners.capacity() == 0 {
-                // Pages never touched cost no RSS: a small mesh pays for
-                // what it uses.
-                self.corners.reserve_exact(self.chunk_records());
-            }
-            self.corners.extend([[a, c, b], [b, a, c], [c, b, a]]);
-            if self.corners.len() + 3 > self.chunk_records() {
-                self.spill()?;
+            for corner in [[a, c, b], [b, a, c], [c, b, a]] {
+                self.corners.push(corner)?;
             }
             self.sets.grow(u64::from(a.max(b).max(c)) + 1);
             self.sets.union(u64::from(a), u64::from(b))?;
             self.sets.union(u64::from(a), u64::from(c))?;
         }
-        Ok(())
-    }
-
-    /// Sorts the buffer and writes it as a run.
-    fn spill(&mut self) -> io::Result<()> {
-        if self.corners.is_empty() {
-            return Ok(());
-        }
-        self.corners.sort_unstable_by_key(|c| c[0]);
-        if self.runs.is_none() {
-            let file = scratch_beside(&self.beside)?;
-            self.runs = Some((BufWriter::with_capacity(1 << 20, file), Vec::new()));
-        }
-        if let Some((w, runs)) = &mut self.runs {
-            let start = runs
-                .last()
-                .map_or(0, |r: &Run| r.start + r.len * RECORD as u64);
-            write_records(w, &self.corners)?;
-            runs.push(Run {
-                start,
-                len: self.corners.len() as u64,
-            });
-        }
-        self.corners.clear();
         Ok(())
     }
 
@@ -534,153 +474,10 @@ impl Auditor {
             parent: Vec::new(),
         };
         sweep.loops.grow(self.vertices);
-        match self.runs.take() {
-            None => {
-                // Everything fits one buffer: no run on disk. The tiles are
-                // done, so the sort takes every thread.
-                self.corners.par_sort_unstable_by_key(|c| c[0]);
-                for &c in &self.corners {
-                    sweep.corner(c, &mut self.sets)?;
-                }
-            }
-            Some((mut w, mut runs)) => {
-                let start = runs.last().map_or(0, |r| r.start + r.len * RECORD as u64);
-                if !self.corners.is_empty() {
-                    self.corners.par_sort_unstable_by_key(|c| c[0]);
-                    write_records(&mut w, &self.corners)?;
-                    runs.push(Run {
-                        start,
-                        len: self.corners.len() as u64,
-                    });
-                }
-                self.corners = Vec::new();
-                let file = w.into_inner().map_err(|e| e.into_error())?;
-                let (file, runs) = merge_rounds(file, runs, &self.beside, self.sizes)?;
-                let sets = &mut self.sets;
-                merge(&file, &runs, self.sizes.merge_bytes, |c| {
-                    sweep.corner(c, sets)
-                })?;
-            }
-        }
+        let sets = &mut self.sets;
+        self.corners.merge(|c| sweep.corner(c, sets))?;
         sweep.close(&mut self.sets)
     }
-}
-
-/// Appends `records` to `w`, little-endian.
-fn write_records(w: &mut impl Write, records: &[Corner]) -> io::Result<()> {
-    let mut bytes = [0u8; RECORD];
-    for r in records {
-        for (b, x) in bytes.chunks_exact_mut(4).zip(r) {
-            b.copy_from_slice(&x.to_le_bytes());
-        }
-        w.write_all(&bytes)?;
-    }
-    Ok(())
-}
-
-/// Merges groups of `sizes.fan_in` runs into longer runs in a new file
-/// until at most that many are left.
-fn merge_rounds(
-    mut file: File,
-    mut runs: Vec<Run>,
-    beside: &Path,
-    sizes: Sizes,
-) -> io::Result<(File, Vec<Run>)> {
-    let fan_in = sizes.fan_in.max(2);
-    while runs.len() > fan_in {
-        let mut w = BufWriter::with_capacity(1 << 20, scratch_beside(beside)?);
-        let mut next = Vec::with_capacity(runs.len().div_ceil(fan_in));
-        let mut start = 0u64;
-        for group in runs.chunks(fan_in) {
-            let len: u64 = group.iter().map(|r| r.len).sum();
-            merge(&file, group, sizes.merge_bytes, |c| {
-                write_records(&mut w, &[c])
-            })?;
-            next.push(Run { start, len });
-            start += len * RECORD as u64;
-        }
-        file = w.into_inner().map_err(|e| e.into_error())?;
-        runs = next;
-    }
-    Ok((file, runs))
-}
-
-/// Reads one run's records in order through a buffer of its own.
-struct RunReader {
-    /// Byte offset of the next record not yet in the buffer.
-    at: u64,
-    /// Records not yet in the buffer.
-    left: u64,
-    buf: Vec<u8>,
-    /// Bytes of `buf` filled, and the next one to take.
-    filled: usize,
-    pos: usize,
-}
-
-impl RunReader {
-    fn new(run: Run, buffer_bytes: usize) -> Self {
-        let records = (buffer_bytes / RECORD).max(1);
-        RunReader {
-            at: run.start,
-            left: run.len,
-            buf: vec![0; records.min(run.len as usize).max(1) * RECORD],
-            filled: 0,
-            pos: 0,
-        }
-    }
-
-    fn next(&mut self, file: &File) -> io::Result<Option<Corner>> {
-        if self.pos == self.filled {
-            if self.left == 0 {
-                return Ok(None);
-            }
-            let records = (self.buf.len() / RECORD).min(self.left as usize);
-            let bytes = records * RECORD;
-            file.read_exact_at(&mut self.buf[..bytes], self.at)?;
-            self.at += bytes as u64;
-            self.left -= records as u64;
-            (self.filled, self.pos) = (bytes, 0);
-        }
-        let r = &self.buf[self.pos..self.pos + RECORD];
-        self.pos += RECORD;
-        Ok(Some([0, 4, 8].map(|k| u32::load(&r[k..]))))
-    }
-}
-
-/// Calls `each` on the records of `runs` (each sorted by vertex) in order
-/// of their vertices. The heap holds each run's next vertex: a run gives
-/// all its records of the smallest vertex at once (a vertex's corners are
-/// mostly in one run), so there is a heap operation per vertex and run,
-/// not per record.
-fn merge(
-    file: &File,
-    runs: &[Run],
-    buffer_bytes: usize,
-    mut each: impl FnMut(Corner) -> io::Result<()>,
-) -> io::Result<()> {
-    let share = buffer_bytes / runs.len().max(1);
-    let mut readers: Vec<RunReader> = runs.iter().map(|&r| RunReader::new(r, share)).collect();
-    let mut heads: Vec<Option<Corner>> = Vec::with_capacity(readers.len());
-    let mut heap = BinaryHeap::with_capacity(readers.len());
-    for (i, r) in readers.iter_mut().enumerate() {
-        let head = r.next(file)?;
-        if let Some(c) = head {
-            heap.push(Reverse((c[0], i)));
-        }
-        heads.push(head);
-    }
-    while let Some(Reverse((v, i))) = heap.pop() {
-        let mut head = heads[i].take();
-        while let Some(c) = head.filter(|c| c[0] == v) {
-            each(c)?;
-            head = readers[i].next(file)?;
-        }
-        if let Some(c) = head {
-            heap.push(Reverse((c[0], i)));
-            heads[i] = Some(c);
-        }
-    }
-    Ok(())
 }
 
 /// A component's running sum, at its root: six times its signed volume
@@ -748,9 +545,6 @@ impl Sweep {
         };
         let a = &mut self.audit;
         a.referenced_vertices += 1;
-        // The runs give a vertex's corners in any order: in order, every
-        // sum is the same whatever the buffer's size.
-        self.link.sort_unstable();
         self.ends.clear();
         for &(prev, next) in &self.link {
             self.ends.extend([(next, 0u8), (prev, 1u8)]);

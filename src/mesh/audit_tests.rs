@@ -15,9 +15,11 @@ use glam::DVec2;
 /// (two triangles a run) and merges them three at a time, in rounds, with
 /// one page of each cache.
 const TINY: Sizes = Sizes {
-    chunk_bytes: 7 * RECORD,
-    fan_in: 3,
-    merge_bytes: 64,
+    runs: RunSizes {
+        chunk_bytes: 7 * 12,
+        fan_in: 3,
+        merge_bytes: 64,
+    },
     cache_bytes: 1,
 };
 

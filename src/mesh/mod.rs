@@ -18,8 +18,10 @@ pub(crate) mod error;
 mod paged;
 pub(crate) mod pieces;
 pub(crate) mod quality;
+pub(crate) mod runs;
 pub(crate) mod self_intersect;
 pub mod shapes;
+pub(crate) mod wound;
 pub(crate) mod write;
 
 mod bvh;

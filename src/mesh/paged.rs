@@ -66,6 +66,19 @@ impl Element for f64 {
     }
 }
 
+/// A triangle's corners, or a corner with its neighbours.
+impl Element for [u32; 3] {
+    const BYTES: usize = 12;
+    fn load(bytes: &[u8]) -> Self {
+        [0, 4, 8].map(|at| u32::load(&bytes[at..]))
+    }
+    fn store(&self, bytes: &mut [u8]) {
+        for (c, at) in self.iter().zip([0, 4, 8]) {
+            c.store(&mut bytes[at..]);
+        }
+    }
+}
+
 /// A position, `x, y, z`.
 impl Element for [f64; 3] {
     const BYTES: usize = 24;

@@ -13,6 +13,8 @@
 use super::kernel::ProjectionTile;
 use super::orient::flipped;
 use crate::io::IoError;
+use crate::mesh::runs::RunSizes;
+use crate::mesh::wound::SameWay;
 use crate::mesh::write::scratch_beside;
 use crate::mesh::{MeshAudit, MeshError, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
@@ -20,7 +22,7 @@ use crate::store::{PointStore, StoreError, TileEntry};
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Counts of what was written.
 #[derive(Clone, Copy, Debug, Default)]
@@ -29,8 +31,11 @@ pub struct StitchReport {
     pub triangles: u64,
     pub pieces: u64,
     /// Relations between pieces that contradicted earlier ones (a
-    /// non-orientable join no job could see; 0 on the test surfaces).
+    /// non-orientable join no job could see).
     pub contradictions: u64,
+    /// Triangles left out so that no edge is run twice the same way (one
+    /// per such edge, where contradicting relations met).
+    pub left_out: u64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -129,7 +134,6 @@ impl Stitcher {
         p
     }
 
-    /// Settles the pieces and writes every triangle.
     /// Settles the orientation, replays the triangles and completes the
     /// file; returns the counts and the writer's audit.
     pub fn finish(mut self) -> Result<(StitchReport, MeshAudit), StitchError> {
@@ -154,32 +158,29 @@ impl Stitcher {
             .map(|&(r, flip)| flip ^ (volume[r as usize] < 0.0))
             .collect();
         self.spool.flush().map_err(|e| self.io(e))?;
-        let mut file = self.spool.get_ref().try_clone().map_err(|e| self.io(e))?;
-        file.seek(SeekFrom::Start(0)).map_err(|e| self.io(e))?;
-        let mut reader = BufReader::with_capacity(1 << 20, file);
+        let file = self.spool.get_ref().try_clone().map_err(|e| self.io(e))?;
+        // Relations that contradicted (a surface some job grew twisted
+        // across a thin part) leave edges both triangles run the same way:
+        // leave the later of each out, so the directed-edge promise holds.
+        let mut same_way = SameWay::new(&self.spool_path, RunSizes::DEFAULT);
+        replay(&self.spool_path, &file, self.spooled, &flip_of, |_, t| {
+            same_way.add(t).map_err(|e| self.io(e))
+        })?;
+        let left_out = same_way.left_out().map_err(|e| self.io(e))?;
         let mut batch = Vec::with_capacity(1 << 16);
-        let mut record = [0u8; RECORD];
-        for _ in 0..self.spooled {
-            reader.read_exact(&mut record).map_err(|e| self.io(e))?;
-            let word = |k: usize| {
-                u32::from_le_bytes([
-                    record[4 * k],
-                    record[4 * k + 1],
-                    record[4 * k + 2],
-                    record[4 * k + 3],
-                ])
-            };
-            let t = [word(0), word(1), word(2)];
-            batch.push(if flip_of[word(3) as usize] {
-                flipped(t)
-            } else {
-                t
-            });
+        let mut next_out = left_out.iter().peekable();
+        let writer = &mut self.writer;
+        replay(&self.spool_path, &file, self.spooled, &flip_of, |i, t| {
+            if next_out.next_if_eq(&&i).is_some() {
+                return Ok(());
+            }
+            batch.push(t);
             if batch.len() == batch.capacity() {
-                self.writer.add_triangles(&batch)?;
+                writer.add_triangles(&batch)?;
                 batch.clear();
             }
-        }
+            Ok(())
+        })?;
         self.writer.add_triangles(&batch)?;
         let written = self.writer.finish()?;
         let report = StitchReport {
@@ -187,7 +188,40 @@ impl Stitcher {
             triangles: written.triangles,
             pieces: pieces as u64,
             contradictions,
+            left_out: left_out.len() as u64,
         };
         Ok((report, written.audit))
     }
+}
+
+/// Reads the spooled triangles in order, each wound as its piece's flip
+/// says, and hands each with its place to `each`.
+fn replay(
+    path: &Path,
+    file: &File,
+    spooled: u64,
+    flip_of: &[bool],
+    mut each: impl FnMut(u64, [u32; 3]) -> Result<(), StitchError>,
+) -> Result<(), StitchError> {
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    let io = |e| StitchError::Io(IoError::os(path, e));
+    reader.seek(SeekFrom::Start(0)).map_err(io)?;
+    let mut record = [0u8; RECORD];
+    for i in 0..spooled {
+        reader.read_exact(&mut record).map_err(io)?;
+        let word = |k: usize| {
+            let b = &record[4 * k..4 * k + 4];
+            u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+        };
+        let t = [word(0), word(1), word(2)];
+        each(
+            i,
+            if flip_of[word(3) as usize] {
+                flipped(t)
+            } else {
+                t
+            },
+        )?;
+    }
+    Ok(())
 }

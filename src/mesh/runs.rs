@@ -1,0 +1,272 @@
+//! Fixed-size records sorted out of core: gathered in a buffer of a fixed
+//! size, each full buffer sorted and written as a run to a scratch file
+//! beside an output, and the runs merged back in order (k-way, through a
+//! binary heap; more runs than [`RunSizes::fan_in`] are merged in rounds
+//! first). The mesh audit sorts its corner records this way
+//! ([`super::audit`]), the projection's seam repair its edge uses
+//! (`recon::projection::stitch`). Records are sorted whole, so the merged
+//! order does not depend on the buffer size.
+//!
+//! RAM: the buffer ([`RunSizes::chunk_bytes`]) while records come, then
+//! the merge's read buffers ([`RunSizes::merge_bytes`]); disk: the records
+//! (twice while a round of merges runs).
+
+use super::paged::Element;
+use super::write::scratch_beside;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+
+/// How much memory the sort takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct RunSizes {
+    /// Bytes of records gathered before a sorted run is written.
+    pub chunk_bytes: usize,
+    /// Most runs merged at once; more are merged in rounds first.
+    pub fan_in: usize,
+    /// Bytes of read buffers shared by the runs of one merge.
+    pub merge_bytes: usize,
+}
+
+impl RunSizes {
+    /// 16 MiB of records, 256 runs at once through 64 KiB each.
+    pub const DEFAULT: RunSizes = RunSizes {
+        chunk_bytes: 16 << 20,
+        fan_in: 256,
+        merge_bytes: 16 << 20,
+    };
+}
+
+/// A run of sorted records in a scratch file.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    /// Byte offset of its first record.
+    start: u64,
+    /// Records it holds.
+    len: u64,
+}
+
+/// Records waiting to be merged in order.
+pub(crate) struct SortedRuns<R> {
+    /// The output the scratch files go beside.
+    beside: PathBuf,
+    sizes: RunSizes,
+    buffer: Vec<R>,
+    /// The sorted runs written so far, once the buffer first filled.
+    runs: Option<(BufWriter<File>, Vec<Run>)>,
+}
+
+impl<R: Element + Ord> SortedRuns<R> {
+    /// A sort whose scratch files go beside `path`.
+    pub fn new(path: &Path, sizes: RunSizes) -> Self {
+        SortedRuns {
+            beside: path.to_path_buf(),
+            sizes,
+            buffer: Vec::new(),
+            runs: None,
+        }
+    }
+
+    /// Records of the buffer before a run is written (at least one).
+    fn chunk_records(&self) -> usize {
+        (self.sizes.chunk_bytes / R::BYTES).max(1)
+    }
+
+    /// Adds a record; writes a run when the buffer is full.
+    pub fn push(&mut self, record: R) -> io::Result<()> {
+        if self.buffer.capacity() == 0 {
+            // Pages never touched cost no RSS: a small sort pays for what
+            // it uses.
+            self.buffer.reserve_exact(self.chunk_records());
+        }
+        self.buffer.push(record);
+        if self.buffer.len() >= self.chunk_records() {
+            self.spill()?;
+        }
+        Ok(())
+    }
+
+    /// Sorts the buffer and writes it as a run.
+    fn spill(&mut self) -> io::Result<()> {
+        if self.buffer.is_empty() {
+            return Ok(());
+        }
+        self.buffer.sort_unstable();
+        if self.runs.is_none() {
+            let file = scratch_beside(&self.beside)?;
+            self.runs = Some((BufWriter::with_capacity(1 << 20, file), Vec::new()));
+        }
+        if let Some((w, runs)) = &mut self.runs {
+            let start = runs.last().map_or(0, |r| r.start + r.len * R::BYTES as u64);
+            write_records(w, &self.buffer)?;
+            runs.push(Run {
+                start,
+                len: self.buffer.len() as u64,
+            });
+        }
+        self.buffer.clear();
+        Ok(())
+    }
+
+    /// Calls `each` on every record, in sorted order.
+    pub fn merge(mut self, mut each: impl FnMut(R) -> io::Result<()>) -> io::Result<()> {
+        if self.runs.is_none() {
+            // Everything fits one buffer: no run on disk.
+            self.buffer.sort_unstable();
+            return self.buffer.iter().try_for_each(|&r| each(r));
+        }
+        self.spill()?;
+        self.buffer = Vec::new();
+        let Some((w, runs)) = self.runs.take() else {
+            return Ok(());
+        };
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        let (file, runs) = merge_rounds::<R>(file, runs, &self.beside, self.sizes)?;
+        merge(&file, &runs, self.sizes.merge_bytes, each)
+    }
+}
+
+/// Appends `records` to `w`, little-endian.
+fn write_records<R: Element>(w: &mut impl Write, records: &[R]) -> io::Result<()> {
+    let mut bytes = vec![0u8; R::BYTES];
+    for r in records {
+        r.store(&mut bytes);
+        w.write_all(&bytes)?;
+    }
+    Ok(())
+}
+
+/// Merges groups of `sizes.fan_in` runs into longer runs in a new file
+/// until at most that many are left.
+fn merge_rounds<R: Element + Ord>(
+    mut file: File,
+    mut runs: Vec<Run>,
+    beside: &Path,
+    sizes: RunSizes,
+) -> io::Result<(File, Vec<Run>)> {
+    let fan_in = sizes.fan_in.max(2);
+    while runs.len() > fan_in {
+        let mut w = BufWriter::with_capacity(1 << 20, scratch_beside(beside)?);
+        let mut next = Vec::with_capacity(runs.len().div_ceil(fan_in));
+        let mut start = 0u64;
+        for group in runs.chunks(fan_in) {
+            let len: u64 = group.iter().map(|r| r.len).sum();
+            merge::<R>(&file, group, sizes.merge_bytes, |r| {
+                write_records(&mut w, &[r])
+            })?;
+            next.push(Run { start, len });
+            start += len * R::BYTES as u64;
+        }
+        file = w.into_inner().map_err(|e| e.into_error())?;
+        runs = next;
+    }
+    Ok((file, runs))
+}
+
+/// Reads one run's records in order through a buffer of its own.
+struct RunReader {
+    /// Byte offset of the next record not yet in the buffer.
+    at: u64,
+    /// Records not yet in the buffer.
+    left: u64,
+    buf: Vec<u8>,
+    /// Bytes of `buf` filled, and the next one to take.
+    filled: usize,
+    pos: usize,
+}
+
+impl RunReader {
+    fn new(run: Run, buffer_bytes: usize, record: usize) -> Self {
+        let records = (buffer_bytes / record).max(1);
+        RunReader {
+            at: run.start,
+            left: run.len,
+            buf: vec![0; records.min(run.len as usize).max(1) * record],
+            filled: 0,
+            pos: 0,
+        }
+    }
+
+    fn next<R: Element>(&mut self, file: &File) -> io::Result<Option<R>> {
+        if self.pos == self.filled {
+            if self.left == 0 {
+                return Ok(None);
+            }
+            let records = (self.buf.len() / R::BYTES).min(self.left as usize);
+            let bytes = records * R::BYTES;
+            file.read_exact_at(&mut self.buf[..bytes], self.at)?;
+            self.at += bytes as u64;
+            self.left -= records as u64;
+            (self.filled, self.pos) = (bytes, 0);
+        }
+        let r = R::load(&self.buf[self.pos..self.pos + R::BYTES]);
+        self.pos += R::BYTES;
+        Ok(Some(r))
+    }
+}
+
+/// Calls `each` on the records of `runs` (each sorted) in sorted order.
+fn merge<R: Element + Ord>(
+    file: &File,
+    runs: &[Run],
+    buffer_bytes: usize,
+    mut each: impl FnMut(R) -> io::Result<()>,
+) -> io::Result<()> {
+    let share = buffer_bytes / runs.len().max(1);
+    let mut readers: Vec<RunReader> = runs
+        .iter()
+        .map(|&r| RunReader::new(r, share, R::BYTES))
+        .collect();
+    let mut heap = BinaryHeap::with_capacity(readers.len());
+    for (i, r) in readers.iter_mut().enumerate() {
+        if let Some(c) = r.next::<R>(file)? {
+            heap.push(Reverse((c, i)));
+        }
+    }
+    while let Some(Reverse((c, i))) = heap.pop() {
+        each(c)?;
+        if let Some(next) = readers[i].next::<R>(file)? {
+            heap.push(Reverse((next, i)));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::Rng;
+
+    #[test]
+    fn merged_runs_come_back_sorted_whatever_the_sizes() {
+        let dir = tempfile::tempdir().unwrap();
+        let beside = dir.path().join("out.ply");
+        let mut rng = Rng::new(5);
+        let records: Vec<[u32; 3]> = (0..20_000)
+            .map(|_| [0; 3].map(|_| rng.below(500) as u32))
+            .collect();
+        let mut expected = records.clone();
+        expected.sort_unstable();
+        let tiny = RunSizes {
+            chunk_bytes: 12 * 37,
+            fan_in: 3,
+            merge_bytes: 100,
+        };
+        for sizes in [tiny, RunSizes::DEFAULT] {
+            let mut runs = SortedRuns::new(&beside, sizes);
+            for &r in &records {
+                runs.push(r).unwrap();
+            }
+            let mut got = Vec::new();
+            runs.merge(|r| {
+                got.push(r);
+                Ok(())
+            })
+            .unwrap();
+            assert_eq!(got, expected);
+        }
+    }
+}
