@@ -26,16 +26,16 @@
 //!
 //! How, for billions of triangles: each triangle `(a, b, c)` gives three
 //! corner records `(v, prev, next)` (`(a, c, b)`, `(b, a, c)`, `(c, b, a)`;
-//! 12 bytes each), gathered in a buffer of a fixed size, sorted, and written
-//! as a run to a scratch file; at the end the runs are merged (k-way,
-//! through a binary heap; more runs than [`Sizes::fan_in`] are merged in
-//! rounds first), so every vertex's corners arrive together, vertices in
-//! increasing order. At vertex `v` the corners name every edge `{v, w}`
-//! and how often each triangle runs it out of `v` (`next == w`) or into it
-//! (`prev == w`): an edge is counted at its smaller vertex, so exactly
-//! once, and the link's components are found by a union-find over the few
-//! neighbours. Records are sorted whole, so the merged order, and with it
-//! every sum, does not depend on the buffer size.
+//! 12 bytes each), sorted out of core by vertex (`super::runs`: buffers of
+//! a fixed size sorted and written as runs to a scratch file, merged at
+//! the end a vertex's block of each run at a time), so every vertex's
+//! corners arrive together, vertices in increasing order. At vertex `v`
+//! the corners name every edge `{v, w}` and how often each triangle runs it
+//! out of `v` (`next == w`) or into it (`prev == w`): an edge is counted at
+//! its smaller vertex, so exactly once, and the link's components are found
+//! by a union-find over the few neighbours. A vertex's corners are sorted
+//! before they are counted, so every sum is the same whatever the buffer
+//! size (the order the runs give them in).
 //!
 //! Components are disjoint sets over a paged scratch file
 //! ([`super::paged::ExternalSets`]), joined as triangles arrive; a set's
@@ -55,7 +55,7 @@
 //! vertex for each set, 9 B per vertex for the sums, 4 B per component.
 
 use super::paged::{Element, ExternalSets, Paged};
-use super::runs::{RunSizes, SortedRuns};
+use super::runs::{Order, RunSizes, SortedRuns};
 use super::write::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::IoError;
@@ -385,15 +385,25 @@ impl Sizes {
 }
 
 /// A corner: the vertex, the corner before it and the corner after it in
-/// its triangle. Sorted whole: by vertex first.
+/// its triangle. Grouped by vertex.
 type Corner = [u32; 3];
+
+/// Corners sorted by their vertex alone.
+struct ByVertex;
+
+impl Order<Corner> for ByVertex {
+    const GROUPED: bool = true;
+    fn key(c: &Corner) -> u64 {
+        c[0].into()
+    }
+}
 
 /// The streaming audit a [`super::MeshWriter`] feeds (see the module doc).
 pub(crate) struct Auditor {
     /// The output the scratch files go beside.
     beside: PathBuf,
     sizes: Sizes,
-    corners: SortedRuns<Corner>,
+    corners: SortedRuns<Corner, ByVertex>,
     positions: BufWriter<File>,
     /// The first vertex: the frame the volumes are summed in.
     origin: Option<DVec3>,
@@ -545,6 +555,9 @@ impl Sweep {
         };
         let a = &mut self.audit;
         a.referenced_vertices += 1;
+        // The runs give a vertex's corners in any order: in order, every
+        // sum is the same whatever the buffer's size.
+        self.link.sort_unstable();
         self.ends.clear();
         for &(prev, next) in &self.link {
             self.ends.extend([(next, 0u8), (prev, 1u8)]);

@@ -5,7 +5,14 @@
 //! first). The mesh audit sorts its corner records this way
 //! ([`super::audit`]), the projection's seam repair its edge uses
 //! (`recon::projection::stitch`). Records are sorted whole, so the merged
-//! order does not depend on the buffer size.
+//! order does not depend on the buffer size; or, with an [`Order`] that
+//! groups, by a key only, and merged a key's block of each run at a time
+//! (a heap operation per key and run, not per record): the keys come in
+//! order, a key's records in an order the buffer size decides. The audit
+//! groups its corners by vertex so (its per-vertex work sorts the few
+//! records of a vertex itself): auditing the 1M dragon's open mesh (2.38M
+//! triangles, 7.2M corners, 6 runs) took 0.73 s instead of 0.93 sorted
+//! whole.
 //!
 //! RAM: the buffer ([`RunSizes::chunk_bytes`]) while records come, then
 //! the merge's read buffers ([`RunSizes::merge_bytes`]); disk: the records
@@ -13,10 +20,12 @@
 
 use super::paged::Element;
 use super::write::scratch_beside;
+use rayon::slice::ParallelSliceMut;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
+use std::marker::PhantomData;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
@@ -40,6 +49,26 @@ impl RunSizes {
     };
 }
 
+/// How the records of a [`SortedRuns`] are ordered: whole ([`Whole`]), or
+/// grouped by a key (a type of the caller's, so the sort's comparisons
+/// inline).
+pub(crate) trait Order<R> {
+    /// Sorted by [`Order::key`] alone, a key's records in no given order.
+    const GROUPED: bool;
+    /// The key a grouped sort orders by.
+    fn key(record: &R) -> u64;
+}
+
+/// Records sorted whole.
+pub(crate) struct Whole;
+
+impl<R> Order<R> for Whole {
+    const GROUPED: bool = false;
+    fn key(_: &R) -> u64 {
+        0
+    }
+}
+
 /// A run of sorted records in a scratch file.
 #[derive(Clone, Copy, Debug)]
 struct Run {
@@ -50,16 +79,17 @@ struct Run {
 }
 
 /// Records waiting to be merged in order.
-pub(crate) struct SortedRuns<R> {
+pub(crate) struct SortedRuns<R, O = Whole> {
     /// The output the scratch files go beside.
     beside: PathBuf,
     sizes: RunSizes,
     buffer: Vec<R>,
     /// The sorted runs written so far, once the buffer first filled.
     runs: Option<(BufWriter<File>, Vec<Run>)>,
+    order: PhantomData<O>,
 }
 
-impl<R: Element + Ord> SortedRuns<R> {
+impl<R: Element + Ord + Send, O: Order<R>> SortedRuns<R, O> {
     /// A sort whose scratch files go beside `path`.
     pub fn new(path: &Path, sizes: RunSizes) -> Self {
         SortedRuns {
@@ -67,6 +97,18 @@ impl<R: Element + Ord> SortedRuns<R> {
             sizes,
             buffer: Vec::new(),
             runs: None,
+            order: PhantomData,
+        }
+    }
+
+    /// Sorts `records` as `O` says; on every thread of the pool when
+    /// `parallel`.
+    fn sort(records: &mut [R], parallel: bool) {
+        match (O::GROUPED, parallel) {
+            (true, false) => records.sort_unstable_by_key(O::key),
+            (true, true) => records.par_sort_unstable_by_key(O::key),
+            (false, false) => records.sort_unstable(),
+            (false, true) => records.par_sort_unstable(),
         }
     }
 
@@ -84,17 +126,18 @@ impl<R: Element + Ord> SortedRuns<R> {
         }
         self.buffer.push(record);
         if self.buffer.len() >= self.chunk_records() {
-            self.spill()?;
+            self.spill(false)?;
         }
         Ok(())
     }
 
-    /// Sorts the buffer and writes it as a run.
-    fn spill(&mut self) -> io::Result<()> {
+    /// Sorts the buffer (on every thread when `parallel`) and writes it as
+    /// a run.
+    fn spill(&mut self, parallel: bool) -> io::Result<()> {
         if self.buffer.is_empty() {
             return Ok(());
         }
-        self.buffer.sort_unstable();
+        Self::sort(&mut self.buffer, parallel);
         if self.runs.is_none() {
             let file = scratch_beside(&self.beside)?;
             self.runs = Some((BufWriter::with_capacity(1 << 20, file), Vec::new()));
@@ -111,21 +154,23 @@ impl<R: Element + Ord> SortedRuns<R> {
         Ok(())
     }
 
-    /// Calls `each` on every record, in sorted order.
+    /// Calls `each` on every record, in the order `O` says. The last buffer
+    /// is sorted on every thread of the pool: the callers merge once the
+    /// tiles are done.
     pub fn merge(mut self, mut each: impl FnMut(R) -> io::Result<()>) -> io::Result<()> {
         if self.runs.is_none() {
             // Everything fits one buffer: no run on disk.
-            self.buffer.sort_unstable();
+            Self::sort(&mut self.buffer, true);
             return self.buffer.iter().try_for_each(|&r| each(r));
         }
-        self.spill()?;
+        self.spill(true)?;
         self.buffer = Vec::new();
         let Some((w, runs)) = self.runs.take() else {
             return Ok(());
         };
         let file = w.into_inner().map_err(|e| e.into_error())?;
-        let (file, runs) = merge_rounds::<R>(file, runs, &self.beside, self.sizes)?;
-        merge(&file, &runs, self.sizes.merge_bytes, each)
+        let (file, runs) = merge_rounds::<R, O>(file, runs, &self.beside, self.sizes)?;
+        merge_runs::<R, O>(&file, &runs, self.sizes.merge_bytes, each)
     }
 }
 
@@ -141,7 +186,7 @@ fn write_records<R: Element>(w: &mut impl Write, records: &[R]) -> io::Result<()
 
 /// Merges groups of `sizes.fan_in` runs into longer runs in a new file
 /// until at most that many are left.
-fn merge_rounds<R: Element + Ord>(
+fn merge_rounds<R: Element + Ord, O: Order<R>>(
     mut file: File,
     mut runs: Vec<Run>,
     beside: &Path,
@@ -154,7 +199,7 @@ fn merge_rounds<R: Element + Ord>(
         let mut start = 0u64;
         for group in runs.chunks(fan_in) {
             let len: u64 = group.iter().map(|r| r.len).sum();
-            merge::<R>(&file, group, sizes.merge_bytes, |r| {
+            merge_runs::<R, O>(&file, group, sizes.merge_bytes, |r| {
                 write_records(&mut w, &[r])
             })?;
             next.push(Run { start, len });
@@ -208,6 +253,62 @@ impl RunReader {
     }
 }
 
+/// Calls `each` on the records of `runs` (each sorted as `O` says) in
+/// that order.
+fn merge_runs<R: Element + Ord, O: Order<R>>(
+    file: &File,
+    runs: &[Run],
+    buffer_bytes: usize,
+    each: impl FnMut(R) -> io::Result<()>,
+) -> io::Result<()> {
+    match O::GROUPED {
+        true => merge_grouped::<R, O>(file, runs, buffer_bytes, each),
+        false => merge(file, runs, buffer_bytes, each),
+    }
+}
+
+/// The readers of `runs`, sharing `buffer_bytes`.
+fn readers<R: Element>(runs: &[Run], buffer_bytes: usize) -> Vec<RunReader> {
+    let share = buffer_bytes / runs.len().max(1);
+    runs.iter()
+        .map(|&r| RunReader::new(r, share, R::BYTES))
+        .collect()
+}
+
+/// Calls `each` on the records of `runs` (each sorted by `O`'s key) in
+/// order of their keys: the heap holds each run's next key, and a run
+/// gives all its records of the smallest key at once.
+fn merge_grouped<R: Element, O: Order<R>>(
+    file: &File,
+    runs: &[Run],
+    buffer_bytes: usize,
+    mut each: impl FnMut(R) -> io::Result<()>,
+) -> io::Result<()> {
+    let key = O::key;
+    let mut readers = readers::<R>(runs, buffer_bytes);
+    let mut heads: Vec<Option<R>> = Vec::with_capacity(readers.len());
+    let mut heap = BinaryHeap::with_capacity(readers.len());
+    for (i, r) in readers.iter_mut().enumerate() {
+        let head = r.next::<R>(file)?;
+        if let Some(h) = &head {
+            heap.push(Reverse((key(h), i)));
+        }
+        heads.push(head);
+    }
+    while let Some(Reverse((k, i))) = heap.pop() {
+        let mut head = heads[i].take();
+        while let Some(r) = head.filter(|r| key(r) == k) {
+            each(r)?;
+            head = readers[i].next::<R>(file)?;
+        }
+        if let Some(h) = &head {
+            heap.push(Reverse((key(h), i)));
+        }
+        heads[i] = head;
+    }
+    Ok(())
+}
+
 /// Calls `each` on the records of `runs` (each sorted) in sorted order.
 fn merge<R: Element + Ord>(
     file: &File,
@@ -215,11 +316,7 @@ fn merge<R: Element + Ord>(
     buffer_bytes: usize,
     mut each: impl FnMut(R) -> io::Result<()>,
 ) -> io::Result<()> {
-    let share = buffer_bytes / runs.len().max(1);
-    let mut readers: Vec<RunReader> = runs
-        .iter()
-        .map(|&r| RunReader::new(r, share, R::BYTES))
-        .collect();
+    let mut readers = readers::<R>(runs, buffer_bytes);
     let mut heap = BinaryHeap::with_capacity(readers.len());
     for (i, r) in readers.iter_mut().enumerate() {
         if let Some(c) = r.next::<R>(file)? {
@@ -256,7 +353,7 @@ mod tests {
             merge_bytes: 100,
         };
         for sizes in [tiny, RunSizes::DEFAULT] {
-            let mut runs = SortedRuns::new(&beside, sizes);
+            let mut runs = SortedRuns::<[u32; 3]>::new(&beside, sizes);
             for &r in &records {
                 runs.push(r).unwrap();
             }
@@ -266,6 +363,49 @@ mod tests {
                 Ok(())
             })
             .unwrap();
+            assert_eq!(got, expected);
+        }
+    }
+
+    /// Grouped by the first element.
+    struct First;
+
+    impl Order<[u32; 3]> for First {
+        const GROUPED: bool = true;
+        fn key(r: &[u32; 3]) -> u64 {
+            r[0].into()
+        }
+    }
+
+    #[test]
+    fn grouped_runs_come_back_by_key_whatever_the_sizes() {
+        let dir = tempfile::tempdir().unwrap();
+        let beside = dir.path().join("out.ply");
+        let mut rng = Rng::new(8);
+        let records: Vec<[u32; 3]> = (0..20_000)
+            .map(|_| [0; 3].map(|_| rng.below(500) as u32))
+            .collect();
+        let mut expected = records.clone();
+        expected.sort_unstable();
+        let tiny = RunSizes {
+            chunk_bytes: 12 * 37,
+            fan_in: 3,
+            merge_bytes: 100,
+        };
+        for sizes in [tiny, RunSizes::DEFAULT] {
+            let mut runs = SortedRuns::<[u32; 3], First>::new(&beside, sizes);
+            for &r in &records {
+                runs.push(r).unwrap();
+            }
+            let mut got = Vec::new();
+            runs.merge(|r| {
+                got.push(r);
+                Ok(())
+            })
+            .unwrap();
+            assert!(got.windows(2).all(|w| w[0][0] <= w[1][0]), "keys in order");
+            // The same records, each key's in some order.
+            got.sort_unstable();
             assert_eq!(got, expected);
         }
     }
