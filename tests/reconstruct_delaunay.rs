@@ -119,6 +119,33 @@ fn tiled_noisy_torus_equals_untiled_with_margins_short_of_the_whole() {
     assert!(wr.forced > 0, "no forced choice: the test lost its point");
 }
 
+/// Six times the signed volume of `m` about the origin.
+fn volume6(m: &Mesh) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.vertices[i as usize]);
+            a.dot(b.cross(c))
+        })
+        .sum()
+}
+
+#[test]
+fn a_torus_faces_outward_tiled_or_not() {
+    // Paper 4 leaves the winding open; each component is turned to a
+    // positive volume at the seam side (the audit found a torus inward).
+    let ((whole, _), (tiled, tr)) = whole_and_tiled(&noisy_torus(20_000), 2_000, 8);
+    let truth = 2.0 * std::f64::consts::PI.powi(2) * 0.35f64.powi(2);
+    for (m, what) in [(&whole, "whole"), (&tiled, "tiled")] {
+        let v = volume6(m) / 6.0;
+        assert!(
+            v > 0.9 * truth && v < 1.1 * truth,
+            "{what}: volume {v} against {truth}"
+        );
+    }
+    assert_eq!(tr.audit.inward_components, 0);
+}
+
 #[test]
 fn one_thread_equals_two_threads() {
     let points = moebius(3_000);

@@ -113,6 +113,14 @@ impl Mesh {
     }
 }
 
+/// Six times the signed volume of the tetrahedron of triangle `t` (indices
+/// into `points`) and `o`: summed over a closed surface, six times its
+/// volume, positive when wound outward, whatever `o`.
+pub(crate) fn volume6(points: &[DVec3], t: [u32; 3], o: DVec3) -> f64 {
+    let [a, b, c] = t.map(|i| points[i as usize] - o);
+    a.dot(b.cross(c))
+}
+
 /// Area of the triangle `abc`.
 pub(crate) fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     0.5 * (b - a).cross(c - a).length()

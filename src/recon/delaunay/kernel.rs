@@ -24,9 +24,11 @@ use super::fan::Hole;
 use super::select::{select, SelectionReport};
 use super::umbrella::Region;
 use super::wind::wind_beside;
+use crate::mesh::volume6;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::store::PointStore;
 use crate::tiling::{Beyond, TilePoints};
+use glam::DVec3;
 
 /// One tile's share of the surface.
 #[derive(Debug, Default)]
@@ -37,6 +39,10 @@ pub struct DelaunayTile {
     pub component: Vec<u32>,
     /// Per tile-local component: it could not be wound consistently.
     pub inconsistent: Vec<bool>,
+    /// Per tile-local component: six times the signed volume of its owned
+    /// triangles as wound, about the store origin (the seam side turns
+    /// each whole component to a positive sum).
+    pub volumes: Vec<f64>,
     /// Edges no other owned triangle shares (another tile's triangle may,
     /// or none): `(a, b)` as wound in the owned triangle (store indices),
     /// and its component.
@@ -112,6 +118,10 @@ impl TileKernel for DelaunayKernel<'_> {
         }
         let w = wind_beside(&mut owned, &beside);
         let seams = seam_edges(&owned, &beside, &w.component, tile);
+        let mut volumes = vec![0.0; w.inconsistent.len()];
+        for (t, &c) in owned.iter().zip(&w.component) {
+            volumes[c as usize] += volume6(&tile.points, *t, DVec3::ZERO);
+        }
         Ok(DelaunayTile {
             tris: owned
                 .iter()
@@ -119,6 +129,7 @@ impl TileKernel for DelaunayKernel<'_> {
                 .collect(),
             component: w.component,
             inconsistent: w.inconsistent,
+            volumes,
             seams,
             report: sel.report,
         })

@@ -215,6 +215,9 @@ struct Seams {
     waiting: HashMap<(u64, u64), (u32, bool)>,
     joins: Vec<(u32, u32, bool)>,
     inconsistent: Vec<bool>,
+    /// Per global component: six times its signed volume as the tile
+    /// wound it, about the store origin.
+    volumes: Vec<f64>,
     report: DelaunayReport,
 }
 
@@ -226,6 +229,7 @@ impl Seams {
             waiting: HashMap::new(),
             joins: Vec::new(),
             inconsistent: Vec::new(),
+            volumes: Vec::new(),
             report: DelaunayReport::default(),
         })
     }
@@ -244,6 +248,7 @@ impl Seams {
         self.writer.add_vertices(&vertices)?;
         let base = self.inconsistent.len() as u32;
         self.inconsistent.extend_from_slice(&tile.inconsistent);
+        self.volumes.extend_from_slice(&tile.volumes);
         for (t, c) in tile.tris.iter().zip(&tile.component) {
             for v in t {
                 self.spool.write_all(&(*v as u32).to_le_bytes())?;
@@ -303,16 +308,17 @@ impl Seams {
                 self.report.non_orientable += bad[r as usize] as u64;
             }
         }
-        self.replay(&mut uf)?;
+        let flips = outward(&mut uf, &self.volumes);
+        self.replay(&flips)?;
         let written = self.writer.finish()?;
         (self.report.vertices, self.report.triangles) = written.counts();
         self.report.audit = written.audit;
         Ok(self.report)
     }
 
-    /// Writes the spooled triangles, each component flipped as its parity
-    /// to the root says.
-    fn replay(&mut self, uf: &mut ParityUnionFind) -> Result<(), DelaunayReconError> {
+    /// Writes the spooled triangles, each component flipped as `flips`
+    /// says.
+    fn replay(&mut self, flips: &[bool]) -> Result<(), DelaunayReconError> {
         self.spool.flush()?;
         let mut file = self.spool.get_ref().try_clone()?;
         file.rewind()?;
@@ -330,7 +336,7 @@ impl Seams {
                 ])
             };
             let mut t = [w(0), w(1), w(2)];
-            if uf.find(w(3)).1 {
+            if flips[w(3) as usize] {
                 t.swap(1, 2);
             }
             batch.push(t);
@@ -342,4 +348,22 @@ impl Seams {
         self.writer.add_triangles(&batch)?;
         Ok(())
     }
+}
+
+/// Whether each tile component is flipped: as its parity to its root says,
+/// and the whole root once more when its signed volume, summed over its
+/// components as they will be written, is negative. A closed surface then
+/// faces outward (paper 4 leaves the result unoriented; the audit found
+/// the torus wound inward); an open one faces away from the store origin,
+/// the projection method's convention (`recon::projection::orient`).
+fn outward(uf: &mut ParityUnionFind, volumes: &[f64]) -> Vec<bool> {
+    let mut total = vec![0.0f64; volumes.len()];
+    let parity: Vec<(u32, bool)> = (0..volumes.len() as u32).map(|c| uf.find(c)).collect();
+    for (&(root, flip), &v) in parity.iter().zip(volumes) {
+        total[root as usize] += if flip { -v } else { v };
+    }
+    parity
+        .iter()
+        .map(|&(root, flip)| flip ^ (total[root as usize] < 0.0))
+        .collect()
 }

@@ -15,9 +15,9 @@
 use super::job::{id_order, run_job, Buckets, JobOutput, TileView, ToLocal};
 use super::lattice::{JobKey, Lattice, LEVELS};
 use super::local::wanted_data;
-use super::orient::volume6;
 use super::params::ProjectionParams;
 use crate::geom::Aabb;
+use crate::mesh::volume6;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::tiling::TilePoints;
 use glam::DVec3;

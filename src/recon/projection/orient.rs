@@ -11,11 +11,7 @@
 use super::surface::Surface;
 use glam::DVec3;
 
-/// Six times the signed volume of triangle `t` about `o`.
-pub fn volume6(points: &[DVec3], t: [u32; 3], o: DVec3) -> f64 {
-    let [a, b, c] = t.map(|i| points[i as usize] - o);
-    a.dot(b.cross(c))
-}
+use crate::mesh::volume6;
 
 /// Reverses the winding of `t`.
 pub fn flipped(t: [u32; 3]) -> [u32; 3] {
