@@ -337,23 +337,22 @@ mod tests {
     use super::*;
     use crate::synth::Rng;
 
-    #[test]
-    fn merged_runs_come_back_sorted_whatever_the_sizes() {
+    /// Random records, and what `O`'s sort gives back of them at a tiny
+    /// and at the default size.
+    fn sorted_back<O: Order<[u32; 3]>>(seed: u64) -> (Vec<[u32; 3]>, Vec<Vec<[u32; 3]>>) {
         let dir = tempfile::tempdir().unwrap();
         let beside = dir.path().join("out.ply");
-        let mut rng = Rng::new(5);
+        let mut rng = Rng::new(seed);
         let records: Vec<[u32; 3]> = (0..20_000)
             .map(|_| [0; 3].map(|_| rng.below(500) as u32))
             .collect();
-        let mut expected = records.clone();
-        expected.sort_unstable();
         let tiny = RunSizes {
             chunk_bytes: 12 * 37,
             fan_in: 3,
             merge_bytes: 100,
         };
-        for sizes in [tiny, RunSizes::DEFAULT] {
-            let mut runs = SortedRuns::<[u32; 3]>::new(&beside, sizes);
+        let back = [tiny, RunSizes::DEFAULT].map(|sizes| {
+            let mut runs = SortedRuns::<[u32; 3], O>::new(&beside, sizes);
             for &r in &records {
                 runs.push(r).unwrap();
             }
@@ -363,7 +362,17 @@ mod tests {
                 Ok(())
             })
             .unwrap();
-            assert_eq!(got, expected);
+            got
+        });
+        (records, back.into())
+    }
+
+    #[test]
+    fn merged_runs_come_back_sorted_whatever_the_sizes() {
+        let (mut records, back) = sorted_back::<Whole>(5);
+        records.sort_unstable();
+        for got in back {
+            assert_eq!(got, records);
         }
     }
 
@@ -379,34 +388,13 @@ mod tests {
 
     #[test]
     fn grouped_runs_come_back_by_key_whatever_the_sizes() {
-        let dir = tempfile::tempdir().unwrap();
-        let beside = dir.path().join("out.ply");
-        let mut rng = Rng::new(8);
-        let records: Vec<[u32; 3]> = (0..20_000)
-            .map(|_| [0; 3].map(|_| rng.below(500) as u32))
-            .collect();
-        let mut expected = records.clone();
-        expected.sort_unstable();
-        let tiny = RunSizes {
-            chunk_bytes: 12 * 37,
-            fan_in: 3,
-            merge_bytes: 100,
-        };
-        for sizes in [tiny, RunSizes::DEFAULT] {
-            let mut runs = SortedRuns::<[u32; 3], First>::new(&beside, sizes);
-            for &r in &records {
-                runs.push(r).unwrap();
-            }
-            let mut got = Vec::new();
-            runs.merge(|r| {
-                got.push(r);
-                Ok(())
-            })
-            .unwrap();
+        let (mut records, back) = sorted_back::<First>(8);
+        records.sort_unstable();
+        for mut got in back {
             assert!(got.windows(2).all(|w| w[0][0] <= w[1][0]), "keys in order");
             // The same records, each key's in some order.
             got.sort_unstable();
-            assert_eq!(got, expected);
+            assert_eq!(got, records);
         }
     }
 }

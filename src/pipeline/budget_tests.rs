@@ -48,12 +48,7 @@ fn line_store(dir: &std::path::Path) -> PointStore {
     let pts: Vec<DVec3> = (0..4000)
         .map(|i| DVec3::new(i as f64 * 0.01, (i % 7) as f64 * 0.01, 0.0))
         .collect();
-    let mut reader = crate::io::memory::MemoryReader::new("line", pts, None);
-    let opts = crate::store::BuildOptions {
-        tiles: crate::store::TileTarget::Points(500),
-        ..Default::default()
-    };
-    crate::store::build_store(&mut reader, dir, &opts, &NoProgress).unwrap()
+    crate::store::test_store::store_of(pts, 500, dir)
 }
 
 fn options(room_points: u64) -> RunOptions {

@@ -32,6 +32,9 @@ mod source;
 pub mod spacing;
 mod tile_plan;
 
+#[cfg(test)]
+pub(crate) mod test_store;
+
 pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};
 pub use checkpoint::{Checkpoints, Job, TileSet};

@@ -79,18 +79,7 @@ mod tests {
         for seed in [3u64, 11] {
             let pts = cloud(seed, 20_000);
             let dir = tempfile::tempdir().unwrap();
-            let mut reader = crate::io::memory::MemoryReader::new("cloud", pts, None);
-            let opts = crate::store::BuildOptions {
-                tiles: crate::store::TileTarget::Points(6000),
-                ..Default::default()
-            };
-            let store = crate::store::build_store(
-                &mut reader,
-                &dir.path().join("s"),
-                &opts,
-                &crate::progress::NoProgress,
-            )
-            .unwrap();
+            let store = crate::store::test_store::store_of(pts, 6000, &dir.path().join("s"));
             // Oracle: the same sample, nearest distances by brute force.
             let (mut sum, mut n) = (0.0, 0u64);
             let (mut p, mut ids) = (Vec::new(), Vec::new());

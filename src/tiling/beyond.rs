@@ -161,14 +161,7 @@ mod tests {
                 DVec3::new(x, y, (x * 1.3).sin() * 0.5)
             })
             .collect();
-        let mut reader = crate::io::memory::MemoryReader::new("sheet", pts, None);
-        let opts = crate::store::BuildOptions {
-            tiles: crate::store::TileTarget::Points(3000),
-            ..Default::default()
-        };
-        let store =
-            crate::store::build_store(&mut reader, dir, &opts, &crate::progress::NoProgress)
-                .unwrap();
+        let store = crate::store::test_store::store_of(pts, 3000, dir);
         let mut stored = Vec::new();
         let mut part = Vec::new();
         for t in store.tiles() {

@@ -438,18 +438,7 @@ mod tests {
             })
             .collect();
         let dir = tempfile::tempdir().unwrap();
-        let mut reader = crate::io::memory::MemoryReader::new("corner", pts, None);
-        let opts = crate::store::BuildOptions {
-            tiles: crate::store::TileTarget::Points(1500),
-            ..Default::default()
-        };
-        let store = crate::store::build_store(
-            &mut reader,
-            &dir.path().join("s"),
-            &opts,
-            &crate::progress::NoProgress,
-        )
-        .unwrap();
+        let store = crate::store::test_store::store_of(pts, 1500, &dir.path().join("s"));
         assert!(store.tiles().len() > 4);
         for t in 0..store.tiles().len() {
             for margin in [0.0, 0.05, 0.4, 3.0, 50.0] {
