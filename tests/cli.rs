@@ -2,14 +2,10 @@
 //! file, a non-zero exit, no panic, and no output file that looks complete.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn scanmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(args)
-        .output()
-        .expect("run scanmesh")
-}
+mod common;
+use common::scanmesh;
 
 fn assert_fails_naming(out: &Output, name: &str) {
     let err = String::from_utf8_lossy(&out.stderr);

@@ -9,14 +9,9 @@ use scanmesh::io::read_mesh_any;
 use scanmesh::mesh::{quality, Mesh};
 use scanmesh::synth::{generate, Shape};
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn scanmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(args)
-        .output()
-        .expect("run scanmesh")
-}
+mod common;
+use common::scanmesh;
 
 fn write_xyz(path: &Path, points: &[DVec3]) {
     let text: String = points

@@ -7,14 +7,10 @@
 //! scanmesh's readers.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn scanmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(args)
-        .output()
-        .expect("run scanmesh")
-}
+mod common;
+use common::scanmesh;
 
 fn ok(args: &[&str]) -> String {
     let o = scanmesh(args);

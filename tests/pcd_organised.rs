@@ -5,25 +5,14 @@
 
 use scanmesh::io::{open_reader, InvalidPolicy, PointChunk};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+mod common;
+use common::{ok, scanmesh};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/pcd")
         .join(name)
-}
-
-fn scanmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(args)
-        .output()
-        .expect("run scanmesh")
-}
-
-fn ok(out: Output) -> String {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "failed: {err}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// The fixture's pixels whose coordinates are NaN, and its pixel count,

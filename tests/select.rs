@@ -8,23 +8,12 @@
 use glam::DVec3;
 use scanmesh::io::{open_reader, InvalidPolicy, PointChunk};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+mod common;
+use common::{ok, scanmesh};
 
 fn autzen() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las/autzen.las")
-}
-
-fn scanmesh(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
-        .args(args)
-        .output()
-        .expect("run scanmesh")
-}
-
-fn ok(out: Output) -> String {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "failed: {err}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 /// Each record's position, class, return number and number of returns,

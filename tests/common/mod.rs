@@ -9,6 +9,7 @@ use scanmesh::normals::{compute_normals, NormalParams, NormalsReport};
 use scanmesh::pipeline::{NoProgress, RunOptions};
 use scanmesh::store::{build_store, export_points, BuildOptions, PointStore, TileTarget};
 use std::path::Path;
+use std::process::{Command, Output};
 
 /// Builds a store of `points` in `dir` with tiles of at most `tile_points`.
 pub fn store_of(points: &[DVec3], dir: &Path, tile_points: u64) -> PointStore {
@@ -161,4 +162,19 @@ pub fn read_all(path: &Path, policy: InvalidPolicy, max: usize) -> ReadBack {
     }
     assert_eq!(r.read_chunk(&mut chunk, max).unwrap(), 0, "stays exhausted");
     out
+}
+
+/// Runs the `scanmesh` binary with `args`.
+pub fn scanmesh(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .args(args)
+        .output()
+        .expect("run scanmesh")
+}
+
+/// The standard output of a run that must have succeeded.
+pub fn ok(out: Output) -> String {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "failed: {err}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
 }
