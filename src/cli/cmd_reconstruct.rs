@@ -5,7 +5,6 @@
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::mesh::MeshFormat;
-use scanmesh::recon::implicit::holes::MAX_FILLED_LOOP;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport, ReconError,
 };
@@ -30,12 +29,12 @@ pub struct ReconstructArgs {
     /// Noise bound delta (default: estimated from the tangent-plane fits).
     #[arg(long)]
     noise: Option<f64>,
-    /// The surface is closed: no open boundaries (paper 1 section 4.1).
-    /// Each corner averages the planes of its 64 nearest samples, so a few
-    /// mis-oriented normals rarely open holes (about 1.6x the time); the
-    /// holes left where the surface runs out of the band around the data
-    /// (next to parts thinner than a cell) are closed with least-area
-    /// patches, and pieces smaller than --min-piece are dropped.
+    /// The surface is closed: watertight, manifold and outward, by
+    /// construction (paper 1 section 4.1). Away from the data each lattice
+    /// corner takes the sign of the samples' winding number, so where the
+    /// scan has a hole (an unscanned base) the surface closes across it
+    /// the way the surface around it runs; an open scan (a terrain) closes
+    /// into a slab. Pieces smaller than --min-piece are dropped.
     #[arg(long)]
     closed: bool,
     /// The signed distance (--method implicit): `mls` (default) averages
@@ -203,20 +202,10 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
     ));
 }
 
-/// " (N holes closed, M left open, P small pieces dropped)", the parts
-/// that apply.
+/// " (P small pieces dropped)", when any were.
 fn changes_summary(r: &ImplicitReport) -> String {
-    let (h, p) = (r.holes, r.pieces);
+    let p = r.pieces;
     let mut parts = Vec::new();
-    if h.filled > 0 {
-        parts.push(format!("{} holes closed", h.filled));
-    }
-    if h.left_open > 0 {
-        parts.push(format!(
-            "{} holes left open (longer than {MAX_FILLED_LOOP} edges, pinched, or unpatchable)",
-            h.left_open
-        ));
-    }
     if p.pieces_dropped > 0 {
         parts.push(format!(
             "{} small pieces dropped ({} triangles)",

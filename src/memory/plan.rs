@@ -73,6 +73,9 @@ pub struct KernelCost {
     /// loads `((sqrt(c) + 2 m) / sqrt(c))^2` points per core point: the
     /// smaller the budget, the larger that share.
     pub margin_spacings: f64,
+    /// Bytes of state kept beside the tiles whatever the point count (the
+    /// `--closed` winding tree, whose size is capped).
+    pub resident_bytes: u64,
 }
 
 impl KernelCost {
@@ -179,7 +182,7 @@ impl MemoryPlan {
     fn assess(budget: MemoryBudget, points: u64, cost: &KernelCost) -> Result<Self, &'static str> {
         let free = budget.bytes.saturating_sub(BASE_BYTES);
         let global_in_memory = budget.holds(points, cost.global_per_point);
-        let resident = (points as f64 * cost.resident_per_point) as u64;
+        let resident = (points as f64 * cost.resident_per_point) as u64 + cost.resident_bytes;
         if resident > free / 2 {
             return Err("state the kernel keeps for the whole run (the piece filter's sets, the seam frames)");
         }
@@ -331,6 +334,7 @@ mod tests {
             output_per_point: 37,
             parallel_in_tile: false,
             margin_spacings: 0.0,
+            resident_bytes: 0,
         }
     }
 

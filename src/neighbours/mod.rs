@@ -137,6 +137,7 @@ impl NeighbourParams {
             output_per_point: 8 + 4 * self.expected_size(),
             parallel_in_tile: false,
             margin_spacings: 0.0,
+            resident_bytes: 0,
         }
     }
 

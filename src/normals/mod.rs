@@ -232,6 +232,7 @@ impl NormalParams {
             output_per_point: 37,
             parallel_in_tile: false,
             margin_spacings: 0.0,
+            resident_bytes: 0,
         }
     }
 

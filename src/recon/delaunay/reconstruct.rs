@@ -65,6 +65,7 @@ pub fn cost() -> KernelCost {
         output_per_point: 24 + 2 * 13,
         parallel_in_tile: false,
         margin_spacings: 0.0,
+        resident_bytes: 0,
     }
 }
 

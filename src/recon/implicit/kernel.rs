@@ -11,6 +11,7 @@
 //! about rho + delta), and the band keeps the work proportional to the
 //! surface rather than the volume.
 
+use super::closed::{self, Everywhere};
 use super::dilate::dilate;
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::polygonize::{polygonize_cube, CubeVertex};
@@ -66,6 +67,8 @@ pub struct ImplicitKernel {
     /// Peak bytes a cube of the band costs ([`BYTES_PER_CUBE`], or
     /// [`BYTES_PER_CUBE_CLOSED`] for a closed surface).
     pub bytes_per_cube: u64,
+    /// With `--closed`: the sign of every corner away from the samples.
+    pub everywhere: Option<Everywhere>,
 }
 
 /// Edge of the signed distance's grid index, in lattice cubes. Its queries
@@ -181,11 +184,10 @@ impl TileKernel for ImplicitKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<ImplicitTile, KernelError> {
-        // The band looks one cube beyond owned cubes, whose far corners lie
-        // one cube beyond the core: every sample within two cubes is needed.
-        let band_reach = (self.band + 1) as f64 * self.lattice.cell * 1.001;
-        if tile.margin < band_reach {
-            return Err(KernelError::MarginTooSmall { needed: band_reach });
+        if tile.margin < self.band_reach() {
+            return Err(KernelError::MarginTooSmall {
+                needed: self.band_reach(),
+            });
         }
         let (points, normals, ids) =
             usable_samples(tile, self.takes_islands()).map_err(KernelError::failed)?;
@@ -196,8 +198,14 @@ impl TileKernel for ImplicitKernel {
             normals: &normals,
             index: &index,
         };
-        let cubes = band(&self.lattice, &points, &tile.core, self.band)?;
-        let corners = self.corner_values(&samples, tile, &cubes)?;
+        let (cubes, corners) = match &self.everywhere {
+            None => {
+                let cubes = band(&self.lattice, &points, &tile.core, self.band)?;
+                let corners = self.corner_values(&samples, tile, &cubes)?;
+                (cubes, corners)
+            }
+            Some(e) => self.closed_cubes(e, &samples, tile)?,
+        };
         let mut out = ImplicitTile {
             cubes: cubes.len(),
             undefined_corners: corners.iter().filter(|c| c.1.is_none()).count(),
@@ -221,6 +229,19 @@ impl TileKernel for ImplicitKernel {
 }
 
 impl ImplicitKernel {
+    /// How far beyond the core the samples are needed. The band looks one
+    /// cube beyond owned cubes, whose far corners lie one cube beyond the
+    /// core: every sample within two cubes. With `--closed`, a coarse
+    /// corner up to [`closed::COARSE`] cubes beyond the core is asked
+    /// whether it is near the samples.
+    fn band_reach(&self) -> f64 {
+        let cubes = match self.everywhere {
+            None => self.band + 1,
+            Some(_) => self.band + closed::COARSE + 3,
+        };
+        cubes as f64 * self.lattice.cell * 1.001
+    }
+
     /// Whether islands take part: samples flagged unoriented because the
     /// paper's island rule left their component apart, signed by its own
     /// highest points (`normals::orient::Sign::Island`). The MLS field takes
@@ -233,7 +254,7 @@ impl ImplicitKernel {
     /// `--closed`, a stray island closes into a small piece the piece
     /// filter drops; the filament's rim needed 69 patch runs
     /// (`hole_guard::tries_for`).
-    fn takes_islands(&self) -> bool {
+    pub(crate) fn takes_islands(&self) -> bool {
         self.field == Field::Mls
     }
 
@@ -259,7 +280,7 @@ impl ImplicitKernel {
         let Some(&first) = cubes.first() else {
             return Ok(triangles);
         };
-        let mut cursor = CornerCursor::new(corners, first)?;
+        let mut cursor = CornerCursor::new(corners, first, self.everywhere.is_some())?;
         for cube in cubes {
             if let Some(values) = cursor.values(*cube)? {
                 polygonize_cube(&self.lattice, *cube, &values, &mut triangles)
@@ -321,15 +342,23 @@ const CUBES_PER_TASK: usize = 4096;
 struct CornerCursor<'a> {
     corners: &'a [CornerValue],
     at: [usize; 8],
+    /// Every cube with all corners defined is drawn (`--closed`), not
+    /// only those with a corner on the data.
+    everywhere: bool,
 }
 
 impl<'a> CornerCursor<'a> {
     /// Cursors placed for cubes from `first` on.
-    fn new(corners: &'a [CornerValue], first: [i64; 3]) -> Result<Self, KernelError> {
+    fn new(
+        corners: &'a [CornerValue],
+        first: [i64; 3],
+        everywhere: bool,
+    ) -> Result<Self, KernelError> {
         let keys = corner_keys(first)?;
         Ok(CornerCursor {
             corners,
             at: keys.map(|key| corners.partition_point(|e| e.0 < key)),
+            everywhere,
         })
     }
 
@@ -352,7 +381,7 @@ impl<'a> CornerCursor<'a> {
                 _ => return Ok(None),
             }
         }
-        Ok(on_data.then_some(values))
+        Ok((on_data || self.everywhere).then_some(values))
     }
 }
 
@@ -391,13 +420,8 @@ pub fn owns(lattice: &Lattice, core: &Aabb, cube: [i64; 3]) -> bool {
     (0..3).all(|a| core.min[a] <= p[a] && p[a] < core.max[a])
 }
 
-/// Owned cubes within `reach` cubes of a sample's cube, sorted.
-fn band(
-    lattice: &Lattice,
-    points: &[DVec3],
-    core: &Aabb,
-    reach: i64,
-) -> Result<Vec<[i64; 3]>, KernelError> {
+/// The cubes holding a sample, sorted keys.
+pub(crate) fn occupied(lattice: &Lattice, points: &[DVec3]) -> Result<Vec<u64>, KernelError> {
     let mut occupied = points
         .iter()
         .map(|p| corner_key(lattice.cell_of(*p)))
@@ -407,6 +431,17 @@ fn band(
     occupied.dedup();
     occupied.par_sort_unstable();
     occupied.dedup();
+    Ok(occupied)
+}
+
+/// Owned cubes within `reach` cubes of a sample's cube, sorted.
+fn band(
+    lattice: &Lattice,
+    points: &[DVec3],
+    core: &Aabb,
+    reach: i64,
+) -> Result<Vec<[i64; 3]>, KernelError> {
+    let occupied = occupied(lattice, points)?;
     let near = dilate(&occupied, -reach..=reach).map_err(KernelError::failed)?;
     Ok(near
         .into_iter()
@@ -439,6 +474,7 @@ mod tests {
             field: Field::Mls,
             spacing: 1.0,
             bytes_per_cube: BYTES_PER_CUBE,
+            everywhere: None,
         };
         let (dense, sparse) = (plane(1.0, 120.0), plane(3.0, 120.0));
         let bytes = |t: &TilePoints| kernel.bytes_for(t).expect("bytes");

@@ -6,22 +6,22 @@
 //! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
 //! (one cube, and a reference driver over a set of cubes).
 
+pub(crate) mod closed;
+mod closed_tile;
 pub(crate) mod cover;
 pub(crate) mod dilate;
-pub(crate) mod hole_guard;
-pub mod holes;
 pub(crate) mod kernel;
 pub mod lattice;
 pub mod mc_table;
 pub(crate) mod mls;
 pub(crate) mod owners;
-pub(crate) mod pinch;
 pub mod polygonize;
 pub mod reconstruct;
 pub(crate) mod refine;
 pub mod sdf;
 pub(crate) mod stitch;
 mod validate;
+pub(crate) mod winding;
 
 pub use lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 pub use polygonize::{polygonize_cube, polygonize_field, CubeVertex, IndexedMesh, MeshWelder};

@@ -2,18 +2,21 @@
 //! (computed unless the store has them), paper 1's rho and delta, one global
 //! lattice anchored at the store origin, the marching-cubes tile kernel, and
 //! the seam stitcher streaming into a mesh file (through a filter of small
-//! pieces; with `--closed` the stitcher also patches holes, and the run
-//! promises a closed surface: the writer's audit checks it).
+//! pieces). With `--closed` every lattice corner gets a sign
+//! ([`super::closed`]) and the run promises a closed surface: the
+//! writer's audit checks it.
 
-use super::holes::HoleReport;
+use super::closed::{self, Everywhere};
 use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
 use super::sdf::Field;
 use super::stitch::Stitcher;
+use super::winding::cells::gather_store;
 use crate::mesh::{
     MeshAudit, MeshError, MeshFormat, MeshWriter, PieceFilter, PieceReport, Promise,
 };
 use crate::normals::{ensure_normals, NormalParams, NormalsError, NormalsReport};
+use crate::normals::{FLAG_DEGENERATE, FLAG_UNORIENTED};
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::{PointStore, StoreError};
 use crate::tiling::load::core_box;
@@ -99,6 +102,10 @@ impl ImplicitParams {
             output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
             parallel_in_tile: false,
             margin_spacings: 0.0,
+            resident_bytes: match self.closed {
+                true => super::winding::cells::MAX_TREE_BYTES,
+                false => 0,
+            },
             ..normals
         }
     }
@@ -129,14 +136,12 @@ pub struct ImplicitReport {
     pub triangles: u64,
     /// Cubes polygonised over all tiles.
     pub cubes: u64,
-    /// Holes closed at the end, and holes left (`--closed` only).
-    pub holes: HoleReport,
     /// Small pieces dropped.
     pub pieces: PieceReport,
     /// The mesh written: its edges, vertices, components and volumes.
     pub audit: MeshAudit,
-    /// Seam entries left at the end that no hole needs (0: the seam maps
-    /// forgot every vertex once complete).
+    /// Seam entries left at the end (0: the seam maps forgot every vertex
+    /// once complete).
     pub seam_left: u64,
     /// Tiles, retries and margins of the run.
     pub run: RunStats,
@@ -228,7 +233,7 @@ pub fn reconstruct_implicit(
     let band = band_cubes(params.field, spacing, report.cell);
     let lattice = Lattice::new(DVec3::ZERO, report.cell)?;
     let reach = report.rho + report.delta;
-    let kernel = ImplicitKernel {
+    let mut kernel = ImplicitKernel {
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
         initial_margin: 4.0 * report.cell + 2.0 * reach,
@@ -236,7 +241,12 @@ pub fn reconstruct_implicit(
         field: params.field,
         spacing,
         bytes_per_cube: bytes_per_cube(params.closed),
+        everywhere: None,
     };
+    if params.closed {
+        kernel.everywhere = Some(everywhere(store, &kernel)?);
+        kernel.initial_margin += (closed::COARSE + 2) as f64 * report.cell;
+    }
     // A closed surface is watertight, manifold, consistently wound and
     // encloses a positive volume in every piece; a mesh that is not is
     // written as incomplete and the run fails (`Promise`).
@@ -248,9 +258,6 @@ pub fn reconstruct_implicit(
     let writer = PieceFilter::new(out, min_piece)?;
     let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
     let mut stitcher = Stitcher::new(writer, store.origin(), cores);
-    if params.closed {
-        stitcher = stitcher.closing_holes();
-    }
     let store = &*store;
     report.run = run_tiles(store, &kernel, opts, progress, |t, out| {
         report.cubes += out.cubes as u64;
@@ -262,11 +269,35 @@ pub fn reconstruct_implicit(
     let written = stitcher.finish()?;
     report.vertices = written.vertices;
     report.triangles = written.triangles;
-    report.holes = written.holes;
     report.pieces = written.pieces;
     report.audit = written.audit;
     report.seam_left = written.seam_left;
     Ok(report)
+}
+
+/// Side of the winding tree's leaves, in cubes: a leaf of the default
+/// `--closed` cell (3 spacings) then holds about 9 samples of a random
+/// sampling, enough for a spread ([`super::winding::cells`]), and the
+/// corners that ask lie at least one and a half leaves from the samples.
+const LEAF_CUBES: f64 = 2.0;
+
+/// The signs away from the samples for `--closed`: the samples' winding
+/// tree, in leaves of [`LEAF_CUBES`], over the store's box padded beyond the
+/// band and two coarse cells.
+fn everywhere(store: &PointStore, kernel: &ImplicitKernel) -> Result<Everywhere, ReconError> {
+    let unusable = match kernel.takes_islands() {
+        true => FLAG_DEGENERATE,
+        false => FLAG_DEGENERATE | FLAG_UNORIENTED,
+    };
+    let leaf = LEAF_CUBES * kernel.lattice.cell;
+    let tree = gather_store(store, leaf, kernel.spacing, unusable)?;
+    let pad = kernel.band + 2 * closed::COARSE + 2;
+    Ok(Everywhere::new(
+        tree,
+        &kernel.lattice,
+        &store.relative_bounds(),
+        pad,
+    ))
 }
 
 /// Lattice cell of the MLS field in open mode, in spacings (mean

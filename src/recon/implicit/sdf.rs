@@ -40,12 +40,16 @@ pub(crate) enum Corner {
 pub(crate) enum Known {
     OnData(f64),
     Beyond(f64),
+    /// Away from the samples with `--closed`: the winding number's sign
+    /// as a value ([`super::closed`]); the field's root is not sought on
+    /// an edge that ends here.
+    Winding(f64),
 }
 
 impl Known {
     pub(crate) fn value(self) -> f64 {
         match self {
-            Known::OnData(f) | Known::Beyond(f) => f,
+            Known::OnData(f) | Known::Beyond(f) | Known::Winding(f) => f,
         }
     }
 }

@@ -6,10 +6,7 @@
 //! owning one of its cubes has been stitched ([`super::owners`]): the map
 //! holds the front between stitched and unstitched tiles, not every seam. Output indices are given in first-appearance
 //! order, so the mesh is the same for a given tiling and thread count.
-//! Asked to close holes, it also hands every tile's triangles to
-//! [`super::holes`], and patches the loops at the end.
 
-use super::holes::{BoundaryEdges, HoleReport, StitchedTriangle};
 use super::kernel::owns;
 use super::lattice::{edge_from_key, Lattice};
 use super::owners::TileOwners;
@@ -19,17 +16,16 @@ use crate::mesh::{MeshAudit, MeshError, PieceFilter, PieceReport};
 use glam::DVec3;
 use std::collections::HashMap;
 
-/// What the stitcher wrote, and what it did to holes and small pieces.
+/// What the stitcher wrote, and what it did to small pieces.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StitchReport {
     pub vertices: u64,
     pub triangles: u64,
-    pub holes: HoleReport,
     pub pieces: PieceReport,
     /// The writer's audit of the mesh written.
     pub audit: MeshAudit,
-    /// Seam state left at the end that no hole needs: 0 unless a vertex's
-    /// owners were not found (tests check it).
+    /// Seam state left at the end: 0 unless a vertex's owners were not
+    /// found (tests check it).
     pub seam_left: u64,
 }
 
@@ -47,8 +43,6 @@ pub struct Stitcher {
     shared: HashMap<u64, SeamVertex>,
     private: HashMap<u64, u32>,
     owners: TileOwners,
-    /// Boundary edges, gathered when holes are to be closed.
-    holes: Option<BoundaryEdges>,
     pub vertices: u64,
     pub triangles: u64,
 }
@@ -62,17 +56,8 @@ impl Stitcher {
             shared: HashMap::new(),
             private: HashMap::new(),
             owners: TileOwners::new(cores),
-            holes: None,
             vertices: 0,
             triangles: 0,
-        }
-    }
-
-    /// Closes the mesh's small holes at the end ([`super::holes`]).
-    pub fn closing_holes(self) -> Self {
-        Stitcher {
-            holes: Some(BoundaryEdges::default()),
-            ..self
         }
     }
 
@@ -88,42 +73,27 @@ impl Stitcher {
         self.private.clear();
         let mut new_vertices = Vec::new();
         let mut faces: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
-        let mut stitched = Vec::new();
         for t in tris {
             let mut face = [0u32; 3];
-            let mut seam = [false; 3];
-            let mut last = [tile as u32; 3];
             for i in 0..3 {
                 let v = &t[i];
                 let next = (self.vertices + new_vertices.len() as u64) as u32;
-                seam[i] = touches_other_tiles(lattice, core, v.key);
                 let mut add = || {
                     new_vertices.push(self.origin + v.pos);
                     next
                 };
-                if seam[i] {
+                if touches_other_tiles(lattice, core, v.key) {
                     let owners = &self.owners;
                     let entry = self.shared.entry(v.key).or_insert_with(|| SeamVertex {
                         index: add(),
                         last: owners.last_owner(lattice, &around, v.key),
                     });
-                    (face[i], last[i]) = (entry.index, entry.last);
+                    face[i] = entry.index;
                 } else {
                     face[i] = *self.private.entry(v.key).or_insert_with(add);
                 }
             }
-            if self.holes.is_some() {
-                stitched.push(StitchedTriangle {
-                    vertices: [0, 1, 2].map(|i| (face[i], self.origin + t[i].pos)),
-                    on_seam: seam,
-                    last,
-                });
-            }
             faces.push(face);
-        }
-        if let Some(holes) = &mut self.holes {
-            holes.add_tile(&stitched);
-            holes.retire(tile as u32);
         }
         self.shared.retain(|_, v| v.last > tile as u32);
         self.writer.add_vertices(&new_vertices)?;
@@ -133,19 +103,12 @@ impl Stitcher {
         Ok(())
     }
 
-    /// Closes the holes (if asked) and completes the file.
-    pub fn finish(mut self) -> Result<StitchReport, MeshError> {
+    /// Completes the file.
+    pub fn finish(self) -> Result<StitchReport, MeshError> {
         let mut report = StitchReport {
             seam_left: self.shared.len() as u64,
             ..StitchReport::default()
         };
-        if let Some(holes) = self.holes.take() {
-            report.seam_left += holes.unneeded();
-            let (patches, holes) = holes.fill();
-            report.holes = holes;
-            let faces: Vec<[u32; 3]> = patches.into_iter().map(|(face, _)| face).collect();
-            self.writer.add_triangles(&faces)?;
-        }
         let (written, pieces) = self.writer.finish()?;
         (report.vertices, report.triangles) = written.counts();
         report.pieces = pieces;

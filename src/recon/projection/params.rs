@@ -136,6 +136,7 @@ impl ProjectionParams {
             output_per_point: 24 + 2 * 13,
             parallel_in_tile: true,
             margin_spacings: MARGIN_SPACINGS,
+            resident_bytes: 0,
         }
     }
 }

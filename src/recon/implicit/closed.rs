@@ -1,0 +1,231 @@
+//! `--closed` by construction: every lattice corner gets a sign, so the
+//! marching cubes' zero set has no boundary anywhere (paper 1 section 4.1
+//! asks for a closed surface; a cube whose corners all have values cannot
+//! leave a crack, and the case table's faces are decided by the face's own
+//! four signs, so neighbouring cubes agree).
+//!
+//! A corner near the samples ([`Everywhere::near`]: within the band of an
+//! occupied cube) takes the field's value, as in the open mode. Any other
+//! corner takes the winding number of the samples ([`super::winding`]),
+//! `w > 1/2` inside, interpolated from a coarse lattice of [`COARSE`]
+//! cubes a side: a coarse corner near the samples carries the field's
+//! value mapped onto `w`'s scale ([`from_field`]), any other the tree's
+//! `w`. Where the data has a hole, `w`'s half level closes it as the
+//! surface around it runs; far from the data every coarse cell has one
+//! sign, and the cubes inside it none to draw.
+//!
+//! Every value is a function of its corner alone (the band, from the
+//! samples within reach; the tree, global; the interpolation, from the
+//! coarse cell below the corner), so the tiles agree on every shared
+//! corner and the mesh is the same in any tiling.
+//!
+//! Deviation from paper 1, which marches the whole box and defines every
+//! corner by the nearest plane: far from the samples that plane's sign is
+//! the nearest sample's, which is wrong across a hole; the winding number
+//! sees every sample at once.
+
+use super::dilate::dilate;
+use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
+use super::winding::WindingTree;
+use crate::geom::Aabb;
+
+/// Side of a coarse cell, in cubes: the winding number is evaluated at
+/// one corner in `COARSE^3`.
+pub(crate) const COARSE: i64 = 4;
+
+/// Sign information for every corner of the lattice box.
+pub(crate) struct Everywhere {
+    pub tree: WindingTree,
+    /// Lattice corners within the padded data box; every corner outside
+    /// lies outside the surface.
+    pub lo: [i64; 3],
+    pub hi: [i64; 3],
+}
+
+impl Everywhere {
+    /// Signs for the lattice `lattice` over data within `bounds`, padded by
+    /// `pad` cubes beyond which nothing is drawn.
+    pub(crate) fn new(tree: WindingTree, lattice: &Lattice, bounds: &Aabb, pad: i64) -> Self {
+        let lo = lattice.cell_of(bounds.min).map(|c| c - pad);
+        let hi = lattice.cell_of(bounds.max).map(|c| c + pad + 1);
+        Everywhere { tree, lo, hi }
+    }
+
+    /// The winding number's value at coarse corner `c` (lattice indices,
+    /// multiples of [`COARSE`]) away from the samples: 0 outside the box.
+    pub(crate) fn coarse_w(&self, lattice: &Lattice, c: [i64; 3]) -> f64 {
+        if (0..3).any(|a| c[a] < self.lo[a] || c[a] > self.hi[a]) {
+            return 0.0;
+        }
+        self.tree.at(lattice.corner(c))
+    }
+
+    /// The coarse cells a tile whose owned cubes are `cubes` (a box of
+    /// cube indices, half-open) needs: every corner of an owned cube lies
+    /// in one, clipped to the box.
+    pub(crate) fn coarse_box(&self, cubes: ([i64; 3], [i64; 3])) -> Option<CoarseBox> {
+        let (lo, hi) = cubes;
+        let mut b = CoarseBox {
+            lo: [0; 3],
+            n: [0; 3],
+        };
+        for a in 0..3 {
+            let first = lo[a].max(self.lo[a]);
+            let last = hi[a].min(self.hi[a]);
+            if first >= last {
+                return None;
+            }
+            b.lo[a] = first.div_euclid(COARSE);
+            b.n[a] = last.div_euclid(COARSE) - b.lo[a] + 1;
+        }
+        Some(b)
+    }
+}
+
+/// A box of coarse cells: `n` a side from coarse cell `lo`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CoarseBox {
+    pub lo: [i64; 3],
+    pub n: [i64; 3],
+}
+
+impl CoarseBox {
+    /// Coarse corners of the box (one more than cells a side), x fastest.
+    pub(crate) fn corners(&self) -> impl Iterator<Item = [i64; 3]> + '_ {
+        let [nx, ny, nz] = self.n.map(|n| n + 1);
+        (0..nx * ny * nz).map(move |i| {
+            let c = [i % nx, (i / nx) % ny, i / (nx * ny)];
+            [0, 1, 2].map(|a| (self.lo[a] + c[a]) * COARSE)
+        })
+    }
+
+    /// Index of coarse corner `c` (lattice indices) in [`Self::corners`].
+    fn corner_index(&self, c: [i64; 3]) -> Option<usize> {
+        let [nx, ny, nz] = self.n.map(|n| n + 1);
+        let i = [0, 1, 2].map(|a| c[a].div_euclid(COARSE) - self.lo[a]);
+        let inside = i[0] >= 0 && i[0] < nx && i[1] >= 0 && i[1] < ny && i[2] >= 0 && i[2] < nz;
+        inside.then(|| (i[0] + nx * (i[1] + ny * i[2])) as usize)
+    }
+
+    /// The cells of the box whose corner values (`w`, in corner order)
+    /// are not all on one side of 1/2: the winding number's half level may
+    /// pass through them.
+    pub(crate) fn mixed_cells(&self, w: &[f64]) -> Vec<[i64; 3]> {
+        let mut mixed = Vec::new();
+        for k in 0..self.n[2] {
+            for j in 0..self.n[1] {
+                for i in 0..self.n[0] {
+                    let cell = [self.lo[0] + i, self.lo[1] + j, self.lo[2] + k];
+                    if self.is_mixed(cell, w) {
+                        mixed.push(cell);
+                    }
+                }
+            }
+        }
+        mixed
+    }
+
+    fn is_mixed(&self, cell: [i64; 3], w: &[f64]) -> bool {
+        let mut inside = [false; 8];
+        for (o, side) in inside.iter_mut().enumerate() {
+            let c = [0, 1, 2].map(|a| (cell[a] + ((o >> a) & 1) as i64) * COARSE);
+            *side = self.corner_index(c).is_some_and(|i| w[i] > 0.5);
+        }
+        inside.iter().any(|&s| s) && !inside.iter().all(|&s| s)
+    }
+
+    /// `w` at fine corner `c` (which lies in the box), trilinear in the
+    /// coarse cell below it: a corner on a coarse face gets the same bits
+    /// from every tile, since the cell is chosen by the corner alone.
+    pub(crate) fn interpolate(&self, w: &[f64], c: [i64; 3]) -> Option<f64> {
+        let base = c.map(|v| v.div_euclid(COARSE) * COARSE);
+        let t = [0, 1, 2].map(|a| (c[a] - base[a]) as f64 / COARSE as f64);
+        let mut sum = 0.0;
+        for o in 0..8 {
+            let corner = [0, 1, 2].map(|a| base[a] + ((o >> a) & 1) as i64 * COARSE);
+            let weight: f64 = (0..3)
+                .map(|a| if (o >> a) & 1 == 1 { t[a] } else { 1.0 - t[a] })
+                .product();
+            if weight > 0.0 {
+                sum += weight * w[self.corner_index(corner)?];
+            }
+        }
+        Some(sum)
+    }
+}
+
+/// Half-width of the field-to-winding map, in coarse cells: a field value
+/// of one coarse cell outside reads as `w = 0`, one inside as `w = 1`.
+fn scale(lattice: &Lattice) -> f64 {
+    2.0 * COARSE as f64 * lattice.cell
+}
+
+/// The field's value `f` (positive outside) read as a winding number.
+pub(crate) fn from_field(lattice: &Lattice, f: f64) -> f64 {
+    (0.5 - f / scale(lattice)).clamp(0.0, 1.0)
+}
+
+/// A winding number read as a field value (positive outside), never
+/// exactly 0, so a vertex never lands on a corner.
+pub(crate) fn to_field(lattice: &Lattice, w: f64) -> f64 {
+    let f = (0.5 - w) * scale(lattice);
+    if f == 0.0 {
+        f64::MIN_POSITIVE
+    } else {
+        f
+    }
+}
+
+/// Corners near the samples: those of the cubes within `band` cubes of an
+/// occupied cube (`occupied` sorted corner keys).
+pub(crate) fn near_corners(occupied: &[u64], band: i64) -> Result<Vec<u64>, LatticeError> {
+    dilate(occupied, -band..=band + 1)
+}
+
+/// Cubes with a corner near the samples: the band widened by one cube.
+pub(crate) fn touching_cubes(occupied: &[u64], band: i64) -> Result<Vec<u64>, LatticeError> {
+    dilate(occupied, -band - 1..=band + 1)
+}
+
+/// The cubes (keys, sorted) of `cells` (coarse cells).
+pub(crate) fn cubes_of(cells: &[[i64; 3]]) -> Result<Vec<u64>, LatticeError> {
+    let mut keys = Vec::with_capacity(cells.len() * (COARSE * COARSE * COARSE) as usize);
+    for cell in cells {
+        for o in 0..COARSE * COARSE * COARSE {
+            let off = [o % COARSE, (o / COARSE) % COARSE, o / (COARSE * COARSE)];
+            keys.push(edge_key([0, 1, 2].map(|a| cell[a] * COARSE + off[a]), 0)?);
+        }
+    }
+    keys.sort_unstable();
+    keys.dedup();
+    Ok(keys)
+}
+
+/// The owned cube box (half-open, cube indices) of a core box.
+pub(crate) fn owned_cubes(lattice: &Lattice, core: &Aabb) -> ([i64; 3], [i64; 3]) {
+    let first = |v: f64, a: usize| -> i64 {
+        if v == f64::NEG_INFINITY {
+            return i64::MIN / 4;
+        }
+        if v == f64::INFINITY {
+            return i64::MAX / 4;
+        }
+        // The first cube whose min corner is >= v.
+        let mut i = ((v - lattice.origin[a]) / lattice.cell).floor() as i64;
+        while lattice.corner([i, i, i])[a] < v {
+            i += 1;
+        }
+        while lattice.corner([i - 1, i - 1, i - 1])[a] >= v {
+            i -= 1;
+        }
+        i
+    };
+    let lo = [0, 1, 2].map(|a| first(core.min[a], a));
+    let hi = [0, 1, 2].map(|a| first(core.max[a], a));
+    (lo, hi)
+}
+
+/// The corner of key `key`.
+pub(crate) fn corner_of(key: u64) -> [i64; 3] {
+    edge_from_key(key).map_or([0; 3], |(c, _)| c)
+}
