@@ -20,6 +20,7 @@ pub mod fibonacci;
 mod mesh;
 pub(crate) mod rng;
 mod sheets;
+mod stations;
 mod stream;
 mod terrain;
 
@@ -28,6 +29,7 @@ pub use error::SynthError;
 pub use fibonacci::{fibonacci_direction, fibonacci_sphere};
 pub use mesh::TriMesh;
 pub use rng::Rng;
+pub use stations::{scan_from_stations, Stations};
 pub use stream::{stream, ShapeSampler, Stream};
 pub use terrain::{Building, Terrain};
 

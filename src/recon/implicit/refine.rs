@@ -42,7 +42,7 @@ pub fn refine_vertices(
     let mut keys: Vec<u64> = triangles.iter().flatten().map(|v| v.key).collect();
     keys.par_sort_unstable();
     keys.dedup();
-    let moved: Vec<Result<Option<DVec3>, f64>> = keys
+    let moved: Vec<Result<DVec3, f64>> = keys
         .par_iter()
         .map_init(Vec::new, |nbr, &key| -> Result<_, KernelError> {
             let (c0, axis) = edge_from_key(key).map_err(KernelError::failed)?;
@@ -50,23 +50,26 @@ pub fn refine_vertices(
             let mut c1 = c0;
             c1[a] += 1;
             let (p0, p1) = (lattice.corner(c0), lattice.corner(c1));
-            let (Some(f0), Some(f1)) = (value(corners, c0)?, value(corners, c1)?) else {
-                return Ok(Ok(None));
-            };
-            let t = match edge_root(s, tile, (p0, f0), (p1, f1), nbr) {
-                Ok(t) => t,
-                Err(short) => return Ok(Err(short)),
-            };
             // The formula of marching cubes' own placement.
             let at = |t: f64| {
                 let mut pos = p0;
                 pos[a] = p0[a] + t * (p1[a] - p0[a]);
                 pos
             };
+            let (k0, k1) = (known(corners, c0)?, known(corners, c1)?);
+            let (f0, f1) = (k0.value(), k1.value());
+            if matches!(k0, Known::Winding(_)) || matches!(k1, Known::Winding(_)) {
+                // No field to follow: marching cubes' place, kept off the
+                // corners like every refined vertex.
+                let t = (f0 / (f0 - f1)).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON);
+                return Ok(Ok(at(t)));
+            }
+            let t = match edge_root(s, tile, (p0, f0), (p1, f1), nbr) {
+                Ok(t) => t,
+                Err(short) => return Ok(Err(short)),
+            };
             match chord_offset(lattice.cell, s, tile, at(t), a, nbr) {
-                Ok(dt) => Ok(Ok(Some(at(
-                    (t + dt).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON)
-                )))),
+                Ok(dt) => Ok(Ok(at((t + dt).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON)))),
                 Err(short) => Ok(Err(short)),
             }
         })
@@ -80,7 +83,7 @@ pub fn refine_vertices(
     }
     for v in triangles.iter_mut().flatten() {
         if let Ok(i) = keys.binary_search(&v.key) {
-            if let Ok(Some(pos)) = moved[i] {
+            if let Ok(pos) = moved[i] {
                 v.pos = pos;
             }
         }
@@ -146,19 +149,14 @@ const MAX_EDGE_MOVE: f64 = 0.1;
 /// sharing a vertex.
 const EDGE_EPSILON: f64 = 1e-4;
 
-/// The field's value at corner `c`; `None` where the winding number gave
-/// it (the field's root is not sought there: the vertex stays where
-/// marching cubes put it).
-fn value(corners: &[CornerValue], c: [i64; 3]) -> Result<Option<f64>, KernelError> {
+/// The value at corner `c`, and whether the field or the winding number
+/// gave it.
+fn known(corners: &[CornerValue], c: [i64; 3]) -> Result<Known, KernelError> {
     let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
     match corners.binary_search_by_key(&key, |e| e.0) {
-        Ok(i) => match corners[i].1 {
-            Some(Known::Winding(_)) => Ok(None),
-            Some(known) => Ok(Some(known.value())),
-            None => Err(KernelError::Failed(
-                "a cut edge has an undefined corner".into(),
-            )),
-        },
+        Ok(i) => corners[i]
+            .1
+            .ok_or_else(|| KernelError::Failed("a cut edge has an undefined corner".into())),
         Err(_) => Err(KernelError::Failed(
             "a cut edge's corner was not evaluated".into(),
         )),
