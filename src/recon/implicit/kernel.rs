@@ -1,9 +1,10 @@
 //! The implicit-reconstruction tile kernel (paper 1 sections 2.5-2.6): a
 //! sparse narrow band of lattice cubes near the samples, the signed distance
 //! at their corners, marching cubes on the cubes whose corners are all
-//! defined and not all beyond the data's edge ([`Known::Beyond`]). A tile
-//! owns the cubes whose min corner lies in its core box (half-open), so
-//! every cube is polygonised by exactly one tile.
+//! defined and not all beyond the data's edge ([`Known::Beyond`]); with
+//! `--closed`, on every cube that may change sign, every corner having one
+//! ([`super::closed`]). A tile owns the cubes whose min corner lies in its
+//! core box (half-open), so every cube is polygonised by exactly one tile.
 //!
 //! Deviation: the paper marches the whole bounding box; the band here is the
 //! cubes within one cube of a sample's cube. A surface piece farther from
@@ -252,8 +253,7 @@ impl ImplicitKernel {
     /// 1M dragon's 102-point filament, whose loss set every Hausdorff
     /// distance: open 33.4 -> 11.3 spacings, `--closed` 33.4 -> 20.3). With
     /// `--closed`, a stray island closes into a small piece the piece
-    /// filter drops; the filament's rim needed 69 patch runs
-    /// (`hole_guard::tries_for`).
+    /// filter drops.
     pub(crate) fn takes_islands(&self) -> bool {
         self.field == Field::Mls
     }

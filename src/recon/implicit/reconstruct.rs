@@ -309,11 +309,12 @@ fn everywhere(store: &PointStore, kernel: &ImplicitKernel) -> Result<Everywhere,
 /// 9: 0.0723), the time about inversely proportional to the cell squared.
 pub(crate) const MLS_CELL_SPACINGS: f64 = 2.2;
 
-/// The MLS cell with `closed`, in spacings: coarser than the open one
-/// because a finer lattice meets more places where the surface leaves the
-/// band (next to parts thinner than a cell), and some of those holes are
-/// too twisted for a least-area patch clear of the mesh: the 1M dragon at
-/// 3 / 2.2 spacings leaves 0 / 4 holes open.
+/// The MLS cell with `closed`, in spacings: coarser than the open one.
+/// It was set so when holes were patched after marching cubes, because a
+/// finer lattice met holes no least-area patch fitted (the 1M dragon at
+/// 3 / 2.2 spacings left 0 / 4 open); every corner now has a sign
+/// ([`super::closed`]), so that reason is gone, and 3 stays for the time
+/// (the time grows as 1 / cell^2; `--cell` gives the finer mesh).
 pub(crate) const CLOSED_MLS_CELL_SPACINGS: f64 = 3.0;
 
 /// The default cell: paper 1's `rho + delta` (section 2.6) for its own
@@ -334,14 +335,11 @@ fn default_cell(field: Field, closed: bool, spacing: f64, paper: f64) -> f64 {
 /// Half-width of the band of cubes around the samples, in spacings. The
 /// band is where the surface can appear, so it must reach across the
 /// sparsest sampling (terrain far from the scanner: the test terrain at a
-/// cell of 3 spacings has 34 holes with a band of 1 cube, 0 with 2), and
-/// with `--closed` across the places the scan missed (the dragon's 1M
-/// samples leave a patch 30 spacings across), where the least-area patch
-/// of [`super::holes`] cannot follow the shape. 1M dragon, `--closed`, cell
-/// 2.9 spacings: a band of 1 / 2 / 3 cubes leaves 5 / 0 / 0 boundary loops
-/// (mean distance 0.062 / 0.063 / 0.065 spacings). Six spacings keeps the
-/// reach the 3-spacing cell had (two cubes) at the open cell of 2.2: with
-/// four, the test terrain opened a second boundary loop.
+/// cell of 3 spacings has 34 holes with a band of 1 cube, 0 with 2). Six
+/// spacings keeps the reach the 3-spacing cell had (two cubes) at the open
+/// cell of 2.2: with four, the test terrain opened a second boundary loop.
+/// With `--closed` the band is where the field's value rather than the
+/// winding number's decides ([`super::closed`]).
 const BAND_SPACINGS: f64 = 6.0;
 
 /// The band's reach in cubes: one for paper 1's field (its cell is
