@@ -166,8 +166,11 @@ impl TileKernel for ImplicitKernel {
     /// sparse region has many cubes per point, so a count of points alone
     /// let a terrestrial scan's tiles overrun `--mem` (519k points of a
     /// geyser cone at 256 MiB peaked at 308 MiB).
+    /// With `--closed` the cubes are the band widened by one (where the
+    /// field meets the winding number).
     fn bytes_for(&self, tile: &TilePoints) -> Option<u64> {
-        let cubes = band(&self.lattice, &tile.points, &tile.core, self.band).ok()?;
+        let reach = self.band + i64::from(self.everywhere.is_some());
+        let cubes = band(&self.lattice, &tile.points, &tile.core, reach).ok()?;
         let n = tile.points.len() as u64;
         Some(tile_bytes(n, cubes.len() as u64, self.bytes_per_cube))
     }
