@@ -144,6 +144,7 @@ impl E57Reader {
         let mut plan = Vec::with_capacity(picked.len());
         let mut stations = Vec::with_capacity(picked.len());
         let mut declared = 0u64;
+        let mut posed = true;
         for &i in &picked {
             let base = scans[..i]
                 .iter()
@@ -155,12 +156,21 @@ impl E57Reader {
                 records: scans[i].records,
                 position: DVec3::from_array(scans[i].pose.translation),
             });
+            // A scan without a pose has no known station (the Stanford
+            // bunny of libE57Format's test data: a merged, all-round scan
+            // whose "station" at the origin turned 88 % of its normals
+            // in); with any such scan the file names none, rather than
+            // orient some points by their station and the rest otherwise.
+            posed &= scans[i].posed;
             plan.push(Planned {
                 cloud: clouds[i].clone(),
                 index: i,
                 base,
                 transform: scans[i].pose.transform(),
             });
+        }
+        if !posed {
+            stations.clear();
         }
         let (block_tx, block_rx) = bounded(AHEAD);
         let (recycle_tx, recycle_rx) = unbounded();

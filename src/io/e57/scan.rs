@@ -26,6 +26,11 @@ pub struct ScanInfo {
     pub records: u64,
     /// Where the scan sits in the world frame: its points are moved by this pose when read.
     pub pose: Pose,
+    /// Whether the file gives the pose: without one the points are taken
+    /// as they are (the identity), but nothing says where the scanner
+    /// stood (merged or converted data often has none), so the scan names
+    /// no station.
+    pub posed: bool,
     /// Whether the records carry Cartesian coordinates.
     pub cartesian: bool,
     /// Whether the records carry spherical coordinates (range, azimuth, elevation).
@@ -118,6 +123,7 @@ pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<Sca
         guid: pc.guid.clone(),
         records: pc.records,
         pose,
+        posed: pc.transform.is_some(),
         cartesian,
         spherical,
         attributes: attributes(pc),
