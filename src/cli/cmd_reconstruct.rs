@@ -202,10 +202,18 @@ pub fn print_summary(r: &ImplicitReport, points: u64, tiles: usize, secs: f64, o
     ));
 }
 
-/// " (P small pieces dropped)", when any were.
+/// " (P small pieces dropped, A % of the surface closed away from the
+/// data)", the parts that apply.
 fn changes_summary(r: &ImplicitReport) -> String {
     let p = r.pieces;
     let mut parts = Vec::new();
+    if r.away_triangles > 0 {
+        let drawn = r.triangles + p.triangles_dropped;
+        parts.push(format!(
+            "{:.2} % of the surface closed away from the data",
+            100.0 * r.away_triangles as f64 / drawn.max(1) as f64
+        ));
+    }
     if p.pieces_dropped > 0 {
         parts.push(format!(
             "{} small pieces dropped ({} triangles)",

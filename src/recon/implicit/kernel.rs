@@ -34,6 +34,8 @@ pub struct ImplicitTile {
     pub triangles: Vec<[CubeVertex; 3]>,
     pub cubes: usize,
     pub undefined_corners: usize,
+    /// Triangles in cubes a corner of which the winding number decided.
+    pub away: usize,
 }
 
 impl ImplicitTile {
@@ -50,6 +52,7 @@ impl ImplicitTile {
         };
         self.cubes < 1 << 48
             && self.undefined_corners < 1 << 48
+            && self.away <= self.triangles.len()
             && self.triangles.iter().all(triangle)
     }
 }
@@ -215,11 +218,12 @@ impl TileKernel for ImplicitKernel {
             undefined_corners: corners.iter().filter(|c| c.1.is_none()).count(),
             ..ImplicitTile::default()
         };
-        let parts: Vec<Vec<[CubeVertex; 3]>> = cubes
+        let parts: Vec<(Vec<[CubeVertex; 3]>, usize)> = cubes
             .par_chunks(CUBES_PER_TASK)
             .map(|chunk| self.polygonize_cubes(chunk, &corners))
             .collect::<Result<_, _>>()?;
-        out.triangles = parts.concat();
+        out.away = parts.iter().map(|p| p.1).sum();
+        out.triangles = parts.into_iter().flat_map(|p| p.0).collect();
         if self.field == Field::Mls {
             let refined =
                 refine_vertices(&self.lattice, &samples, tile, &corners, &mut out.triangles)?;
@@ -273,24 +277,30 @@ impl ImplicitKernel {
         }
     }
 
-    /// Marching cubes over sorted `cubes` (a run of the tile's), in order.
+    /// Marching cubes over sorted `cubes` (a run of the tile's), in order,
+    /// and how many of the triangles lie in cubes a corner of which the
+    /// winding number decided (`--closed`: the surface away from the data).
     fn polygonize_cubes(
         &self,
         cubes: &[[i64; 3]],
         corners: &[CornerValue],
-    ) -> Result<Vec<[CubeVertex; 3]>, KernelError> {
-        let mut triangles = Vec::new();
+    ) -> Result<(Vec<[CubeVertex; 3]>, usize), KernelError> {
+        let (mut triangles, mut away) = (Vec::new(), 0);
         let Some(&first) = cubes.first() else {
-            return Ok(triangles);
+            return Ok((triangles, away));
         };
         let mut cursor = CornerCursor::new(corners, first, self.everywhere.is_some())?;
         for cube in cubes {
-            if let Some(values) = cursor.values(*cube)? {
+            if let Some((values, winding)) = cursor.values(*cube)? {
+                let before = triangles.len();
                 polygonize_cube(&self.lattice, *cube, &values, &mut triangles)
                     .map_err(KernelError::failed)?;
+                if winding {
+                    away += triangles.len() - before;
+                }
             }
         }
-        Ok(triangles)
+        Ok((triangles, away))
     }
 
     /// Signed distance at every corner of `cubes`, sorted by corner.
@@ -368,10 +378,12 @@ impl<'a> CornerCursor<'a> {
     /// The values at the corners of `cube` (no earlier than the last cube
     /// asked), in [`CORNERS`] order, or `None` if one is undefined or none
     /// projects onto the data.
-    fn values(&mut self, cube: [i64; 3]) -> Result<Option<[f64; 8]>, KernelError> {
+    /// With the values, whether the winding number gave one of them (the
+    /// cube lies away from the data, `--closed`).
+    fn values(&mut self, cube: [i64; 3]) -> Result<Option<([f64; 8], bool)>, KernelError> {
         let keys = corner_keys(cube)?;
         let mut values = [0.0; 8];
-        let mut on_data = false;
+        let (mut on_data, mut away) = (false, false);
         for ((at, key), value) in self.at.iter_mut().zip(keys).zip(values.iter_mut()) {
             while self.corners.get(*at).is_some_and(|e| e.0 < key) {
                 *at += 1;
@@ -379,12 +391,13 @@ impl<'a> CornerCursor<'a> {
             match self.corners.get(*at) {
                 Some(&(k, Some(known))) if k == key => {
                     on_data |= matches!(known, Known::OnData(_));
+                    away |= matches!(known, Known::Winding(_));
                     *value = known.value();
                 }
                 _ => return Ok(None),
             }
         }
-        Ok((on_data || self.everywhere).then_some(values))
+        Ok((on_data || self.everywhere).then_some((values, away)))
     }
 }
 

@@ -136,6 +136,11 @@ pub struct ImplicitReport {
     pub triangles: u64,
     /// Cubes polygonised over all tiles.
     pub cubes: u64,
+    /// With `--closed`: triangles drawn in cubes a corner of which the
+    /// winding number decided, away from the data (holes closed, and the
+    /// band's edge wherever the field and the winding number disagree:
+    /// a large share says the normals are wrong somewhere).
+    pub away_triangles: u64,
     /// Small pieces dropped.
     pub pieces: PieceReport,
     /// The mesh written: its edges, vertices, components and volumes.
@@ -261,6 +266,7 @@ pub fn reconstruct_implicit(
     let store = &*store;
     report.run = run_tiles(store, &kernel, opts, progress, |t, out| {
         report.cubes += out.cubes as u64;
+        report.away_triangles += out.away as u64;
         let core = core_box(store, &store.tiles()[t]);
         stitcher
             .add_tile(&lattice, (t, &core), &out.triangles)
