@@ -3,7 +3,7 @@
 //! lattice anchored at the store origin, the marching-cubes tile kernel, and
 //! the seam stitcher streaming into a mesh file (through a filter of small
 //! pieces). With `--closed` every lattice corner gets a sign
-//! ([`super::closed`]) and the run promises a closed surface: the
+//! (`closed`) and the run promises a closed surface: the
 //! writer's audit checks it.
 
 use super::closed::{self, Everywhere};
