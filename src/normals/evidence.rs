@@ -189,11 +189,7 @@ pub(crate) fn check(
                 if flg[i] & FLAG_DEGENERATE != 0 {
                     continue;
                 }
-                let n = DVec3::new(
-                    f64::from(nrm[3 * i]),
-                    f64::from(nrm[3 * i + 1]),
-                    f64::from(nrm[3 * i + 2]),
-                );
+                let n = super::normal_at(&nrm, i);
                 let p = DVec3::new(
                     f64::from(xyz[3 * i]),
                     f64::from(xyz[3 * i + 1]),

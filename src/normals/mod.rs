@@ -43,6 +43,15 @@ pub const FLAG_DEGENERATE: u8 = 1;
 /// is still signed by its island's own highest points, not tied to the rest.
 pub const FLAG_UNORIENTED: u8 = 2;
 
+/// Normal `k` of a normals column read as flat f32 triples.
+pub(crate) fn normal_at(raw: &[f32], k: usize) -> DVec3 {
+    DVec3::new(
+        f64::from(raw[3 * k]),
+        f64::from(raw[3 * k + 1]),
+        f64::from(raw[3 * k + 2]),
+    )
+}
+
 /// How normals get their sign.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Orientation {

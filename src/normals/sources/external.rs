@@ -110,11 +110,7 @@ fn tile_bests(
     labels.read_tile(t, &mut words)?;
     let mut best: BTreeMap<u64, Option<Best>> = BTreeMap::new();
     for (k, p) in pts.iter().enumerate() {
-        let n = DVec3::new(
-            nrm[3 * k] as f64,
-            nrm[3 * k + 1] as f64,
-            nrm[3 * k + 2] as f64,
-        );
+        let n = crate::normals::normal_at(&nrm, k);
         if flg[k] & FLAG_DEGENERATE != 0 || n == DVec3::ZERO {
             continue;
         }

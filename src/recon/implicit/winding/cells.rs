@@ -231,11 +231,7 @@ fn gather_within(
         normals.read_f32(at, count, &mut nrm)?;
         flags.read_u8(at, count, &mut flg)?;
         for (i, p) in pts.iter().enumerate() {
-            let n = DVec3::new(
-                nrm[3 * i] as f64,
-                nrm[3 * i + 1] as f64,
-                nrm[3 * i + 2] as f64,
-            );
+            let n = crate::normals::normal_at(&nrm, i);
             if flg[i] & unusable != 0 || n == DVec3::ZERO {
                 continue;
             }
