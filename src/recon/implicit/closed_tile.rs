@@ -10,7 +10,7 @@
 
 use super::closed::{
     cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes, CoarseBox,
-    Everywhere,
+    Everywhere, COARSE,
 };
 use super::dilate::dilate;
 use super::kernel::{occupied, owns, ImplicitKernel};
@@ -60,12 +60,13 @@ impl ImplicitKernel {
         tile: &TilePoints,
     ) -> Result<Vec<f64>, KernelError> {
         let corners: Vec<[i64; 3]> = coarse.corners().collect();
+        let supers = e.supers(&self.lattice, coarse, self.band + COARSE + 2);
         let valued: Vec<Result<f64, f64>> = corners
             .par_iter()
             .map_init(Vec::new, |nbr, &c| -> Result<_, KernelError> {
                 let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
                 if near.binary_search(&key).is_err() {
-                    return Ok(Ok(e.coarse_w(&self.lattice, c)));
+                    return Ok(Ok(supers.coarse_w(e, &self.lattice, c)));
                 }
                 Ok(self
                     .field_at(samples, tile, c, nbr)

@@ -80,6 +80,32 @@ impl WindingTree {
         self.levels.first().map_or(0, Vec::len)
     }
 
+    /// Whether a leaf cell meets the box `lo`..`hi` (a cell is found by
+    /// its level's aligned cube round its centroid, which lies in it).
+    pub(crate) fn any_within(&self, lo: DVec3, hi: DVec3) -> bool {
+        let Some(top) = self.levels.len().checked_sub(1) else {
+            return false;
+        };
+        let mut stack: Vec<(usize, u32)> = (0..self.levels[top].len() as u32)
+            .map(|i| (top, i))
+            .collect();
+        while let Some((level, i)) = stack.pop() {
+            let cell = &self.levels[level][i as usize];
+            let side = self.leaf * f64::from(1u32 << level.min(31));
+            let min = (cell.centroid / side).floor() * side;
+            let max = min + DVec3::splat(side);
+            if (0..3).any(|a| max[a] < lo[a] || min[a] > hi[a]) {
+                continue;
+            }
+            if level == 0 {
+                return true;
+            }
+            let children = cell.first_child..cell.first_child + cell.children;
+            stack.extend(children.map(|c| (level - 1, c)));
+        }
+        false
+    }
+
     /// The winding number at `q`.
     pub(crate) fn at(&self, q: DVec3) -> f64 {
         let Some(top) = self.levels.len().checked_sub(1) else {
