@@ -25,7 +25,7 @@
 //! sees every sample at once.
 
 use super::dilate::dilate;
-use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
+use super::lattice::{edge_key, Lattice, LatticeError};
 use super::winding::WindingTree;
 use crate::geom::Aabb;
 use rayon::prelude::*;
@@ -349,11 +349,6 @@ pub(crate) fn owned_cubes(lattice: &Lattice, core: &Aabb) -> ([i64; 3], [i64; 3]
     let lo = [0, 1, 2].map(|a| first(core.min[a], a));
     let hi = [0, 1, 2].map(|a| first(core.max[a], a));
     (lo, hi)
-}
-
-/// The corner of key `key`.
-pub(crate) fn corner_of(key: u64) -> [i64; 3] {
-    edge_from_key(key).map_or([0; 3], |(c, _)| c)
 }
 
 #[cfg(test)]

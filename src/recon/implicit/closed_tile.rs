@@ -13,9 +13,9 @@ use super::closed::{
     Everywhere, COARSE,
 };
 use super::dilate::dilate;
-use super::kernel::{occupied, owns, ImplicitKernel};
+use super::kernel::{corner_of, occupied, owns, ImplicitKernel};
 use super::refine::CornerValue;
-use super::sdf::{Corner, Known, Samples};
+use super::sdf::{Known, Samples};
 use crate::pipeline::KernelError;
 use crate::tiling::TilePoints;
 use rayon::prelude::*;
@@ -43,8 +43,8 @@ impl ImplicitKernel {
         keys.extend(cubes_of(&coarse.mixed_cells(&w)).map_err(KernelError::failed)?);
         keys.par_sort_unstable();
         keys.dedup();
-        keys.retain(|&k| owns(lattice, &tile.core, super::closed::corner_of(k)));
-        let cubes: Vec<[i64; 3]> = keys.iter().map(|&k| super::closed::corner_of(k)).collect();
+        keys.retain(|&k| owns(lattice, &tile.core, corner_of(k)));
+        let cubes: Vec<[i64; 3]> = keys.iter().map(|&k| corner_of(k)).collect();
         let corners = self.closed_corner_values(&coarse, &w, &near, &keys, samples, tile)?;
         Ok((cubes, corners))
     }
@@ -91,7 +91,7 @@ impl ImplicitKernel {
         let valued: Vec<Valued> = keys
             .par_iter()
             .map_init(Vec::new, |nbr, &key| -> Result<_, KernelError> {
-                let c = super::closed::corner_of(key);
+                let c = corner_of(key);
                 if near.binary_search(&key).is_ok() {
                     return Ok(self.field_at(samples, tile, c, nbr));
                 }
@@ -114,11 +114,7 @@ impl ImplicitKernel {
         nbr: &mut Vec<crate::spatial::Neighbour>,
     ) -> Valued {
         let p = self.lattice.corner(c);
-        match self.field.corner(samples, tile, p, self.limit, nbr) {
-            Corner::Value(f) => Ok(f.map(Known::OnData)),
-            Corner::Beyond(f) => Ok(Some(Known::Beyond(f))),
-            Corner::Short(s) => Err(s),
-        }
+        self.field.corner(samples, tile, p, self.limit, nbr).known()
     }
 }
 

@@ -138,7 +138,7 @@ fn corner_key(c: [i64; 3]) -> Result<u64, LatticeError> {
     edge_key(c, 0)
 }
 
-fn corner_of(key: u64) -> [i64; 3] {
+pub(crate) fn corner_of(key: u64) -> [i64; 3] {
     // Keys come from `corner_key`, so decoding cannot fail.
     edge_from_key(key).map_or([0; 3], |(c, _)| c)
 }
@@ -332,14 +332,7 @@ impl ImplicitKernel {
         Ok(corners
             .into_iter()
             .zip(evaluated)
-            .map(|(c, v)| {
-                let known = match v {
-                    Corner::Value(f) => f.map(Known::OnData),
-                    Corner::Beyond(f) => Some(Known::Beyond(f)),
-                    Corner::Short(_) => None,
-                };
-                (c, known)
-            })
+            .map(|(c, v)| (c, v.known().unwrap_or(None)))
             .collect())
     }
 }

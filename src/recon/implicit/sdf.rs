@@ -34,6 +34,17 @@ pub(crate) enum Corner {
     Short(f64),
 }
 
+impl Corner {
+    /// The value as the kernel keeps it, or the loaded region's shortfall.
+    pub(crate) fn known(self) -> Result<Option<Known>, f64> {
+        match self {
+            Corner::Value(f) => Ok(f.map(Known::OnData)),
+            Corner::Beyond(f) => Ok(Some(Known::Beyond(f))),
+            Corner::Short(s) => Err(s),
+        }
+    }
+}
+
 /// A corner's value as the kernel keeps it, and whether its projection
 /// lies on the data ([`Corner::Beyond`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
