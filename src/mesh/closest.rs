@@ -78,6 +78,42 @@ pub fn closest_point_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
     a + ab * t
 }
 
+/// Squared distance between segments `p1q1` and `p2q2` (Ericson section
+/// 5.1.9: the closest parameters on the two lines, clamped to the segments
+/// one after the other); a zero-length segment is its point.
+pub fn segment_segment_distance2(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> f64 {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let (s, t) = if a <= 0.0 && e <= 0.0 {
+        (0.0, 0.0)
+    } else if a <= 0.0 {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= 0.0 {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            // Parallel segments (denom 0): any s; take the start.
+            let s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t = (b * s + f) / e;
+            if t < 0.0 {
+                ((-c / a).clamp(0.0, 1.0), 0.0)
+            } else if t > 1.0 {
+                (((b - c) / a).clamp(0.0, 1.0), 1.0)
+            } else {
+                (s, t)
+            }
+        }
+    };
+    ((p1 + d1 * s) - (p2 + d2 * t)).length_squared()
+}
+
 fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let candidates = [
         closest_point_on_segment(p, a, b),
@@ -118,6 +154,42 @@ mod tests {
                 (got - want).length() < 1e-15,
                 "p {p}: got {got}, want {want}"
             );
+        }
+    }
+
+    #[test]
+    fn segment_distances_against_sampled_minima() {
+        let v = DVec3::new;
+        let cases = [
+            // Crossing at right angles, 1 apart in z.
+            (
+                [v(-1., 0., 0.), v(1., 0., 0.), v(0., -1., 1.), v(0., 1., 1.)],
+                1.0,
+            ),
+            // Parallel, overlapping, 0.5 apart.
+            (
+                [v(0., 0., 0.), v(2., 0., 0.), v(1., 0.5, 0.), v(3., 0.5, 0.)],
+                0.25,
+            ),
+            // End to end along a line.
+            (
+                [v(0., 0., 0.), v(1., 0., 0.), v(3., 0., 0.), v(4., 0., 0.)],
+                4.0,
+            ),
+            // A point against a segment.
+            (
+                [v(0., 2., 0.), v(0., 2., 0.), v(-1., 0., 0.), v(1., 0., 0.)],
+                4.0,
+            ),
+        ];
+        for ([p1, q1, p2, q2], want) in cases {
+            let got = segment_segment_distance2(p1, q1, p2, q2);
+            assert!((got - want).abs() < 1e-12, "{p1} {q1} {p2} {q2}: {got}");
+            let sampled = (0..=100)
+                .flat_map(|i| (0..=100).map(move |j| (i as f64 / 100.0, j as f64 / 100.0)))
+                .map(|(s, t)| (p1.lerp(q1, s) - p2.lerp(q2, t)).length_squared())
+                .fold(f64::INFINITY, f64::min);
+            assert!(got <= sampled + 1e-12, "sampled {sampled} below {got}");
         }
     }
 

@@ -25,6 +25,7 @@ pub(crate) mod wound;
 pub(crate) mod write;
 
 mod bvh;
+pub(crate) mod clearance;
 mod closest;
 pub(crate) mod intersect;
 mod nearest;

@@ -313,6 +313,23 @@ impl PointStore {
         b
     }
 
+    /// How far the distance between two stored points (f32 offsets) may lie
+    /// from the distance between the same points as written (the input's
+    /// own coordinates, `xyz.input`): each coordinate rounds by up to half
+    /// its last place, `|x| 2^-24`, so two points move apart by at most
+    /// `2 sqrt(3) max|x| 2^-24`, under `2 max|x| f32::EPSILON`. A kernel
+    /// whose exact predicates decide what the written mesh must satisfy
+    /// keeps this much clearance (`mesh::clearance`).
+    pub(crate) fn rounding_reach(&self) -> f64 {
+        let b = self.relative_bounds();
+        let max_abs = b.min.abs().max(b.max.abs()).max_element();
+        if max_abs.is_finite() {
+            2.0 * max_abs * f64::from(f32::EPSILON)
+        } else {
+            0.0
+        }
+    }
+
     /// Stored coordinates (relative to the origin) of points `[first, first+count)`.
     pub fn read_points(
         &self,

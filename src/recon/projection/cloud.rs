@@ -45,6 +45,11 @@ pub struct Cloud<'a, H: Neighbourhoods> {
     /// Whether a point may be a corner of a new triangle (a lattice job
     /// adds triangles only inside its window, `lattice.rs`).
     pub joinable: &'a [bool],
+    /// Clearance a new triangle keeps from the triangles near it, beyond
+    /// what they share: how far the rounding of the kernel's coordinates
+    /// may move them (`PointStore::rounding_reach`; 0 for points that are
+    /// written as they are).
+    pub slack: f64,
     /// Every point within a ball, for checks beyond a neighbour list.
     pub probe: &'a Probe<'a>,
 }

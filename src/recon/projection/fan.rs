@@ -22,18 +22,23 @@
 //! overlapping the triangles already at that vertex (the visible-region
 //! rule at every corner, which keeps the surface from folding over
 //! itself), no new edge crossing a front edge, no vertex of the mesh inside
-//! it, and finally the surface's directed-edge rule.
+//! it, no triangle round its corners met in space, and finally the
+//! surface's directed-edge rule.
+//!
+//! The test in space runs for every triangle, not only where the plane
+//! looks unreliable (a curved neighbourhood or a long edge, as before):
+//! depth-camera frames fold flat triangles onto their neighbours where
+//! nothing looked curved (`tests/projection_real.rs`), and the test keeps
+//! the coordinates' rounding as clearance (`mesh::clearance`), since the
+//! kernel's f32 coordinates are not the ones written.
 
 use super::cloud::{Cloud, Neighbourhoods};
 use super::frame::{arcs_overlap, orient, strictly_inside};
 use super::holes::HOLE_MAX_ANGLE_COS;
 use super::star::{Arc, Limits, Star};
 use super::surface::{State, Surface, NONE};
+use crate::mesh::clearance::meet_within;
 use glam::DVec2;
-
-/// A triangle with an edge longer than this many local spacings is also
-/// tested in space against the triangles around its corners.
-const RISKY_EDGE: f64 = 5.0;
 
 /// A walk's current edge end.
 #[derive(Clone, Copy, Debug)]
@@ -240,8 +245,8 @@ fn acceptable<H: Neighbourhoods>(
             existing[i] || !star.crosses_front(a.0, a.1, b.0, b.1)
         })
         && !holds_a_vertex(star, s, t)
-        && !((hole || risky(star, cloud, ids)) && meets_nearby(star, cloud, s, ids))
         && (closes_hole || !big_and_not_empty(star, cloud, s, ids))
+        && !meets_nearby(star, cloud, s, ids)
 }
 
 /// For a triangle too big for `v`'s neighbour list to vouch for (a corner
@@ -351,17 +356,6 @@ fn holds_a_vertex(star: &Star, s: &Surface, t: [(u32, DVec2); 3]) -> bool {
     })
 }
 
-/// Where the tangent plane may misrepresent space: a curved neighbourhood,
-/// or a long edge.
-fn risky<H: Neighbourhoods>(star: &Star, cloud: &Cloud<H>, t: [u32; 3]) -> bool {
-    star.curved
-        || (0..3).any(|i| {
-            let (a, b) = (t[i] as usize, t[(i + 1) % 3] as usize);
-            let d = (cloud.points[b] - cloud.points[a]).length();
-            d > RISKY_EDGE * cloud.spacing[a].max(cloud.spacing[b])
-        })
-}
-
 /// Whether triangle `t` meets, in space, a triangle at `v` or at one of its
 /// neighbours (exact test, shared vertices handled: `mesh::intersect`).
 ///
@@ -396,6 +390,7 @@ pub(super) fn meets_nearby<H: Neighbourhoods>(
     };
     add(star.v);
     for x in t {
+        add(x);
         cloud.hoods.get(x).iter().for_each(|&y| add(y));
     }
     let earlier = |y: u32, place: usize| {
@@ -413,7 +408,7 @@ pub(super) fn meets_nearby<H: Neighbourhoods>(
             if olo.cmpgt(hi).any() || lo.cmpgt(ohi).any() {
                 continue;
             }
-            if crate::mesh::intersect::triangles_intersect(t, &p, o, &q) {
+            if meet_within(t, &p, o, &q, cloud.slack) {
                 return true;
             }
         }

@@ -194,6 +194,7 @@ mod tests {
             centre: &centre,
             joinable,
             probe: &probe,
+            slack: 0.0,
         };
         close_three_edge_holes(&mut Star::default(), &cloud, s);
     }

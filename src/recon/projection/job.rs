@@ -59,6 +59,8 @@ pub struct TileView<'a, H: Neighbourhoods> {
     /// The tile's points in input-id order, and each point's place there.
     pub by_id: &'a [u32],
     pub rank: &'a [u32],
+    /// [`super::cloud::Cloud::slack`]: the same for every tile.
+    pub slack: f64,
 }
 
 /// `(by_id, rank)`: the points in input-id order and each one's place in
@@ -344,6 +346,7 @@ fn grow_job<'a, H: Neighbourhoods>(
         centre: &jp.centre,
         joinable: &jp.joinable,
         probe: &probe,
+        slack: tile.slack,
     };
     let mut grower = Grower::new(params, n_all);
     for i in 0..n_all {

@@ -49,6 +49,8 @@ pub struct ProjectionKernel {
     pub params: ProjectionParams,
     pub lattice: Lattice,
     pub initial_margin: f64,
+    /// [`super::cloud::Cloud::slack`] of the store.
+    pub slack: f64,
 }
 
 impl TileKernel for ProjectionKernel {
@@ -84,6 +86,7 @@ impl TileKernel for ProjectionKernel {
             info: &info,
             hoods: &hoods,
             buckets: &buckets,
+            slack: self.slack,
         };
         let mut done: BTreeMap<JobKey, JobOutput> = BTreeMap::new();
         for level in 0..LEVELS {

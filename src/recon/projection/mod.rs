@@ -29,9 +29,9 @@
 //! instead of fan plus flips (`fan.rs`); re-processing of late-touched
 //! BOUNDARY vertices (`grow.rs`); small holes where fronts meet closed from
 //! one of their vertices (`star.rs`), and holes of three edges left after
-//! the growth closed with their triangle (`holes.rs`); exact checks in space where the plane
-//! misleads, and a kNN probe inside triangles larger than a vertex's list
-//! (`fan.rs`); orientation pieces settled by a parity union-find, needed
+//! the growth closed with their triangle (`holes.rs`); every triangle
+//! checked in space against the triangles round its corners, and a kNN
+//! probe inside triangles larger than a vertex's list (`fan.rs`); orientation pieces settled by a parity union-find, needed
 //! once fronts from different seeds or tiles meet (`surface.rs`,
 //! `orient.rs`).
 

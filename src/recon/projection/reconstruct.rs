@@ -152,6 +152,7 @@ pub fn reconstruct_projection(
         params: *params,
         lattice,
         initial_margin: margin * 1.05,
+        slack: store.rounding_reach(),
     };
     // Every directed edge is used once (ARCHITECTURE.md): no non-manifold
     // or inconsistently wound edge, or the mesh is written as incomplete

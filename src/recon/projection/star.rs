@@ -9,14 +9,6 @@ use super::frame::{ccw_from, orient, pseudo_angle, segments_cross, Frame};
 use super::surface::{State, Surface, Wedge, NONE};
 use glam::{DVec2, DVec3};
 
-/// Elevation (height over distance in the plane) above which a neighbour
-/// makes the neighbourhood "curved": tan 25 degrees.
-const CURVED_ELEVATION: f64 = 0.466;
-
-/// A neighbour whose plane turns more than this from `v`'s (cos 30
-/// degrees) makes the neighbourhood "curved" too: a crease.
-const CURVED_COS: f64 = 0.866;
-
 /// A projected point of the neighbourhood.
 #[derive(Clone, Copy, Debug)]
 pub struct Local {
@@ -113,9 +105,6 @@ pub struct Star {
     pub front: Vec<FrontEdge>,
     /// Indices into `pts` of the candidates, in angular order.
     pub cands: Vec<usize>,
-    /// Some neighbour stands high over the plane: projections distort, so
-    /// new triangles are also tested in space (`fan.rs`).
-    pub curved: bool,
     /// Distance from `v` to its farthest neighbour: circles up to this
     /// diameter through `v` hold only neighbours.
     pub reach: f64,
@@ -204,7 +193,6 @@ impl Star {
 
     fn project_neighbours<H: Neighbourhoods>(&mut self, v: u32, cloud: &Cloud<H>, s: &Surface) {
         self.pts.clear();
-        self.curved = false;
         self.reach = 0.0;
         let frame = *self.frame();
         for &u in cloud.hoods.get(v) {
@@ -214,8 +202,6 @@ impl Star {
                 continue;
             }
             let (q, height) = frame.project(cloud.points[u as usize]);
-            self.curved |= height.abs() > CURVED_ELEVATION * q.length()
-                || cloud.normals[u as usize].dot(frame.n).abs() < CURVED_COS;
             if q != DVec2::ZERO {
                 self.pts.push(Local {
                     id: u,

@@ -40,6 +40,7 @@ pub fn triangulate_tile(
         centre: &centre,
         joinable: &joinable,
         probe: &probe,
+        slack: 0.0,
     };
     let mut surface = Surface::new(tile.points.len());
     for (state, p) in surface.state.iter_mut().zip(&info) {
