@@ -27,6 +27,9 @@ pub(crate) fn meet_within(
     q: &[DVec3; 3],
     slack: f64,
 ) -> bool {
+    if slack > 0.0 && apart_by_planes(pi, p, qi, q, 2.0 * slack) {
+        return false;
+    }
     if triangles_intersect(pi, p, qi, q) {
         return true;
     }
@@ -55,6 +58,49 @@ pub(crate) fn meet_within(
         }
         _ => true,
     }
+}
+
+/// Whether each triangle's corners not shared lie more than `gap` beyond
+/// the other along an axis of the other ([`beyond`]): then the two neither
+/// meet beyond what they share nor come within `gap` there. The common
+/// cases, neighbours on a curved surface and triangles of one fan, are
+/// settled by a few dot products; `gap` is far above the float error of
+/// the projections (it is taken at twice a positive slack).
+fn apart_by_planes(pi: [u32; 3], p: &[DVec3; 3], qi: [u32; 3], q: &[DVec3; 3], gap: f64) -> bool {
+    beyond(p, pi, q, qi, gap) && beyond(q, qi, p, pi, gap)
+}
+
+/// Whether the corners of `q` not in `pi` all project more than `gap`
+/// past `p` on one of `p`'s axes (its normal, either way, or the outward
+/// normal of an edge in its plane) at whose far end every shared corner
+/// lies: `q` is the hull of those corners and the shared ones, so it then
+/// keeps `gap` from `p` except at what they share.
+fn beyond(p: &[DVec3; 3], pi: [u32; 3], q: &[DVec3; 3], qi: [u32; 3], gap: f64) -> bool {
+    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    let len = n.length();
+    if len == 0.0 || !len.is_finite() {
+        return false;
+    }
+    let n = n / len;
+    let others = |k: &usize| !pi.contains(&qi[*k]);
+    if !(0..3).any(|k| others(&k)) {
+        return false;
+    }
+    let past = |axis: DVec3, at: DVec3| (0..3).filter(others).all(|k| axis.dot(q[k] - at) > gap);
+    if past(n, p[0]) || past(-n, p[0]) {
+        return true;
+    }
+    (0..3).any(|k| {
+        let (a, b, c) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+        let shared_on_edge = (0..3)
+            .filter(|&j| qi.contains(&pi[j]))
+            .all(|j| j == k || j == (k + 1) % 3);
+        let mut m = (b - a).cross(n).normalize_or_zero();
+        if m.dot(c - a) > 0.0 {
+            m = -m;
+        }
+        shared_on_edge && m != DVec3::ZERO && past(m, a)
+    })
 }
 
 /// Squared distance from segment `ab` to triangle `t`, for a segment that
@@ -101,6 +147,28 @@ mod tests {
         assert!(!meet_within([0, 1, 2], &p, [0, 1, 3], &bent, 1e-6));
         assert!(meet_within([0, 1, 2], &p, [0, 1, 3], &fold, 1e-6));
         assert!(!meet_within([0, 1, 2], &p, [0, 1, 3], &fold, 0.0));
+    }
+
+    /// Neighbours on a curved surface are settled by their planes; the
+    /// same triangle twice is not.
+    #[test]
+    fn planes_settle_bent_neighbours_but_not_a_repeat() {
+        let (a, b) = (v(0., 0., 0.), v(2., 0., 0.));
+        let p = [a, b, v(1., 1., 0.)];
+        let bent = [a, b, v(1., -1., 0.5)];
+        assert!(apart_by_planes([0, 1, 2], &p, [0, 1, 3], &bent, 1e-6));
+        // Flat neighbours across an edge, and two triangles of a fan.
+        let flat = [a, b, v(1., -1., 0.)];
+        assert!(apart_by_planes([0, 1, 2], &p, [0, 1, 3], &flat, 1e-6));
+        let fan = [a, v(-1., 1., 0.), v(-1., -0.5, 0.)];
+        assert!(apart_by_planes([0, 1, 2], &p, [0, 4, 5], &fan, 1e-6));
+        // A corner shared off the axis' edge proves nothing: q reaches
+        // back into p from the corner opposite the edge.
+        let into = [v(1., 1., 0.), v(3., -1., 0.), v(1., -3., 0.)];
+        assert!(!apart_by_planes([0, 1, 2], &p, [2, 6, 7], &into, 1e-6));
+        assert!(meet_within([0, 1, 2], &p, [2, 6, 7], &into, 1e-6));
+        assert!(!apart_by_planes([0, 1, 2], &p, [0, 1, 2], &p, 1e-6));
+        assert!(meet_within([0, 1, 2], &p, [2, 0, 1], &p, 1e-6));
     }
 
     /// Separate triangles: the least distance between their edges.
