@@ -25,7 +25,7 @@
 //! sees every sample at once.
 
 use super::dilate::dilate;
-use super::lattice::{edge_key, Lattice, LatticeError};
+use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::winding::WindingTree;
 use crate::geom::Aabb;
 use rayon::prelude::*;
@@ -135,54 +135,66 @@ pub(crate) struct CoarseBox {
 }
 
 impl CoarseBox {
-    /// Coarse corners of the box (one more than cells a side), x fastest.
-    pub(crate) fn corners(&self) -> impl Iterator<Item = [i64; 3]> + '_ {
-        let [nx, ny, nz] = self.n.map(|n| n + 1);
-        (0..nx * ny * nz).map(move |i| {
-            let c = [i % nx, (i / nx) % ny, i / (nx * ny)];
-            [0, 1, 2].map(|a| (self.lo[a] + c[a]) * COARSE)
-        })
+    fn contains(&self, cell: [i64; 3]) -> bool {
+        (0..3).all(|a| cell[a] >= self.lo[a] && cell[a] < self.lo[a] + self.n[a])
+    }
+}
+
+/// `w` at the coarse corners a tile asks about, by key (of the corner's
+/// coarse indices): only near loud super cells ([`Supers::busy_cells`]),
+/// so a tile's coarse values follow the surface in it, not its volume (a
+/// tile of few points can span half the box: at 100M points the dense
+/// coarse box of every tile took the run to 1 GiB under `--mem 512MiB`).
+pub(crate) struct CoarseValues {
+    keys: Vec<u64>,
+    w: Vec<f64>,
+}
+
+impl CoarseValues {
+    /// The keys of the corners of coarse cells `cells` (keys, sorted).
+    pub(crate) fn corners_of(cells: &[u64]) -> Result<Vec<u64>, LatticeError> {
+        dilate(cells, 0..=1)
     }
 
-    /// Index of coarse corner `c` (lattice indices) in [`Self::corners`].
-    fn corner_index(&self, c: [i64; 3]) -> Option<usize> {
-        let [nx, ny, nz] = self.n.map(|n| n + 1);
-        let i = [0, 1, 2].map(|a| c[a].div_euclid(COARSE) - self.lo[a]);
-        let inside = i[0] >= 0 && i[0] < nx && i[1] >= 0 && i[1] < ny && i[2] >= 0 && i[2] < nz;
-        inside.then(|| (i[0] + nx * (i[1] + ny * i[2])) as usize)
+    /// Lattice indices of the coarse corner of key `key`.
+    pub(crate) fn corner(key: u64) -> [i64; 3] {
+        edge_from_key(key).map_or([0; 3], |(c, _)| c.map(|v| v * COARSE))
     }
 
-    /// The cells of the box whose corner values (`w`, in corner order)
-    /// are not all on one side of 1/2: the winding number's half level may
-    /// pass through them.
-    pub(crate) fn mixed_cells(&self, w: &[f64]) -> Vec<[i64; 3]> {
-        let mut mixed = Vec::new();
-        for k in 0..self.n[2] {
-            for j in 0..self.n[1] {
-                for i in 0..self.n[0] {
-                    let cell = [self.lo[0] + i, self.lo[1] + j, self.lo[2] + k];
-                    if self.is_mixed(cell, w) {
-                        mixed.push(cell);
-                    }
+    /// Values `w` at the corners of keys `keys` (sorted).
+    pub(crate) fn new(keys: Vec<u64>, w: Vec<f64>) -> Self {
+        CoarseValues { keys, w }
+    }
+
+    fn at(&self, c: [i64; 3]) -> Option<f64> {
+        let key = edge_key(c.map(|v| v.div_euclid(COARSE)), 0).ok()?;
+        self.keys.binary_search(&key).ok().map(|i| self.w[i])
+    }
+
+    /// The cells of `cells` (keys) whose corner values are not all on one
+    /// side of 1/2: the winding number's half level may pass through them.
+    pub(crate) fn mixed_cells(&self, cells: &[u64]) -> Vec<[i64; 3]> {
+        cells
+            .iter()
+            .filter_map(|&k| edge_from_key(k).ok().map(|(cell, _)| cell))
+            .filter(|&cell| {
+                let (mut any, mut all) = (false, true);
+                for o in 0..8usize {
+                    let c = [0, 1, 2].map(|a| (cell[a] + ((o >> a) & 1) as i64) * COARSE);
+                    let inside = self.at(c).is_some_and(|w| w > 0.5);
+                    any |= inside;
+                    all &= inside;
                 }
-            }
-        }
-        mixed
+                any && !all
+            })
+            .collect()
     }
 
-    fn is_mixed(&self, cell: [i64; 3], w: &[f64]) -> bool {
-        let mut inside = [false; 8];
-        for (o, side) in inside.iter_mut().enumerate() {
-            let c = [0, 1, 2].map(|a| (cell[a] + ((o >> a) & 1) as i64) * COARSE);
-            *side = self.corner_index(c).is_some_and(|i| w[i] > 0.5);
-        }
-        inside.iter().any(|&s| s) && !inside.iter().all(|&s| s)
-    }
-
-    /// `w` at fine corner `c` (which lies in the box), trilinear in the
-    /// coarse cell below it: a corner on a coarse face gets the same bits
-    /// from every tile, since the cell is chosen by the corner alone.
-    pub(crate) fn interpolate(&self, w: &[f64], c: [i64; 3]) -> Option<f64> {
+    /// `w` at fine corner `c`, trilinear in the coarse cell below it (a
+    /// corner on a coarse face gets the same bits from every tile, since
+    /// the cell is chosen by the corner alone); `None` when a corner of
+    /// that cell was not asked about.
+    pub(crate) fn interpolate(&self, c: [i64; 3]) -> Option<f64> {
         let base = c.map(|v| v.div_euclid(COARSE) * COARSE);
         let t = [0, 1, 2].map(|a| (c[a] - base[a]) as f64 / COARSE as f64);
         let mut sum = 0.0;
@@ -192,7 +204,7 @@ impl CoarseBox {
                 .map(|a| if (o >> a) & 1 == 1 { t[a] } else { 1.0 - t[a] })
                 .product();
             if weight > 0.0 {
-                sum += weight * w[self.corner_index(corner)?];
+                sum += weight * self.at(corner)?;
             }
         }
         Some(sum)
@@ -233,6 +245,31 @@ impl Supers {
             all &= inside;
         }
         any && !all
+    }
+
+    /// The coarse cells of `coarse` in or beside a loud super cell, sorted,
+    /// without repeats: the only ones that may be mixed (a quiet super
+    /// cell's coarse corners are interpolated between corners on one side,
+    /// except on a face it shares with a loud one), and the only ones a
+    /// cube near the samples interpolates in (a sample within reach makes
+    /// its super cell loud; the cube's far corners may lie in the next).
+    pub(crate) fn busy_cells(&self, coarse: &CoarseBox) -> Result<Vec<u64>, LatticeError> {
+        let m = self.n.map(|v| v - 1);
+        let mut cells = Vec::new();
+        for (k, _) in self.loud.iter().enumerate().filter(|l| *l.1) {
+            let k = k as i64;
+            let sup = [k % m[0], (k / m[0]) % m[1], k / (m[0] * m[1])];
+            let first = [0, 1, 2].map(|a| (self.lo[a] + sup[a]) * SUPER - 1);
+            for i in grid([SUPER + 2; 3]) {
+                let cell = [0, 1, 2].map(|a| first[a] + i[a]);
+                if coarse.contains(cell) {
+                    cells.push(edge_key(cell, 0)?);
+                }
+            }
+        }
+        cells.sort_unstable();
+        cells.dedup();
+        Ok(cells)
     }
 
     /// `w` at coarse corner `c` (lattice indices) away from the samples:
@@ -389,7 +426,9 @@ mod tests {
         );
         assert!(sw.loud.iter().any(|l| !l), "no quiet super cell");
         let mut quiet = 0;
-        for c in left.corners().step_by(7) {
+        let corners =
+            grid(left.n.map(|n| n + 1)).map(|i| [0, 1, 2].map(|a| (left.lo[a] + i[a]) * COARSE));
+        for c in corners.step_by(7) {
             let w = sw.coarse_w(&e, &lattice, c);
             assert_eq!(w.to_bits(), sl.coarse_w(&e, &lattice, c).to_bits(), "{c:?}");
             let r = lattice.corner(c).length();
@@ -399,5 +438,56 @@ mod tests {
             quiet += usize::from(w != e.exact_w(&lattice, c));
         }
         assert!(quiet > 0, "no corner was interpolated");
+    }
+
+    /// The mixed coarse cells found on the busy cells alone (those near a
+    /// loud super cell) are those of the whole box, every corner asked.
+    #[test]
+    fn busy_cells_hold_every_mixed_cell() {
+        let lattice = Lattice::new(DVec3::ZERO, 0.01).expect("lattice");
+        // A sphere with a cap missing: the half level closes it.
+        let points: Vec<DVec3> = fibonacci_sphere(DVec3::ZERO, 1.0, 20_000)
+            .into_iter()
+            .filter(|p| p.z < 0.8)
+            .collect();
+        let mut g = Gather::new(0.05, 0.024);
+        for p in &points {
+            g.add(*p, p.normalize()).expect("in range");
+        }
+        let bounds = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        let e = Everywhere::new(g.tree(), &lattice, &bounds, 40);
+        let coarse = CoarseBox {
+            lo: [-35, -35, 0],
+            n: [70, 70, 35],
+        };
+        let supers = e.supers(&lattice, &coarse, 8);
+        let mut all: Vec<u64> = grid(coarse.n)
+            .map(|i| edge_key([0, 1, 2].map(|a| coarse.lo[a] + i[a]), 0).expect("key"))
+            .collect();
+        all.sort_unstable();
+        let values = |cells: &[u64]| {
+            let corners = CoarseValues::corners_of(cells).expect("keys");
+            let w = corners
+                .iter()
+                .map(|&k| supers.coarse_w(&e, &lattice, CoarseValues::corner(k)))
+                .collect();
+            CoarseValues::new(corners, w)
+        };
+        let busy = supers.busy_cells(&coarse).expect("keys");
+        assert!(
+            busy.len() < all.len() / 2,
+            "{} of {}",
+            busy.len(),
+            all.len()
+        );
+        let mut dense = values(&all).mixed_cells(&all);
+        let mut sparse = values(&busy).mixed_cells(&busy);
+        dense.sort_unstable();
+        sparse.sort_unstable();
+        assert!(!dense.is_empty(), "the open cap draws no half level");
+        assert_eq!(dense, sparse);
     }
 }

@@ -9,8 +9,8 @@
 //! its corners all share that sign and it holds nothing.
 
 use super::closed::{
-    cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes, CoarseBox,
-    Everywhere, COARSE,
+    cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes, CoarseValues,
+    Everywhere, Supers, COARSE,
 };
 use super::dilate::dilate;
 use super::kernel::{corner_of, occupied, owns, ImplicitKernel};
@@ -22,6 +22,14 @@ use rayon::prelude::*;
 
 /// A corner's value, or how far the loaded region falls short.
 type Valued = Result<Option<Known>, f64>;
+
+/// What a tile knows of the coarse lattice: the super cells over its box
+/// and `w` at the coarse corners near the loud ones.
+struct Coarse<'a> {
+    e: &'a Everywhere,
+    supers: Supers,
+    values: CoarseValues,
+}
 
 impl ImplicitKernel {
     /// The owned cubes that may hold the surface, sorted, and the values
@@ -35,53 +43,78 @@ impl ImplicitKernel {
         let lattice = &self.lattice;
         let occupied = occupied(lattice, samples.points)?;
         let near = near_corners(&occupied, self.band).map_err(KernelError::failed)?;
-        let Some(coarse) = e.coarse_box(owned_cubes(lattice, &tile.core)) else {
+        let Some(coarse_box) = e.coarse_box(owned_cubes(lattice, &tile.core)) else {
             return Ok((Vec::new(), Vec::new()));
         };
-        let w = self.coarse_values(e, &coarse, &near, samples, tile)?;
+        let supers = e.supers(lattice, &coarse_box, self.band + COARSE + 2);
+        let cells = supers
+            .busy_cells(&coarse_box)
+            .map_err(KernelError::failed)?;
+        let corners = CoarseValues::corners_of(&cells).map_err(KernelError::failed)?;
+        let mut coarse = Coarse {
+            e,
+            supers,
+            values: CoarseValues::new(Vec::new(), Vec::new()),
+        };
+        let w = self.coarse_values(&coarse, &corners, &near, samples, tile)?;
+        coarse.values = CoarseValues::new(corners, w);
         let mut keys = touching_cubes(&occupied, self.band).map_err(KernelError::failed)?;
-        keys.extend(cubes_of(&coarse.mixed_cells(&w)).map_err(KernelError::failed)?);
+        let mixed = coarse.values.mixed_cells(&cells);
+        keys.extend(cubes_of(&mixed).map_err(KernelError::failed)?);
         keys.par_sort_unstable();
         keys.dedup();
         keys.retain(|&k| owns(lattice, &tile.core, corner_of(k)));
         let cubes: Vec<[i64; 3]> = keys.iter().map(|&k| corner_of(k)).collect();
-        let corners = self.closed_corner_values(&coarse, &w, &near, &keys, samples, tile)?;
-        Ok((cubes, corners))
+        let values = self.closed_corner_values(&coarse, &near, &keys, samples, tile)?;
+        Ok((cubes, values))
     }
 
-    /// The winding number at every corner of `coarse`: near the samples the
-    /// field's value read on its scale, elsewhere the tree's.
+    /// The winding number at the coarse corners of keys `corners`.
     fn coarse_values(
         &self,
-        e: &Everywhere,
-        coarse: &CoarseBox,
+        coarse: &Coarse,
+        corners: &[u64],
         near: &[u64],
         samples: &Samples,
         tile: &TilePoints,
     ) -> Result<Vec<f64>, KernelError> {
-        let corners: Vec<[i64; 3]> = coarse.corners().collect();
-        let supers = e.supers(&self.lattice, coarse, self.band + COARSE + 2);
         let valued: Vec<Result<f64, f64>> = corners
             .par_iter()
-            .map_init(Vec::new, |nbr, &c| -> Result<_, KernelError> {
-                let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
-                if near.binary_search(&key).is_err() {
-                    return Ok(Ok(supers.coarse_w(e, &self.lattice, c)));
-                }
-                Ok(self
-                    .field_at(samples, tile, c, nbr)
-                    .map(|f| from_field(&self.lattice, f.map_or(0.0, Known::value))))
+            .map_init(Vec::new, |nbr, &k| {
+                let c = CoarseValues::corner(k);
+                self.coarse_w(coarse, c, near, samples, tile, nbr)
             })
             .collect::<Result<_, _>>()?;
         settle(valued, tile.margin)
     }
 
+    /// The winding number at coarse corner `c`: near the samples the
+    /// field's value read on its scale, elsewhere the tree's (or the super
+    /// cell's interpolation).
+    fn coarse_w(
+        &self,
+        coarse: &Coarse,
+        c: [i64; 3],
+        near: &[u64],
+        samples: &Samples,
+        tile: &TilePoints,
+        nbr: &mut Vec<crate::spatial::Neighbour>,
+    ) -> Result<Result<f64, f64>, KernelError> {
+        let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
+        if near.binary_search(&key).is_err() {
+            return Ok(Ok(coarse.supers.coarse_w(coarse.e, &self.lattice, c)));
+        }
+        Ok(self
+            .field_at(samples, tile, c, nbr)
+            .map(|f| from_field(&self.lattice, f.map_or(0.0, Known::value))))
+    }
+
     /// Values at the corners of `cubes` (keys, sorted): the field's near
-    /// the samples, else the winding number interpolated in `coarse`.
+    /// the samples, else the winding number interpolated in the coarse
+    /// cell below the corner.
     fn closed_corner_values(
         &self,
-        coarse: &CoarseBox,
-        w: &[f64],
+        coarse: &Coarse,
         near: &[u64],
         cubes: &[u64],
         samples: &Samples,
@@ -95,14 +128,42 @@ impl ImplicitKernel {
                 if near.binary_search(&key).is_ok() {
                     return Ok(self.field_at(samples, tile, c, nbr));
                 }
-                let at = coarse.interpolate(w, c).ok_or_else(|| {
-                    KernelError::Failed(format!("corner {c:?} lies outside the coarse box"))
-                })?;
-                Ok(Ok(Some(Known::Winding(to_field(&self.lattice, at)))))
+                let at = match coarse.values.interpolate(c) {
+                    Some(w) => Ok(w),
+                    None => self.interpolate_asking(coarse, c, near, samples, tile, nbr)?,
+                };
+                Ok(at.map(|w| Some(Known::Winding(to_field(&self.lattice, w)))))
             })
             .collect::<Result<_, _>>()?;
         let values = settle(valued, tile.margin)?;
         Ok(keys.into_iter().zip(values).collect())
+    }
+
+    /// [`CoarseValues::interpolate`] for a corner whose coarse cell was
+    /// not asked about (a cube near samples the tree leaves out, degenerate
+    /// or unoriented, whose super cell is quiet): each coarse corner
+    /// found as [`Self::coarse_w`] finds it, so the value is the same.
+    fn interpolate_asking(
+        &self,
+        coarse: &Coarse,
+        c: [i64; 3],
+        near: &[u64],
+        samples: &Samples,
+        tile: &TilePoints,
+        nbr: &mut Vec<crate::spatial::Neighbour>,
+    ) -> Result<Result<f64, f64>, KernelError> {
+        let base = c.map(|v| v.div_euclid(COARSE));
+        let key = super::lattice::edge_key(base, 0).map_err(KernelError::failed)?;
+        let corners = CoarseValues::corners_of(&[key]).map_err(KernelError::failed)?;
+        let mut w = Vec::with_capacity(8);
+        for &k in &corners {
+            match self.coarse_w(coarse, CoarseValues::corner(k), near, samples, tile, nbr)? {
+                Ok(v) => w.push(v),
+                Err(short) => return Ok(Err(short)),
+            }
+        }
+        let cell = CoarseValues::new(corners, w);
+        Ok(Ok(cell.interpolate(c).expect("the cell's eight corners")))
     }
 
     /// The field's value at corner `c`, or the loaded region's shortfall.
