@@ -581,18 +581,41 @@ pub fn run() -> Result<()> {
         .command
         .common()
         .map_or(Ok(()), CommonArgs::check_against_this_machine);
+    let promised = cli
+        .command
+        .common()
+        .and_then(|c| c.mem_and_threads().ok())
+        .map(|(mem, _)| mem);
     let outcome = checked
         .and_then(|()| match cli.command {
             Command::RunJob(a) => cmd_run_job::run(a),
             Command::Status(a) => cmd_status::run(a),
             command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
         })
-        .map_err(hints::with_flag_hints);
+        .map_err(hints::with_flag_hints)
+        .and_then(|()| within_the_promise(promised));
     liveness::forget();
     if let Some(path) = &report {
         report::write(path, &start, &outcome)?;
     }
     outcome
+}
+
+/// `--mem` promises the peak RSS: a run that went over it fails, though
+/// its outputs are whole (the plan, not the data, was wrong), so that a
+/// budget bench or a cluster's memory limit learns it from the exit code.
+fn within_the_promise(mem: Option<u64>) -> Result<()> {
+    let (Some(mem), Some(peak)) = (mem, scanmesh::memory::peak_rss_bytes()) else {
+        return Ok(());
+    };
+    if peak > mem {
+        anyhow::bail!(
+            "the run's peak memory {} went over --mem {}: its outputs are complete, but its memory plan failed (please report it with the command line)",
+            scanmesh::units::human_bytes(peak),
+            scanmesh::units::human_bytes(mem)
+        );
+    }
+    Ok(())
 }
 
 /// Runs one command in this process.
@@ -682,4 +705,20 @@ pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Resu
 
 pub fn peak() -> String {
     scanmesh::memory::peak_rss_bytes().map_or("?".into(), scanmesh::units::human_bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::within_the_promise;
+
+    /// A peak over `--mem` fails the run, naming both; under it, or with
+    /// no promise, it passes.
+    #[test]
+    fn a_peak_over_the_promise_fails_the_run() {
+        let over = within_the_promise(Some(1024)).expect_err("this process holds more than 1 KiB");
+        let said = over.to_string();
+        assert!(said.contains("went over --mem 1.00KiB"), "{said}");
+        assert!(within_the_promise(Some(u64::MAX)).is_ok());
+        assert!(within_the_promise(None).is_ok());
+    }
 }
