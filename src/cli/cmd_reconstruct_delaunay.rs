@@ -47,7 +47,7 @@ pub fn run(
 fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: &Path) {
     super::report::mesh_audit(&r.audit);
     super::report::summary(format!(
-        "reconstruct (delaunay): {points} points, {tiles} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left; triangulation {:.0} B/point; {secs:.2} s, peak {} -> {}; checked: {}",
+        "reconstruct (delaunay): {points} points, {tiles} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left, {} edges of more than two triangles mended ({} triangles left out); triangulation {:.0} B/point; {secs:.2} s, peak {} -> {}; checked: {}",
         r.run.retries,
         r.run.largest_margin,
         r.hole,
@@ -61,6 +61,8 @@ fn print_summary(r: &DelaunayReport, points: u64, tiles: usize, secs: f64, out: 
         r.forced,
         r.patches,
         r.incompatible_left,
+        r.non_manifold_mended,
+        r.fins_left_out,
         r.triangulation_bytes_per_point,
         super::peak(),
         out.display(),

@@ -15,6 +15,7 @@ pub mod angles;
 pub(crate) mod audit;
 pub mod distance;
 pub(crate) mod error;
+pub(crate) mod fans;
 mod paged;
 pub(crate) mod pieces;
 pub(crate) mod quality;

@@ -7,6 +7,15 @@
 //! the spool is replayed into the mesh writer; a component whose parities
 //! contradict each other is non-orientable (a Moebius band) and is counted.
 //!
+//! An edge of more than two triangles (paper 4's fans on real scans leave
+//! some: 204 on two depth-camera frames of a room, 16 on a city block)
+//! keeps the two that continue each other most nearly flat, and the
+//! others are left out (`mesh::fans`, out of core, over the whole stream,
+//! so the choice is the same in any tiling); the two kept then join their
+//! components like a seam edge, so they are wound consistently. A
+//! deviation from paper 4, which keeps multi-sheet contacts: a mesh with a
+//! non-manifold edge is refused by most tools downstream.
+//!
 //! Memory: the seam edges waiting for their twin (about the tiles' borders;
 //! a tile sends only edges whose twin another tile owns, so each meets
 //! it), one union-find entry per tile component; the triangles wait on
@@ -16,10 +25,13 @@ use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile};
 use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
+use crate::mesh::fans::Fans;
+use crate::mesh::runs::RunSizes;
 use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::PointStore;
+use glam::DVec3;
 use std::collections::HashMap;
 use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
@@ -109,6 +121,11 @@ pub struct DelaunayReport {
     pub patches: u64,
     /// Incompatible edges left after the last cleanup round.
     pub incompatible_left: u64,
+    /// Edges that had more than two triangles, and the triangles left out
+    /// so that each keeps two (see the module doc).
+    pub non_manifold_mended: u64,
+    /// Triangles left out at edges of more than two.
+    pub fins_left_out: u64,
     /// Largest triangulation of a tile, bytes per loaded point.
     pub triangulation_bytes_per_point: f64,
     /// The hole-closing rule used, for the report.
@@ -192,11 +209,11 @@ pub fn reconstruct_delaunay(
         initial_margin: MARGIN_SPACINGS * spacing,
         store: Some(store),
     };
-    let mut seam = Seams::new(MeshWriter::create(output, format)?)?;
+    let mut seam = Seams::new(MeshWriter::create(output, format)?, output)?;
     let run = run_tiles(store, &kernel, opts, progress, |t, out| {
         seam.add_tile(store, t, out).map_err(PipelineError::seam)
     })?;
-    let mut report = seam.finish()?;
+    let mut report = seam.finish(store)?;
     report.run = run;
     report.hole = match hole {
         Hole::Absolute(h) => format!("{h:.4e}"),
@@ -211,6 +228,9 @@ pub fn reconstruct_delaunay(
 struct Seams {
     writer: MeshWriter,
     spool: BufWriter<std::fs::File>,
+    /// Every triangle's edges, for the edges of more than two (taken at
+    /// the end).
+    fans: Option<Fans>,
     /// Edge (low, high store index) -> component and whether it runs low
     /// to high in its triangle.
     waiting: HashMap<(u64, u64), (u32, bool)>,
@@ -223,10 +243,11 @@ struct Seams {
 }
 
 impl Seams {
-    fn new(writer: MeshWriter) -> Result<Self, DelaunayReconError> {
+    fn new(writer: MeshWriter, output: &Path) -> Result<Self, DelaunayReconError> {
         Ok(Seams {
             writer,
             spool: BufWriter::new(tempfile::tempfile()?),
+            fans: Some(Fans::new(output, RunSizes::DEFAULT)),
             waiting: HashMap::new(),
             joins: Vec::new(),
             inconsistent: Vec::new(),
@@ -255,6 +276,9 @@ impl Seams {
                 self.spool.write_all(&(*v as u32).to_le_bytes())?;
             }
             self.spool.write_all(&(base + c).to_le_bytes())?;
+            if let Some(fans) = &mut self.fans {
+                fans.add(t.map(|v| v as u32), base + c)?;
+            }
         }
         for (a, b, c) in tile.seams {
             let key = (a.min(b), a.max(b));
@@ -283,7 +307,18 @@ impl Seams {
         Ok(())
     }
 
-    fn finish(mut self) -> Result<DelaunayReport, DelaunayReconError> {
+    fn finish(mut self, store: &PointStore) -> Result<DelaunayReport, DelaunayReconError> {
+        let fans = self.fans.take().expect("finish runs once");
+        let mut exact = Vec::new();
+        let mended = fans.mend(|v| {
+            store
+                .read_exact_in_store_order(u64::from(v), 1, &mut exact)
+                .map_err(std::io::Error::other)?;
+            Ok(exact.first().copied().unwrap_or(DVec3::ZERO))
+        })?;
+        self.report.non_manifold_mended = mended.edges;
+        self.report.fins_left_out = mended.left_out.len() as u64;
+        self.joins.extend(mended.pairs.iter().copied());
         let n = self.inconsistent.len();
         let mut uf = ParityUnionFind::new(n);
         let mut bad = self.inconsistent.clone();
@@ -310,24 +345,28 @@ impl Seams {
             }
         }
         let flips = outward(&mut uf, &self.volumes);
-        self.replay(&flips)?;
+        self.replay(&flips, &mended.left_out)?;
         let written = self.writer.finish()?;
         (self.report.vertices, self.report.triangles) = written.counts();
         self.report.audit = written.audit;
         Ok(self.report)
     }
 
-    /// Writes the spooled triangles, each component flipped as `flips`
-    /// says.
-    fn replay(&mut self, flips: &[bool]) -> Result<(), DelaunayReconError> {
+    /// Writes the spooled triangles but those `left_out` (places,
+    /// increasing), each component flipped as `flips` says.
+    fn replay(&mut self, flips: &[bool], left_out: &[u64]) -> Result<(), DelaunayReconError> {
         self.spool.flush()?;
         let mut file = self.spool.get_ref().try_clone()?;
         file.rewind()?;
         let mut reader = BufReader::with_capacity(1 << 20, file);
         let mut record = [0u8; 16];
         let mut batch = Vec::with_capacity(1 << 16);
-        for _ in 0..self.report.triangles {
+        let mut out = left_out.iter().peekable();
+        for index in 0..self.report.triangles {
             reader.read_exact(&mut record)?;
+            if out.next_if_eq(&&index).is_some() {
+                continue;
+            }
             let w = |k: usize| {
                 u32::from_le_bytes([
                     record[4 * k],
