@@ -14,15 +14,6 @@ mod common;
 use common::scanmesh;
 use scanmesh::io::read_mesh_any;
 use scanmesh::mesh::{quality, self_intersections, Mesh};
-use std::path::Path;
-
-fn fixture(rel: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(rel)
-        .display()
-        .to_string()
-}
 
 #[test]
 fn real_scans_of_five_kinds_come_out_closed() {
@@ -34,7 +25,7 @@ fn real_scans_of_five_kinds_come_out_closed() {
         ("pcd/organised_milk.pcd", &["--skip-invalid"][..]),
         ("e57/bunnyInt32.e57", &[][..]),
     ] {
-        let input = fixture(rel);
+        let input = common::fixture_arg(rel);
         let out = dir.path().join("m.ply");
         let o = out.display().to_string();
         let args = [
@@ -79,7 +70,7 @@ fn real_scans_of_five_kinds_come_out_closed() {
 fn a_scan_without_a_pose_names_no_station() {
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("n.ply").display().to_string();
-    let input = fixture("e57/bunnyInt32.e57");
+    let input = common::fixture_arg("e57/bunnyInt32.e57");
     let run = scanmesh(&["normals", input.as_str(), "-o", out.as_str()]);
     let said = String::from_utf8_lossy(&run.stdout);
     assert!(

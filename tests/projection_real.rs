@@ -13,15 +13,6 @@ mod common;
 use common::scanmesh;
 use scanmesh::io::read_mesh_any;
 use scanmesh::mesh::{quality, self_intersections, Mesh};
-use std::path::Path;
-
-fn fixture(rel: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(rel)
-        .display()
-        .to_string()
-}
 
 #[test]
 fn real_scans_project_without_crossing_or_twisting() {
@@ -35,7 +26,7 @@ fn real_scans_project_without_crossing_or_twisting() {
         "e57/three_scans.e57",
         "pcd/organised_milk.pcd",
     ] {
-        let input = fixture(rel);
+        let input = common::fixture_arg(rel);
         let out = dir.path().join("m.ply");
         let o = out.display().to_string();
         let args = [

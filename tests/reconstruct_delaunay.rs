@@ -168,18 +168,10 @@ fn a_hole_radius_that_is_not_positive_and_finite_is_refused() {
     assert!(DelaunayParams::default().validate().is_ok());
 }
 
-fn fixture(rel: &str) -> String {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(rel)
-        .display()
-        .to_string()
-}
-
 /// Runs `reconstruct --method delaunay` on a fixture; the mesh and what
 /// the summary said.
 fn delaunay_cli(rel: &str, extra: &[&str], dir: &std::path::Path) -> (Mesh, String) {
-    let input = fixture(rel);
+    let input = common::fixture_arg(rel);
     let out = dir.join("d.ply");
     let o = out.display().to_string();
     let args = [

@@ -178,3 +178,12 @@ pub fn ok(out: Output) -> String {
     assert!(out.status.success(), "failed: {err}");
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
+
+/// The path of `rel` under `tests/fixtures`, as a command-line argument.
+pub fn fixture_arg(rel: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(rel)
+        .display()
+        .to_string()
+}

@@ -395,22 +395,30 @@ mod tests {
     use crate::synth::fibonacci_sphere;
     use glam::DVec3;
 
-    /// A sphere of radius 100 cubes: super cells at its centre and far
-    /// outside are quiet, and their interpolated `w` keeps the tree's side
-    /// of 1/2; two tiles' boxes give the same bits at every shared corner.
-    #[test]
-    fn quiet_super_cells_keep_the_sign_and_agree_across_tiles() {
+    /// The signs round a unit sphere of 20,000 samples (those `keep`
+    /// keeps) on a lattice of cubes 0.01 a side, padded by 40 cubes.
+    fn unit_sphere(keep: impl Fn(&DVec3) -> bool) -> (Lattice, Everywhere) {
         let lattice = Lattice::new(DVec3::ZERO, 0.01).expect("lattice");
-        let points = fibonacci_sphere(DVec3::ZERO, 1.0, 20_000);
         let mut g = Gather::new(0.05, 0.024);
-        for p in &points {
-            g.add(*p, p.normalize()).expect("in range");
+        for p in fibonacci_sphere(DVec3::ZERO, 1.0, 20_000) {
+            if keep(&p) {
+                g.add(p, p.normalize()).expect("in range");
+            }
         }
         let bounds = Aabb {
             min: DVec3::splat(-1.0),
             max: DVec3::splat(1.0),
         };
         let e = Everywhere::new(g.tree(), &lattice, &bounds, 40);
+        (lattice, e)
+    }
+
+    /// A sphere of radius 100 cubes: super cells at its centre and far
+    /// outside are quiet, and their interpolated `w` keeps the tree's side
+    /// of 1/2; two tiles' boxes give the same bits at every shared corner.
+    #[test]
+    fn quiet_super_cells_keep_the_sign_and_agree_across_tiles() {
+        let (lattice, e) = unit_sphere(|_| true);
         let whole = CoarseBox {
             lo: [-40; 3],
             n: [80; 3],
@@ -444,21 +452,8 @@ mod tests {
     /// loud super cell) are those of the whole box, every corner asked.
     #[test]
     fn busy_cells_hold_every_mixed_cell() {
-        let lattice = Lattice::new(DVec3::ZERO, 0.01).expect("lattice");
         // A sphere with a cap missing: the half level closes it.
-        let points: Vec<DVec3> = fibonacci_sphere(DVec3::ZERO, 1.0, 20_000)
-            .into_iter()
-            .filter(|p| p.z < 0.8)
-            .collect();
-        let mut g = Gather::new(0.05, 0.024);
-        for p in &points {
-            g.add(*p, p.normalize()).expect("in range");
-        }
-        let bounds = Aabb {
-            min: DVec3::splat(-1.0),
-            max: DVec3::splat(1.0),
-        };
-        let e = Everywhere::new(g.tree(), &lattice, &bounds, 40);
+        let (lattice, e) = unit_sphere(|p| p.z < 0.8);
         let coarse = CoarseBox {
             lo: [-35, -35, 0],
             n: [70, 70, 35],
