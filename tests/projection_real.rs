@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::scanmesh;
+use common::reconstruct_fixture;
 use scanmesh::io::read_mesh_any;
 use scanmesh::mesh::{quality, self_intersections, Mesh};
 
@@ -26,25 +26,8 @@ fn real_scans_project_without_crossing_or_twisting() {
         "e57/three_scans.e57",
         "pcd/organised_milk.pcd",
     ] {
-        let input = common::fixture_arg(rel);
         let out = dir.path().join("m.ply");
-        let o = out.display().to_string();
-        let args = [
-            "reconstruct",
-            input.as_str(),
-            "-o",
-            o.as_str(),
-            "--method",
-            "projection",
-            "--skip-invalid",
-        ];
-        let run = scanmesh(&args);
-        assert!(
-            run.status.success(),
-            "{rel}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let said = String::from_utf8_lossy(&run.stdout);
+        let said = reconstruct_fixture(rel, &out, &["--method", "projection", "--skip-invalid"]);
         assert!(said.contains(", 0 non-manifold edges"), "{rel}: {said}");
         assert!(said.contains(", 0 inconsistently wound"), "{rel}: {said}");
         let (v, t) = read_mesh_any(&out).expect("read");

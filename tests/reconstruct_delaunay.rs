@@ -171,29 +171,9 @@ fn a_hole_radius_that_is_not_positive_and_finite_is_refused() {
 /// Runs `reconstruct --method delaunay` on a fixture; the mesh and what
 /// the summary said.
 fn delaunay_cli(rel: &str, extra: &[&str], dir: &std::path::Path) -> (Mesh, String) {
-    let input = common::fixture_arg(rel);
     let out = dir.join("d.ply");
-    let o = out.display().to_string();
-    let args = [
-        &[
-            "reconstruct",
-            input.as_str(),
-            "-o",
-            o.as_str(),
-            "--method",
-            "delaunay",
-            "--skip-invalid",
-        ][..],
-        extra,
-    ]
-    .concat();
-    let run = common::scanmesh(&args);
-    let said = String::from_utf8_lossy(&run.stdout).into_owned();
-    assert!(
-        run.status.success(),
-        "{rel}: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let args = [&["--method", "delaunay", "--skip-invalid"][..], extra].concat();
+    let said = common::reconstruct_fixture(rel, &out, &args);
     let (v, t) = read_mesh_any(&out).expect("read mesh");
     (Mesh::new(v, t), said)
 }

@@ -187,3 +187,17 @@ pub fn fixture_arg(rel: &str) -> String {
         .display()
         .to_string()
 }
+
+/// Runs `scanmesh reconstruct` on fixture `rel` into `out` with `args`
+/// after it, and returns what it said; fails the test, naming the
+/// fixture, when the run fails.
+pub fn reconstruct_fixture(rel: &str, out: &Path, args: &[&str]) -> String {
+    let (input, o) = (fixture_arg(rel), out.display().to_string());
+    let run = scanmesh(&[&["reconstruct", input.as_str(), "-o", o.as_str()][..], args].concat());
+    assert!(
+        run.status.success(),
+        "{rel}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    String::from_utf8_lossy(&run.stdout).into_owned()
+}
