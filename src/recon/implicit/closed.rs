@@ -247,12 +247,14 @@ impl Supers {
         any && !all
     }
 
-    /// The coarse cells of `coarse` in or beside a loud super cell, sorted,
-    /// without repeats: the only ones that may be mixed (a quiet super
-    /// cell's coarse corners are interpolated between corners on one side,
-    /// except on a face it shares with a loud one), and the only ones a
-    /// cube near the samples interpolates in (a sample within reach makes
-    /// its super cell loud; the cube's far corners may lie in the next).
+    /// The coarse cells of `coarse` in or beside a loud super cell, as
+    /// keys, sorted: with the cells round a near coarse corner
+    /// ([`cells_round_near`]) the only ones that may be mixed (a quiet
+    /// super cell's coarse corners are interpolated between corners on one
+    /// side, except on a face it shares with a loud one), and the ones a
+    /// cube near the samples interpolates in (a sample of the tree within
+    /// reach makes its super cell loud; the cube's far corners may lie in
+    /// the next).
     pub(crate) fn busy_cells(&self, coarse: &CoarseBox) -> Result<Vec<u64>, LatticeError> {
         let m = self.n.map(|v| v - 1);
         let mut cells = Vec::new();
@@ -309,6 +311,32 @@ impl Supers {
         }
         sum
     }
+}
+
+/// The coarse cells of `coarse` round every coarse corner among `near`
+/// (corner keys, sorted), as keys, sorted: such a corner takes the field's
+/// value, so its cells may be mixed even where the samples that made it
+/// near are not in the tree (degenerate or unoriented ones) and no super
+/// cell round it is loud.
+pub(crate) fn cells_round_near(near: &[u64], coarse: &CoarseBox) -> Result<Vec<u64>, LatticeError> {
+    let mut cells = Vec::new();
+    for &key in near {
+        let Ok((c, _)) = edge_from_key(key) else {
+            continue;
+        };
+        if c.iter().any(|v| v.rem_euclid(COARSE) != 0) {
+            continue;
+        }
+        for o in 0..8usize {
+            let cell = [0, 1, 2].map(|a| c[a] / COARSE - ((o >> a) & 1) as i64);
+            if coarse.contains(cell) {
+                cells.push(edge_key(cell, 0)?);
+            }
+        }
+    }
+    cells.sort_unstable();
+    cells.dedup();
+    Ok(cells)
 }
 
 /// The indices of a box of `n` a side, x fastest.

@@ -9,8 +9,8 @@
 //! its corners all share that sign and it holds nothing.
 
 use super::closed::{
-    cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes, CoarseValues,
-    Everywhere, Supers, COARSE,
+    cells_round_near, cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes,
+    CoarseValues, Everywhere, Supers, COARSE,
 };
 use super::dilate::dilate;
 use super::kernel::{corner_of, occupied, owns, ImplicitKernel};
@@ -47,9 +47,12 @@ impl ImplicitKernel {
             return Ok((Vec::new(), Vec::new()));
         };
         let supers = e.supers(lattice, &coarse_box, self.band + COARSE + 2);
-        let cells = supers
+        let mut cells = supers
             .busy_cells(&coarse_box)
             .map_err(KernelError::failed)?;
+        cells.extend(cells_round_near(&near, &coarse_box).map_err(KernelError::failed)?);
+        cells.sort_unstable();
+        cells.dedup();
         let corners = CoarseValues::corners_of(&cells).map_err(KernelError::failed)?;
         let mut coarse = Coarse {
             e,
