@@ -23,12 +23,16 @@ use rayon::prelude::*;
 /// A corner's value, or how far the loaded region falls short.
 type Valued = Result<Option<Known>, f64>;
 
-/// What a tile knows of the coarse lattice: the super cells over its box
-/// and `w` at the coarse corners near the loud ones.
+/// One `--closed` tile at work: the signs everywhere, the super cells over
+/// its box, `w` at the coarse corners it asks about, and its samples with
+/// the corners near them (keys, sorted).
 struct Coarse<'a> {
     e: &'a Everywhere,
     supers: Supers,
     values: CoarseValues,
+    near: &'a [u64],
+    samples: &'a Samples<'a>,
+    tile: &'a TilePoints,
 }
 
 impl ImplicitKernel {
@@ -58,8 +62,11 @@ impl ImplicitKernel {
             e,
             supers,
             values: CoarseValues::new(Vec::new(), Vec::new()),
+            near: &near,
+            samples,
+            tile,
         };
-        let w = self.coarse_values(&coarse, &corners, &near, samples, tile)?;
+        let w = self.coarse_values(&coarse, &corners)?;
         coarse.values = CoarseValues::new(corners, w);
         let mut keys = touching_cubes(&occupied, self.band).map_err(KernelError::failed)?;
         let mixed = coarse.values.mixed_cells(&cells);
@@ -68,27 +75,19 @@ impl ImplicitKernel {
         keys.dedup();
         keys.retain(|&k| owns(lattice, &tile.core, corner_of(k)));
         let cubes: Vec<[i64; 3]> = keys.iter().map(|&k| corner_of(k)).collect();
-        let values = self.closed_corner_values(&coarse, &near, &keys, samples, tile)?;
+        let values = self.closed_corner_values(&coarse, &keys)?;
         Ok((cubes, values))
     }
 
     /// The winding number at the coarse corners of keys `corners`.
-    fn coarse_values(
-        &self,
-        coarse: &Coarse,
-        corners: &[u64],
-        near: &[u64],
-        samples: &Samples,
-        tile: &TilePoints,
-    ) -> Result<Vec<f64>, KernelError> {
+    fn coarse_values(&self, coarse: &Coarse, corners: &[u64]) -> Result<Vec<f64>, KernelError> {
         let valued: Vec<Result<f64, f64>> = corners
             .par_iter()
             .map_init(Vec::new, |nbr, &k| {
-                let c = CoarseValues::corner(k);
-                self.coarse_w(coarse, c, near, samples, tile, nbr)
+                self.coarse_w(coarse, CoarseValues::corner(k), nbr)
             })
             .collect::<Result<_, _>>()?;
-        settle(valued, tile.margin)
+        settle(valued, coarse.tile.margin)
     }
 
     /// The winding number at coarse corner `c`: near the samples the
@@ -98,17 +97,14 @@ impl ImplicitKernel {
         &self,
         coarse: &Coarse,
         c: [i64; 3],
-        near: &[u64],
-        samples: &Samples,
-        tile: &TilePoints,
         nbr: &mut Vec<crate::spatial::Neighbour>,
     ) -> Result<Result<f64, f64>, KernelError> {
         let key = super::lattice::edge_key(c, 0).map_err(KernelError::failed)?;
-        if near.binary_search(&key).is_err() {
+        if coarse.near.binary_search(&key).is_err() {
             return Ok(Ok(coarse.supers.coarse_w(coarse.e, &self.lattice, c)));
         }
         Ok(self
-            .field_at(samples, tile, c, nbr)
+            .field_at(coarse.samples, coarse.tile, c, nbr)
             .map(|f| from_field(&self.lattice, f.map_or(0.0, Known::value))))
     }
 
@@ -118,27 +114,24 @@ impl ImplicitKernel {
     fn closed_corner_values(
         &self,
         coarse: &Coarse,
-        near: &[u64],
         cubes: &[u64],
-        samples: &Samples,
-        tile: &TilePoints,
     ) -> Result<Vec<CornerValue>, KernelError> {
         let keys = dilate(cubes, 0..=1).map_err(KernelError::failed)?;
         let valued: Vec<Valued> = keys
             .par_iter()
             .map_init(Vec::new, |nbr, &key| -> Result<_, KernelError> {
                 let c = corner_of(key);
-                if near.binary_search(&key).is_ok() {
-                    return Ok(self.field_at(samples, tile, c, nbr));
+                if coarse.near.binary_search(&key).is_ok() {
+                    return Ok(self.field_at(coarse.samples, coarse.tile, c, nbr));
                 }
                 let at = match coarse.values.interpolate(c) {
                     Some(w) => Ok(w),
-                    None => self.interpolate_asking(coarse, c, near, samples, tile, nbr)?,
+                    None => self.interpolate_asking(coarse, c, nbr)?,
                 };
                 Ok(at.map(|w| Some(Known::Winding(to_field(&self.lattice, w)))))
             })
             .collect::<Result<_, _>>()?;
-        let values = settle(valued, tile.margin)?;
+        let values = settle(valued, coarse.tile.margin)?;
         Ok(keys.into_iter().zip(values).collect())
     }
 
@@ -150,9 +143,6 @@ impl ImplicitKernel {
         &self,
         coarse: &Coarse,
         c: [i64; 3],
-        near: &[u64],
-        samples: &Samples,
-        tile: &TilePoints,
         nbr: &mut Vec<crate::spatial::Neighbour>,
     ) -> Result<Result<f64, f64>, KernelError> {
         let base = c.map(|v| v.div_euclid(COARSE));
@@ -160,7 +150,7 @@ impl ImplicitKernel {
         let corners = CoarseValues::corners_of(&[key]).map_err(KernelError::failed)?;
         let mut w = Vec::with_capacity(8);
         for &k in &corners {
-            match self.coarse_w(coarse, CoarseValues::corner(k), near, samples, tile, nbr)? {
+            match self.coarse_w(coarse, CoarseValues::corner(k), nbr)? {
                 Ok(v) => w.push(v),
                 Err(short) => return Ok(Err(short)),
             }
