@@ -25,7 +25,7 @@ use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile};
 use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
-use crate::mesh::fans::Fans;
+use crate::mesh::fans::{Fans, Mended};
 use crate::mesh::runs::RunSizes;
 use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter};
 use crate::normals::unionfind::ParityUnionFind;
@@ -311,14 +311,16 @@ impl Seams {
     }
 
     fn finish(mut self, store: &PointStore) -> Result<DelaunayReport, DelaunayReconError> {
-        let fans = self.fans.take().expect("finish runs once");
         let mut exact = Vec::new();
-        let mended = fans.mend(|v| {
-            store
-                .read_exact_in_store_order(u64::from(v), 1, &mut exact)
-                .map_err(std::io::Error::other)?;
-            Ok(exact.first().copied().unwrap_or(DVec3::ZERO))
-        })?;
+        let mended = match self.fans.take() {
+            Some(fans) => fans.mend(|v| {
+                store
+                    .read_exact_in_store_order(u64::from(v), 1, &mut exact)
+                    .map_err(std::io::Error::other)?;
+                Ok(exact.first().copied().unwrap_or(DVec3::ZERO))
+            })?,
+            None => Mended::default(),
+        };
         self.report.non_manifold_mended = mended.edges;
         self.report.fins_left_out = mended.left_out.len() as u64;
         self.joins.extend(mended.pairs.iter().copied());

@@ -156,7 +156,11 @@ impl ImplicitKernel {
             }
         }
         let cell = CoarseValues::new(corners, w);
-        Ok(Ok(cell.interpolate(c).expect("the cell's eight corners")))
+        cell.interpolate(c).map(Ok).ok_or_else(|| {
+            KernelError::Failed(format!(
+                "corner {c:?}: its coarse cell's corners were not all found"
+            ))
+        })
     }
 
     /// The field's value at corner `c`, or the loaded region's shortfall.
