@@ -4,6 +4,7 @@
 //!
 //! `scangen torus -n 1000000 -o torus.ply`
 //! `scangen mesh --mesh dragon_vrip.ply.gz -n 10000000 --noise-spacing 0.1 -o dragon10m.ply`
+//! `scangen ripples --wavelength 0.5 -o ripples.ply --truth ripples_lines.ply`
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -22,7 +23,7 @@ use std::path::PathBuf;
 )]
 struct Args {
     /// sphere, torus, hole-plane, two-sheets, terrain, moebius, density-step, mesh,
-    /// stepped-block, notched-box, wavy-sheet.
+    /// stepped-block, notched-box, wavy-sheet, cylinder, capsule, ripples.
     shape: String,
     /// Number of points.
     #[arg(short, default_value_t = 100_000)]
@@ -39,6 +40,13 @@ struct Args {
     /// Triangle mesh to sample (PLY or OBJ, .gz ok) for the `mesh` shape.
     #[arg(long)]
     mesh: Option<PathBuf>,
+    /// Crest height of the wavy-sheet or ripples shape (overrides the preset).
+    #[arg(long)]
+    amplitude: Option<f64>,
+    /// Crest-to-crest distance of the wavy-sheet or ripples shape (overrides
+    /// the preset).
+    #[arg(long)]
+    wavelength: Option<f64>,
     /// Also write the true normals.
     #[arg(long)]
     normals: bool,
@@ -46,7 +54,8 @@ struct Args {
     #[arg(short, long)]
     output: PathBuf,
     /// Also write the shape's true feature lines (stepped-block,
-    /// notched-box, wavy-sheet) to this PLY, in `scanmesh features`' format.
+    /// notched-box, wavy-sheet, ripples) to this PLY, in `scanmesh features`'
+    /// format.
     #[arg(long)]
     truth: Option<PathBuf>,
     /// Also write the true surface as a triangle mesh (terrain: ground,
@@ -59,7 +68,7 @@ struct Args {
 
 fn main() -> Result<()> {
     let a = Args::parse();
-    let shape = match (a.shape.as_str(), &a.mesh) {
+    let mut shape = match (a.shape.as_str(), &a.mesh) {
         ("mesh", Some(path)) => {
             let (vertices, faces) = read_mesh_any(path)?;
             Shape::mesh(TriMesh { vertices, faces })
@@ -67,6 +76,7 @@ fn main() -> Result<()> {
         ("mesh", None) => bail!("the mesh shape needs --mesh <file>"),
         (name, _) => Shape::preset(name).with_context(|| format!("unknown shape {name}"))?,
     };
+    override_waves(&mut shape, a.amplitude, a.wavelength)?;
     let noise = match a.noise_spacing {
         Some(f) => f * mean_spacing_hint(&shape, a.n)?,
         None => a.noise,
@@ -132,6 +142,33 @@ fn main() -> Result<()> {
         noise,
         a.output.display()
     );
+    Ok(())
+}
+
+/// `--amplitude` and `--wavelength` applied to a wavy sheet or ripples; an
+/// error for any other shape. The sampler validates the values.
+fn override_waves(
+    shape: &mut Shape,
+    amplitude: Option<f64>,
+    wavelength: Option<f64>,
+) -> Result<()> {
+    if amplitude.is_none() && wavelength.is_none() {
+        return Ok(());
+    }
+    let (a, w) = match shape {
+        Shape::WavySheet(s) => (&mut s.amplitude, &mut s.wavelength),
+        Shape::Ripples {
+            amplitude,
+            wavelength,
+            ..
+        } => (amplitude, wavelength),
+        other => bail!(
+            "{}: --amplitude and --wavelength are for wavy-sheet and ripples only",
+            other.name()
+        ),
+    };
+    *a = amplitude.unwrap_or(*a);
+    *w = wavelength.unwrap_or(*w);
     Ok(())
 }
 

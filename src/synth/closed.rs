@@ -1,5 +1,6 @@
-//! Parametric surfaces sampled uniformly by area: sphere, torus and the
-//! (non-orientable) Moebius strip.
+//! Parametric surfaces sampled uniformly by area: sphere, torus, the
+//! (non-orientable) Moebius strip, an open tube (cylinder without caps) and
+//! a capsule (a cylinder closed by hemispheres).
 //!
 //! Uniform-by-area sampling of a parametrised surface: draw parameters
 //! uniformly and accept with probability `|x_u x x_v| / max |x_u x x_v|`
@@ -93,6 +94,87 @@ impl Sampler for TorusSampler {
     }
 }
 
+/// Open tube around the z axis: `x^2 + y^2 = radius^2`, `|z| <= length/2`,
+/// no caps; outward (radial) normals. The area element is constant in
+/// `(angle, z)`, so both are drawn uniformly.
+#[derive(Clone, Debug)]
+pub struct CylinderSampler {
+    radius: f64,
+    half_length: f64,
+}
+
+impl CylinderSampler {
+    pub fn new(radius: f64, length: f64) -> Result<Self, SynthError> {
+        let radius = positive("cylinder", "radius", radius)?;
+        let length = positive("cylinder", "length", length)?;
+        Ok(CylinderSampler {
+            radius,
+            half_length: length * 0.5,
+        })
+    }
+}
+
+impl Sampler for CylinderSampler {
+    fn sample(&self, rng: &mut Rng) -> Sample {
+        let (c, s) = rng.unit_circle();
+        let z = rng.range(-self.half_length, self.half_length);
+        let n = DVec3::new(c, s, 0.0);
+        Sample {
+            p: n * self.radius + DVec3::Z * z,
+            n,
+        }
+    }
+    fn area(&self) -> f64 {
+        4.0 * PI * self.radius * self.half_length
+    }
+}
+
+/// Capsule around the z axis: the tube `x^2 + y^2 = radius^2`,
+/// `|z| <= length/2`, closed by hemispheres of the same radius centred at
+/// `z = +-length/2`; outward normals. A sample picks the tube or the caps in
+/// proportion to their areas, then a point uniform on that part (the two
+/// caps together are a sphere split at its equator).
+#[derive(Clone, Debug)]
+pub struct CapsuleSampler {
+    tube: CylinderSampler,
+}
+
+impl CapsuleSampler {
+    pub fn new(radius: f64, length: f64) -> Result<Self, SynthError> {
+        let radius = positive("capsule", "radius", radius)?;
+        let length = positive("capsule", "length", length)?;
+        Ok(CapsuleSampler {
+            tube: CylinderSampler {
+                radius,
+                half_length: length * 0.5,
+            },
+        })
+    }
+
+    /// Area of the two hemispheres together.
+    fn caps_area(&self) -> f64 {
+        4.0 * PI * self.tube.radius * self.tube.radius
+    }
+}
+
+impl Sampler for CapsuleSampler {
+    fn sample(&self, rng: &mut Rng) -> Sample {
+        if rng.uniform() * self.area() < self.tube.area() {
+            return self.tube.sample(rng);
+        }
+        let n = rng.unit_vector();
+        // The upper hemisphere of the direction sphere goes to the top cap.
+        let centre = DVec3::Z * self.tube.half_length.copysign(n.z);
+        Sample {
+            p: centre + n * self.tube.radius,
+            n,
+        }
+    }
+    fn area(&self) -> f64 {
+        self.tube.area() + self.caps_area()
+    }
+}
+
 /// Moebius strip `x(u, t) = ((R + t c) cos u, (R + t c) sin u, t s)` with
 /// `c = cos(u/2)`, `s = sin(u/2)`, `u in [0, 2 pi)`, `t in [-w/2, w/2]`.
 ///
@@ -179,5 +261,86 @@ impl Sampler for MoebiusSampler {
             }
         }
         sum * du * dt
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Distance of `p` to the capsule's surface (radius `r`, straight part
+    /// `|z| <= h`): its distance to the axis segment, minus `r`.
+    fn capsule_distance(p: DVec3, r: f64, h: f64) -> f64 {
+        let axis = DVec3::Z * p.z.clamp(-h, h);
+        ((p - axis).length() - r).abs()
+    }
+
+    #[test]
+    fn cylinder_samples_lie_on_the_tube_with_radial_normals_uniformly() {
+        let (r, len, seed) = (0.3, 2.0, 1);
+        let s = CylinderSampler::new(r, len).unwrap();
+        assert!((s.area() - 2.0 * PI * r * len).abs() < 1e-12);
+        let mut rng = Rng::new(seed);
+        let mut bins = [0usize; 4];
+        let n = 20_000;
+        for i in 0..n {
+            let q = s.sample(&mut rng);
+            let rho = q.p.truncate().length();
+            assert!((rho - r).abs() < 1e-9, "seed {seed} point {i}: rho {rho}");
+            assert!(q.p.z.abs() <= 0.5 * len, "seed {seed} point {i}");
+            assert!((q.n.length() - 1.0).abs() < 1e-12, "seed {seed} point {i}");
+            assert!(q.n.z == 0.0 && q.n.dot(q.p) > 0.0, "seed {seed} point {i}");
+            bins[((q.p.z / len + 0.5) * 4.0).clamp(0.0, 3.0) as usize] += 1;
+        }
+        // z uniform: each quarter holds n/4, sd sqrt(n 3/16) = 61.
+        for b in bins {
+            assert!((b as f64 - 5000.0).abs() < 300.0, "seed {seed}: {bins:?}");
+        }
+    }
+
+    #[test]
+    fn capsule_samples_lie_on_it_and_the_caps_get_their_area_share() {
+        let (r, len, seed) = (0.3, 1.0, 2);
+        let s = CapsuleSampler::new(r, len).unwrap();
+        let caps = 4.0 * PI * r * r;
+        let total = caps + 2.0 * PI * r * len;
+        assert!((s.area() - total).abs() < 1e-12);
+        let mut rng = Rng::new(seed);
+        let (n, h) = (20_000, 0.5 * len);
+        let (mut on_caps, mut top) = (0usize, 0usize);
+        for i in 0..n {
+            let q = s.sample(&mut rng);
+            let d = capsule_distance(q.p, r, h);
+            assert!(d < 1e-9, "seed {seed} point {i}: off by {d}");
+            assert!((q.n.length() - 1.0).abs() < 1e-12, "seed {seed} point {i}");
+            // Outward: the normal is the direction from the axis segment.
+            let axis = DVec3::Z * q.p.z.clamp(-h, h);
+            let want = (q.p - axis) / r;
+            assert!((q.n - want).length() < 1e-9, "seed {seed} point {i}");
+            if q.p.z.abs() > h {
+                on_caps += 1;
+                top += usize::from(q.p.z > 0.0);
+            }
+        }
+        // Cap share 0.375, sd sqrt(0.375 0.625 / n) = 0.0034.
+        let share = on_caps as f64 / n as f64;
+        assert!(
+            (share - caps / total).abs() < 0.015,
+            "seed {seed}: cap share {share} vs {}",
+            caps / total
+        );
+        let top_share = top as f64 / on_caps as f64;
+        assert!(
+            (top_share - 0.5).abs() < 0.03,
+            "seed {seed}: top {top_share}"
+        );
+    }
+
+    #[test]
+    fn tube_and_capsule_reject_bad_sizes() {
+        assert!(CylinderSampler::new(0.0, 1.0).is_err());
+        assert!(CylinderSampler::new(1.0, f64::NAN).is_err());
+        assert!(CapsuleSampler::new(-1.0, 1.0).is_err());
+        assert!(CapsuleSampler::new(1.0, f64::INFINITY).is_err());
     }
 }

@@ -1,8 +1,8 @@
 //! Seeded synthetic scans of surfaces with known truth (position and normal),
 //! for tests and benches: sphere, torus, plane with a hole, two close sheets,
-//! terrain with buildings, Moebius strip, a 20:1 density step, any
-//! triangle mesh, and shapes with known feature lines (stepped prisms, a
-//! wavy sheet: `creased`).
+//! terrain with buildings, Moebius strip, an open cylinder, a capsule, a
+//! 20:1 density step, any triangle mesh, and shapes with known feature lines
+//! (stepped prisms, a wavy sheet: `creased`; concentric ripples: `ripples`).
 //!
 //! Everything streams: [`stream`] yields one [`Sample`] at a time (or fills
 //! bounded chunks), so 10^7 points never need to be in memory at once;
@@ -18,6 +18,7 @@ mod creased;
 mod error;
 pub mod fibonacci;
 mod mesh;
+mod ripples;
 pub(crate) mod rng;
 mod sheets;
 mod stations;
@@ -34,6 +35,7 @@ pub use stream::{stream, ShapeSampler, Stream};
 pub use terrain::{Building, Terrain};
 
 use glam::DVec3;
+use ripples::RipplesSampler;
 
 /// One synthetic point: position (noisy if noise was asked for) and the true
 /// unit normal of the surface point it was drawn from.
@@ -115,6 +117,31 @@ pub enum Shape {
     Steps(StepProfile),
     /// A sinusoidal sheet (known crest and trough lines).
     WavySheet(WavySheet),
+    /// Open tube (no caps) around the z axis, `|z| <= length/2`.
+    Cylinder {
+        /// Radius of the tube.
+        radius: f64,
+        /// Extent along z.
+        length: f64,
+    },
+    /// Closed capsule around the z axis: a tube of `length` closed by
+    /// hemispheres of its radius.
+    Capsule {
+        /// Radius of the tube and of the caps.
+        radius: f64,
+        /// Length of the straight part along z (the caps excluded).
+        length: f64,
+    },
+    /// Disc of `radius` with `z = amplitude sin(2 pi rho / wavelength)`,
+    /// normals up (known circular crest and trough lines).
+    Ripples {
+        /// Radius of the disc in (x, y).
+        radius: f64,
+        /// Height of the crests above z = 0.
+        amplitude: f64,
+        /// Distance between crests along the radius.
+        wavelength: f64,
+    },
 }
 
 impl Shape {
@@ -158,6 +185,23 @@ impl Shape {
     pub fn mesh(mesh: TriMesh) -> Self {
         Shape::Mesh(mesh)
     }
+    /// Open tube of `radius` and `length` around the z axis.
+    pub fn cylinder(radius: f64, length: f64) -> Self {
+        Shape::Cylinder { radius, length }
+    }
+    /// Capsule of `radius` with a straight part of `length` around the z axis.
+    pub fn capsule(radius: f64, length: f64) -> Self {
+        Shape::Capsule { radius, length }
+    }
+    /// Concentric ripples of `amplitude` and `wavelength` on a disc of
+    /// `radius`.
+    pub fn ripples(radius: f64, amplitude: f64, wavelength: f64) -> Self {
+        Shape::Ripples {
+            radius,
+            amplitude,
+            wavelength,
+        }
+    }
 
     /// Short kebab-case name of the kind of shape.
     pub fn name(&self) -> &'static str {
@@ -172,6 +216,9 @@ impl Shape {
             Shape::Mesh(_) => "mesh",
             Shape::Steps(_) => "steps",
             Shape::WavySheet(_) => "wavy-sheet",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::Capsule { .. } => "capsule",
+            Shape::Ripples { .. } => "ripples",
         }
     }
 
@@ -189,6 +236,9 @@ impl Shape {
             Shape::mesh(TriMesh::icosahedron(1.0)),
             Shape::Steps(StepProfile::stepped_block()),
             Shape::wavy_sheet(),
+            Shape::cylinder(0.3, 2.0),
+            Shape::capsule(0.3, 1.0),
+            Shape::ripples_preset(),
         ]
     }
 
@@ -203,12 +253,27 @@ impl Shape {
         })
     }
 
+    /// Ripples on a disc of radius 2 with crests every 0.35 (amplitude
+    /// 0.0875: slopes up to 57 degrees, crest radius of curvature 0.035,
+    /// about 5 mean spacings at 100,000 points).
+    pub fn ripples_preset() -> Self {
+        Shape::ripples(2.0, 0.0875, 0.35)
+    }
+
     /// The true feature lines of the shapes that have them (ridges convex
-    /// seen from the normals' side, valleys concave).
+    /// seen from the normals' side, valleys concave). `None` for ripples
+    /// whose parameters are invalid.
     pub fn feature_lines(&self) -> Option<Vec<TrueSegment>> {
         match self {
             Shape::Steps(p) => Some(p.truth()),
             Shape::WavySheet(w) => Some(w.truth()),
+            Shape::Ripples {
+                radius,
+                amplitude,
+                wavelength,
+            } => RipplesSampler::new(*radius, *amplitude, *wavelength)
+                .ok()
+                .map(|s| s.truth()),
             _ => None,
         }
     }

@@ -1,10 +1,11 @@
 //! Streaming front end: dispatch from a [`Shape`] to its sampler, the
 //! noise, and chunked output.
 
-use super::closed::{MoebiusSampler, SphereSampler, TorusSampler};
+use super::closed::{CapsuleSampler, CylinderSampler, MoebiusSampler, SphereSampler, TorusSampler};
 use super::creased::{StepSampler, WavySampler};
 use super::error::SynthError;
 use super::mesh::MeshSampler;
+use super::ripples::RipplesSampler;
 use super::rng::Rng;
 use super::sheets::{DensityStepSampler, HolePlaneSampler, TwoSheetsSampler};
 use super::terrain::TerrainSampler;
@@ -39,6 +40,12 @@ pub enum ShapeSampler<'a> {
     Steps(StepSampler),
     /// Sampler of a [`Shape::WavySheet`].
     Wavy(WavySampler),
+    /// Sampler of a [`Shape::Cylinder`].
+    Cylinder(CylinderSampler),
+    /// Sampler of a [`Shape::Capsule`].
+    Capsule(CapsuleSampler),
+    /// Sampler of a [`Shape::Ripples`].
+    Ripples(RipplesSampler),
 }
 
 impl<'a> ShapeSampler<'a> {
@@ -67,6 +74,17 @@ impl<'a> ShapeSampler<'a> {
             Shape::Mesh(m) => ShapeSampler::Mesh(MeshSampler::new(m)?),
             Shape::Steps(p) => ShapeSampler::Steps(StepSampler::new(p)?),
             Shape::WavySheet(w) => ShapeSampler::Wavy(WavySampler::new(*w)?),
+            Shape::Cylinder { radius, length } => {
+                ShapeSampler::Cylinder(CylinderSampler::new(*radius, *length)?)
+            }
+            Shape::Capsule { radius, length } => {
+                ShapeSampler::Capsule(CapsuleSampler::new(*radius, *length)?)
+            }
+            Shape::Ripples {
+                radius,
+                amplitude,
+                wavelength,
+            } => ShapeSampler::Ripples(RipplesSampler::new(*radius, *amplitude, *wavelength)?),
         })
     }
 
@@ -82,6 +100,9 @@ impl<'a> ShapeSampler<'a> {
             ShapeSampler::Mesh(s) => s,
             ShapeSampler::Steps(s) => s,
             ShapeSampler::Wavy(s) => s,
+            ShapeSampler::Cylinder(s) => s,
+            ShapeSampler::Capsule(s) => s,
+            ShapeSampler::Ripples(s) => s,
         }
     }
 }
