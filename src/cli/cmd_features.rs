@@ -80,6 +80,9 @@ struct Thresholds {
     /// Side of the cells polylines grow in (d).
     #[arg(long)]
     cell: Option<f64>,
+    /// Feature points kept only where the curvature peaks across the line: the drop a crest must reach over 2.5 fit radii, in units of the curvature the fit noise makes (0 = off: the paper's whole band above alpha).
+    #[arg(long)]
+    peak: Option<f64>,
 }
 
 impl FeaturesArgs {
@@ -103,6 +106,7 @@ impl FeaturesArgs {
             refine_width: t.refine_width.unwrap_or(d.refine_width),
             crest: t.crest.unwrap_or(d.crest),
             cell: t.cell.unwrap_or(d.cell),
+            peak: t.peak.unwrap_or(d.peak),
             ..d
         };
         if let Err(e) = p.validate() {

@@ -79,9 +79,12 @@ pub fn extract_lines(
         // A first guess; the kernel asks for more when a point needs it.
         _ => 4.0 * estimate * 4.0,
     };
+    // The crest test reads its wide ball round every class enhancement reads.
+    let peak = resolved.peak.map_or(0.0, |t| t.wide);
     let kernel = FeaturesKernel {
         params: resolved,
-        margin: (resolved.cell + resolved.chain() + reach + resolved.phi) * 1.0001 + 1e-12,
+        margin: (resolved.cell + resolved.chain() + reach.max(peak) + resolved.phi) * 1.0001
+            + 1e-12,
     };
     let mut cells: Vec<CellLines> = Vec::new();
     let mut corners = Vec::new();
@@ -114,6 +117,7 @@ pub fn extract_lines(
         half_angle: resolved.cone_angle,
     };
     let mut graph = repair(polylines, &corner_points, cone, resolved.gamma_max);
+    graph.prune(resolved.cone_length);
     graph.relax(resolved.relax_passes);
     let report = FeaturesReport {
         points: store.len(),

@@ -32,9 +32,11 @@
 //! region covers it and asks for more margin otherwise.
 
 use super::crest::{place_on_crests, Slab};
+use super::curvature::oriented_normal;
 use super::curvature::VALUES;
 use super::hood::HoodIndex;
 use super::params::Resolved;
+use super::peak::on_crest;
 use super::polyline::grow_polylines;
 use super::stages::{
     classify, corner_kept, enhance_points, feature_sets, kind_slot, smooth_points, Class,
@@ -120,10 +122,13 @@ impl TileKernel for FeaturesKernel {
 
     fn run(&self, tile: &TilePoints) -> Result<FeaturesTile, KernelError> {
         let p = &self.params;
-        let class = self.classes(tile)?;
         let own = Aabb::new(tile.core.min, tile.core.max + DVec3::splat(p.cell));
         let dist = |i: usize| gap(&own, tile.points[i]);
         let chain = p.chain();
+        // Enhancement reads the classes of feature points within `phi` of
+        // the points it runs for; each class reads the crest test's ball.
+        let class = self.classes(tile, &own, chain + p.phi)?;
+        let classed = chain + p.phi + p.peak.map_or(0.0, |t| t.wide);
         let which: Vec<u32> = (0..tile.points.len())
             .filter(|&i| class[i].is_some() && dist(i) <= chain)
             .map(|i| i as u32)
@@ -139,7 +144,7 @@ impl TileKernel for FeaturesKernel {
         };
         let hood = HoodIndex::build(tile, p.hood)?;
         let (enh, short) = enhance_points(tile, &hood, &class, &sets, &which, p)?;
-        KernelError::unless_short(short.max(uncovered(tile, &own, chain)), tile.margin)?;
+        KernelError::unless_short(short.max(uncovered(tile, &own, classed)), tile.margin)?;
         let status = corner_status(tile, &which, &enh, &class, &dist, p);
         let mut out = FeaturesTile::default();
         // The crest's slabs query the tile's points: the curvature
@@ -207,21 +212,77 @@ impl TileKernel for FeaturesKernel {
 }
 
 impl FeaturesKernel {
-    /// Section 2's class of every loaded point, from the curvature columns.
-    fn classes(&self, tile: &TilePoints) -> Result<Vec<Option<Class>>, KernelError> {
-        let (Some(Values::F32(vals)), Some(Values::U8(flg))) =
-            (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS))
-        else {
-            return Err(KernelError::Failed(
-                "the tile carries no curvature columns".into(),
-            ));
-        };
+    /// Section 2's class of every loaded point, from the curvature columns,
+    /// kept only on the crest of its curvature (`peak.rs`) for the points
+    /// within `reach` of the owned region (no other class is read).
+    fn classes(
+        &self,
+        tile: &TilePoints,
+        own: &Aabb,
+        reach: f64,
+    ) -> Result<Vec<Option<Class>>, KernelError> {
+        let k_of = curvature_of(tile)?;
         let alpha = self.params.alpha;
-        Ok(vals
-            .chunks_exact(VALUES)
-            .zip(flg)
-            .map(|(v, f)| classify(v[0], v[1], *f, alpha))
-            .collect())
+        let mut class: Vec<Option<Class>> = (0..tile.points.len())
+            .map(|i| k_of.classify(i, alpha))
+            .collect();
+        let Some(test) = self.params.peak else {
+            return Ok(class);
+        };
+        let Some(grid) = BallGrid::new(&tile.points, &tile.ids, test.wide) else {
+            return Err(KernelError::Failed("the tile's points have no grid".into()));
+        };
+        // NaN where unknown: 8 B a loaded point, not an Option's 16.
+        let k_i: Vec<f64> = (0..tile.points.len())
+            .map(|j| k_of.k_i(j).unwrap_or(f64::NAN))
+            .collect();
+        class
+            .par_iter_mut()
+            .enumerate()
+            .for_each_init(Vec::new, |found, (i, c)| {
+                let Some(kind) = c.map(|c| c.kind) else {
+                    return;
+                };
+                let keep = gap(own, tile.points[i]) <= reach
+                    && oriented_normal(tile, i).is_some_and(|n| {
+                        let sign = if kind == LineKind::Ridge { 1.0 } else { -1.0 };
+                        let value = |j: usize| Some(sign * k_i[j]).filter(|k| k.is_finite());
+                        on_crest(tile.points[i], n, &grid, &value, &test, found)
+                    });
+                if !keep {
+                    *c = None;
+                }
+            });
+        Ok(class)
+    }
+}
+
+/// A tile's curvature columns.
+struct CurvatureColumns<'a> {
+    vals: &'a [f32],
+    flags: &'a [u8],
+}
+
+fn curvature_of(tile: &TilePoints) -> Result<CurvatureColumns<'_>, KernelError> {
+    match (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS)) {
+        (Some(Values::F32(vals)), Some(Values::U8(flags))) => Ok(CurvatureColumns { vals, flags }),
+        _ => Err(KernelError::Failed(
+            "the tile carries no curvature columns".into(),
+        )),
+    }
+}
+
+impl CurvatureColumns<'_> {
+    fn classify(&self, j: usize, alpha: f64) -> Option<Class> {
+        let v = &self.vals[j * VALUES..j * VALUES + 2];
+        classify(v[0], v[1], self.flags[j], alpha)
+    }
+
+    /// `k_i`, the principal curvature of larger magnitude, when known.
+    fn k_i(&self, j: usize) -> Option<f64> {
+        let v = &self.vals[j * VALUES..j * VALUES + 2];
+        let k = if v[0].abs() >= v[1].abs() { v[0] } else { v[1] };
+        (self.flags[j] == 0 && k.is_finite()).then_some(f64::from(k))
     }
 }
 
@@ -234,18 +295,8 @@ fn crests(
     tile: &TilePoints,
     slab: Slab,
 ) -> Result<f64, KernelError> {
-    let (Some(Values::F32(vals)), Some(Values::U8(flg))) =
-        (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS))
-    else {
-        return Err(KernelError::Failed(
-            "the tile carries no curvature columns".into(),
-        ));
-    };
-    let k_of = |j: usize| {
-        let v = &vals[j * VALUES..j * VALUES + 2];
-        let k = if v[0].abs() >= v[1].abs() { v[0] } else { v[1] };
-        (flg[j] == 0 && k.is_finite()).then_some(f64::from(k))
-    };
+    let columns = curvature_of(tile)?;
+    let k_of = |j: usize| columns.k_i(j);
     let room = |p: DVec3| tile.room(p);
     let ridge = kind == LineKind::Ridge;
     Ok(cells

@@ -24,6 +24,7 @@ pub(crate) mod lift;
 pub mod lines;
 pub(crate) mod order;
 pub mod params;
+pub(crate) mod peak;
 pub(crate) mod polyline;
 pub(crate) mod quadric;
 pub(crate) mod refine;

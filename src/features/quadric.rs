@@ -157,37 +157,7 @@ pub fn pca_frame(pts: &[DVec3], toward: DVec3) -> Result<Frame, FitFlag> {
 /// coordinates are recomputed in each pass rather than stored: three dot
 /// products cost less than an allocation per fit.
 pub fn fit_quadric(pts: &[DVec3], frame: Frame) -> Result<Quadric, FitFlag> {
-    if pts.len() < MIN_FIT_POINTS {
-        return Err(FLAG_SPARSE);
-    }
-    let scale = pts
-        .iter()
-        .map(|p| {
-            let l = frame.local(*p);
-            l.x * l.x + l.y * l.y
-        })
-        .fold(0.0f64, f64::max)
-        .sqrt();
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(FLAG_DEGENERATE);
-    }
-    let inv = 1.0 / scale;
-    let mut ata = [[0.0f64; 6]; 6];
-    let mut atz = [0.0f64; 6];
-    for p in pts {
-        let l = frame.local(*p);
-        let row = basis(l.x * inv, l.y * inv);
-        let z = l.z * inv;
-        for r in 0..6 {
-            atz[r] += row[r] * z;
-            for c in 0..=r {
-                ata[r][c] += row[r] * row[c];
-            }
-        }
-    }
-    let s = solve_spd6(ata, atz).ok_or(FLAG_ILL_CONDITIONED)?;
-    // Back from scaled coordinates: z = scale * g~(u / scale, v / scale).
-    let coef = [s[0] * scale, s[1], s[2], s[3] * inv, s[4] * inv, s[5] * inv];
+    let coef = fit_quadratic(pts.iter().map(|p| frame.local(*p)))?;
     let mut q = Quadric {
         frame,
         coef,
@@ -203,6 +173,43 @@ pub fn fit_quadric(pts: &[DVec3], frame: Frame) -> Result<Quadric, FitFlag> {
     }
     q.rms = (sum2 / pts.len() as f64).sqrt();
     Ok(q)
+}
+
+/// The least-squares `z = g(x, y)` (formula (3)'s basis) over samples
+/// `(x, y, z)` in a local frame, solved on coordinates scaled by the
+/// samples' radius (see the module doc). `z` may be any field over the
+/// plane (`peak.rs` fits the curvature itself).
+pub(crate) fn fit_quadratic<I>(samples: I) -> Result<[f64; 6], FitFlag>
+where
+    I: Iterator<Item = DVec3> + Clone,
+{
+    if samples.clone().count() < MIN_FIT_POINTS {
+        return Err(FLAG_SPARSE);
+    }
+    let scale = samples
+        .clone()
+        .map(|l| l.x * l.x + l.y * l.y)
+        .fold(0.0f64, f64::max)
+        .sqrt();
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(FLAG_DEGENERATE);
+    }
+    let inv = 1.0 / scale;
+    let mut ata = [[0.0f64; 6]; 6];
+    let mut atz = [0.0f64; 6];
+    for l in samples {
+        let row = basis(l.x * inv, l.y * inv);
+        let z = l.z * inv;
+        for r in 0..6 {
+            atz[r] += row[r] * z;
+            for c in 0..=r {
+                ata[r][c] += row[r] * row[c];
+            }
+        }
+    }
+    let s = solve_spd6(ata, atz).ok_or(FLAG_ILL_CONDITIONED)?;
+    // Back from scaled coordinates: z = scale * g~(u / scale, v / scale).
+    Ok([s[0] * scale, s[1], s[2], s[3] * inv, s[4] * inv, s[5] * inv])
 }
 
 fn basis(x: f64, y: f64) -> [f64; 6] {

@@ -61,13 +61,10 @@ pub fn repair(
         let first = g.vertices.len() as u32;
         if pts.len() >= 2 {
             let last = first + pts.len() as u32 - 1;
-            let n = pts.len();
-            ends.push((first, (pts[0] - pts[1]).normalize_or_zero(), k as u32));
-            ends.push((
-                last,
-                (pts[n - 1] - pts[n - 2]).normalize_or_zero(),
-                k as u32,
-            ));
+
+            let span = TANGENT_SPAN * reach;
+            ends.push((first, end_direction(pts.iter(), span), k as u32));
+            ends.push((last, end_direction(pts.iter().rev(), span), k as u32));
         }
         for i in 0..pts.len() as u32 {
             owner.push(Owner::Line(k as u32));
@@ -232,6 +229,30 @@ fn corner_meetings(
 /// `end_at` of a vertex that ends no polyline.
 const NOT_END: u32 = u32::MAX;
 
+/// How far back along a line its end tangent looks, in growth radii: the
+/// last segment alone turns with the sideways scatter of the last growth
+/// point (lines 3 d apart on one crest, their last segments hooked, were
+/// left unjoined: a corrugated sheet at noise 0.5 sp).
+const TANGENT_SPAN: f64 = 2.0;
+
+/// The unit direction out of a line's end (`pts` from that end): from the
+/// first vertex at least `span` back (or the line's far end) to the end;
+/// the paper's "tangent at the end" (the last segment, or a cubic through
+/// the last four vertices) over a span of a few growth steps.
+fn end_direction<'a>(mut pts: impl Iterator<Item = &'a DVec3> + Clone, span: f64) -> DVec3 {
+    let Some(&end) = pts.next() else {
+        return DVec3::ZERO;
+    };
+    let mut back = end;
+    for &p in pts {
+        back = p;
+        if p.distance(end) >= span {
+            break;
+        }
+    }
+    (end - back).normalize_or_zero()
+}
+
 /// Smallest angle between two end tangents that `corner_meetings` takes
 /// for a corner (below it, the lines continue each other: the cone rule).
 pub const MEET_ANGLE: f64 = 20.0 * std::f64::consts::PI / 180.0;
@@ -239,6 +260,23 @@ pub const MEET_ANGLE: f64 = 20.0 * std::f64::consts::PI / 180.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The end direction looks past a hooked last segment.
+    #[test]
+    fn end_direction_spans_more_than_the_last_segment() {
+        let pts = [
+            DVec3::new(0.0, 0.3, 0.0),
+            DVec3::new(0.2, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(3.0, 0.0, 0.0),
+        ];
+        let d = end_direction(pts.iter(), 2.0);
+        assert!(d.x < -0.98, "{d}");
+        let last = end_direction(pts.iter(), 0.1);
+        assert!(last.y > 0.8, "{last}");
+        assert_eq!(end_direction([].iter(), 1.0), DVec3::ZERO);
+    }
 
     /// Three ridges along the axes, each stopping `short` before the
     /// origin, as at a box corner.
