@@ -21,9 +21,16 @@ fn main() -> ExitCode {
         // The reader stopped early (`| head`): its choice, not a failure.
         Err(err) if cli::stdout_closed(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err}");
+            // A message that already quotes its cause (`{0}` of the error
+            // below) is not followed by that cause again.
+            let mut shown = err.to_string();
+            eprintln!("error: {shown}");
             for cause in err.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let text = cause.to_string();
+                if !shown.contains(&text) {
+                    eprintln!("  caused by: {text}");
+                    shown.push_str(&text);
+                }
             }
             ExitCode::FAILURE
         }

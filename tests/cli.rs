@@ -487,3 +487,23 @@ fn info_accepts_skip_invalid_and_counts_what_it_would_skip() {
     let o = scanmesh(&["info", &input, "-q", "--plan", "--skip-invalid"]);
     assert!(stdout(&o).contains("plan for 15 points"));
 }
+
+/// `info` reads as text (no Debug names, no quotes), and an error that
+/// quotes its cause does not repeat it as "caused by".
+#[test]
+fn info_is_plain_text_and_errors_say_each_cause_once() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = write(dir.path(), "a.xyz", b"0 0 0\n1 0 0\n0 1 0\n1 1 0.5\n");
+    let o = scanmesh(&["info", &input, "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("format: XYZ text"), "{text}");
+    assert!(text.contains("bounds max: [1, 1, 0.5]"), "{text}");
+    assert!(!text.contains('"'), "{text}");
+    let missing = dir.path().join("missing.ply");
+    let o = scanmesh(&["info", missing.to_str().expect("utf8"), "-q"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("missing.ply"), "{err}");
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+}

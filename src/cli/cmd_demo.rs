@@ -138,6 +138,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 h / spacing
             )?;
         }
+        outln!(
+            "demo: next, on a scan of your own: `scanmesh info scan.las`, then `scanmesh reconstruct scan.las -o mesh.ply` (open surface) or `--closed`, `scanmesh render --mesh mesh.ply -o mesh.png`; `scanmesh --help` lists every command"
+        )?;
         Ok(())
     })();
     let _ = std::fs::remove_dir_all(&dir);

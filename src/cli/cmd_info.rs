@@ -107,7 +107,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let copc = las["copc"].as_bool() == Some(true);
         json!({
             "path": a.input.display().to_string(),
-            "format": format!("{:?}", r.info.format),
+            "format": r.info.format.to_string(),
             "gzip": r.info.gzip,
             "declared_points": r.info.declared_count,
             "points": r.count,
@@ -216,11 +216,44 @@ fn scans_json(scans: &[ScanInspection]) -> serde_json::Value {
         .collect()
 }
 
+/// A report value as a person reads it: strings without quotes, numbers
+/// to a micrometre of a metre-scale scan (six decimals, trailing zeros
+/// dropped; below 0.01 five significant digits), arrays and records inline.
+fn human(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::String(s) => s.clone(),
+        Value::Number(n) if n.is_f64() => n.as_f64().map_or(n.to_string(), decimal),
+        Value::Array(items) => {
+            let parts: Vec<String> = items.iter().map(human).collect();
+            format!("[{}]", parts.join(", "))
+        }
+        Value::Object(map) => {
+            let parts: Vec<String> = map
+                .iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| format!("{}: {}", k.replace('_', " "), human(v)))
+                .collect();
+            parts.join(", ")
+        }
+        other => other.to_string(),
+    }
+}
+
+fn decimal(x: f64) -> String {
+    if x != 0.0 && x.abs() < 1e-2 {
+        return format!("{x:.4e}");
+    }
+    let fixed = format!("{x:.6}");
+    let trimmed = fixed.trim_end_matches('0').trim_end_matches('.');
+    trimmed.to_string()
+}
+
 fn print_text(v: &serde_json::Value) -> Result<()> {
     if let Some(map) = v.as_object() {
         for (k, val) in map {
             if !val.is_null() && k != "scans" {
-                outln!("{:>18}: {}", k, val)?;
+                outln!("{:>18}: {}", k.replace('_', " "), human(val))?;
             }
         }
     }

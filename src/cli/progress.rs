@@ -7,6 +7,30 @@ use scanmesh::pipeline::{NoProgress, Progress};
 use std::io::IsTerminal;
 use std::sync::Mutex;
 
+/// Items a second, three significant digits with a k/M/G suffix
+/// (indicatif's `{per_sec}` prints `7,841,517.0193/s`).
+fn rate(state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write) {
+    let _ = write!(w, "{}/s", short_count(state.per_sec()));
+}
+
+/// `x` with three significant digits and a k/M/G suffix.
+fn short_count(x: f64) -> String {
+    let (v, unit) = match x.abs() {
+        a if a >= 1e9 => (x / 1e9, "G"),
+        a if a >= 1e6 => (x / 1e6, "M"),
+        a if a >= 1e3 => (x / 1e3, "k"),
+        _ => (x, ""),
+    };
+    let digits = if v.abs() >= 100.0 {
+        0
+    } else if v.abs() >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{v:.digits$}{unit}")
+}
+
 pub struct Bars {
     bar: Mutex<Option<ProgressBar>>,
 }
@@ -16,15 +40,17 @@ impl Progress for Bars {
         let bar = if total > 0 {
             ProgressBar::new(total).with_style(
                 ProgressStyle::with_template(
-                    "{prefix:>22} [{bar:30}] {human_pos}/{human_len} {per_sec} eta {eta}",
+                    "{prefix:>22} [{bar:30}] {human_pos}/{human_len} {rate} eta {eta}",
                 )
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .with_key("rate", rate)
                 .progress_chars("=> "),
             )
         } else {
             ProgressBar::new_spinner().with_style(
-                ProgressStyle::with_template("{prefix:>22} {spinner} {human_pos} {per_sec}")
-                    .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+                ProgressStyle::with_template("{prefix:>22} {spinner} {human_pos} {rate}")
+                    .unwrap_or_else(|_| ProgressStyle::default_spinner())
+                    .with_key("rate", rate),
             )
         };
         bar.set_prefix(stage.to_string());
@@ -119,4 +145,18 @@ pub fn progress(quiet: bool) -> Box<dyn Progress> {
         })
     };
     Box::new(super::report::Recorder::new(shown))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::short_count;
+
+    #[test]
+    fn rates_read_short() {
+        assert_eq!(short_count(7_841_517.019), "7.84M");
+        assert_eq!(short_count(12_345.0), "12.3k");
+        assert_eq!(short_count(999.0), "999");
+        assert_eq!(short_count(0.5), "0.50");
+        assert_eq!(short_count(2.5e9), "2.50G");
+    }
 }

@@ -74,6 +74,21 @@ pub enum Format {
     E57,
 }
 
+impl std::fmt::Display for Format {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Format::PlyAscii => "PLY (ASCII)",
+            Format::PlyBinaryLe => "PLY (binary little-endian)",
+            Format::PlyBinaryBe => "PLY (binary big-endian)",
+            Format::Xyz => "XYZ text",
+            Format::Las => "LAS",
+            Format::Laz => "LAZ",
+            Format::Pcd => "PCD",
+            Format::E57 => "E57",
+        })
+    }
+}
+
 impl Format {
     /// The attributes this format can hold (README "Attributes").
     pub fn attributes(self) -> AttributeSet {
