@@ -230,7 +230,11 @@ impl FeaturesKernel {
             return Ok(class);
         };
         let Some(grid) = BallGrid::new(&tile.points, &tile.ids, test.wide) else {
-            return Err(KernelError::Failed("the tile's points have no grid".into()));
+            return Err(KernelError::Failed(format!(
+                "the crest test's radius {:e} indexes no grid over the tile's {} points",
+                test.wide,
+                tile.points.len()
+            )));
         };
         // NaN where unknown: 8 B a loaded point, not an Option's 16.
         let k_i: Vec<f64> = (0..tile.points.len())
