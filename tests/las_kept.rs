@@ -471,7 +471,7 @@ fn copc_is_named_by_info_and_read_as_laz() {
     assert_eq!(info["las"]["point_format"], 7, "{info}");
     assert_eq!(info["points"], 1065, "{info}");
     let text = scanmesh(&["info", s(&input)]);
-    assert!(String::from_utf8_lossy(&text.stdout).contains("copc: \"yes"));
+    assert!(String::from_utf8_lossy(&text.stdout).contains("copc: yes"));
     let plain = scanmesh(&["info", s(&fixture("autzen.las")), "--json"]);
     let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     assert_eq!(plain["las"]["copc"], false, "{plain}");
