@@ -11,7 +11,7 @@ INPUT=$(realpath "$1")
 WHICH=${2:-both}
 TASKS=${3:-8}
 cargo build --release --quiet
-BIN=$(realpath target/release/scanmesh)
+BIN=$(realpath "${CARGO_TARGET_DIR:-target}/release/scanmesh")
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/scanmesh-e2e.XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 cd "$WORK"

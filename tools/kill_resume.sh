@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 INPUT=$(realpath "$1"); shift
 EXTRA=("$@")
 cargo build --release --quiet
-BIN=$(realpath target/release/scanmesh)
+BIN=$(realpath "${CARGO_TARGET_DIR:-target}/release/scanmesh")
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/scanmesh-kill.XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 cd "$WORK"

@@ -12,7 +12,7 @@ cmd=${3:-normals}
 work=${MEMBENCH_DIR:-target/membench}
 mkdir -p "$work"
 cargo build --release --quiet --bins
-bin=target/release
+bin="${CARGO_TARGET_DIR:-target}/release"
 input="$work/scan-$n.ply"
 if [ ! -f "$input" ]; then
   dragon=../shared/data/dragon_vrip.ply.gz

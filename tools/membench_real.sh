@@ -18,7 +18,7 @@ while [ $# -gt 0 ] && [ "$1" != "--" ]; do files+=("$(realpath "$1")"); shift; d
 [ $# -gt 0 ] && shift
 budgets=("$@"); [ ${#budgets[@]} -eq 0 ] && budgets=(256MiB 512MiB)
 cargo build --release --quiet --bins || exit 1
-bin=$(pwd)/target/release
+bin=$(realpath "${CARGO_TARGET_DIR:-target}")/release
 work=${MEMBENCH_DIR:-target/membench-real}
 mkdir -p "$work"
 failed=0

@@ -18,7 +18,7 @@ normals_mem=${NORMALS_MEM:-256MiB}
 recon_mem=${RECONSTRUCT_MEM:-512MiB}
 mkdir -p "$work"
 cargo build --release --quiet --bins
-bin=target/release
+bin="${CARGO_TARGET_DIR:-target}/release"
 dragon=../shared/data/dragon_vrip.ply.gz
 
 run() { # label budget args...

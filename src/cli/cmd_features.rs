@@ -39,50 +39,50 @@ struct Thresholds {
     #[arg(long)]
     alpha: Option<f64>,
     /// Enhancement radius phi (d).
-    #[arg(long)]
-    phi: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().phi)]
+    phi: f64,
     /// Growth-circle radius R (d).
-    #[arg(long)]
-    growth_radius: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().growth_radius)]
+    growth_radius: f64,
     /// Corner merge distance epsilon (d).
-    #[arg(long)]
-    epsilon: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().epsilon)]
+    epsilon: f64,
     /// Smoothing radius: first delta (d).
-    #[arg(long)]
-    delta: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().delta)]
+    delta: f64,
     /// Smoothing radius: largest delta (d).
-    #[arg(long)]
-    delta_max: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().delta_max)]
+    delta_max: f64,
     /// Correlation the smoothing neighbourhood must reach (paper: 0.6).
-    #[arg(long)]
-    rho: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().rho)]
+    rho: f64,
     /// Polyline growth radius gamma_max (d).
-    #[arg(long)]
-    gamma_max: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().gamma_max)]
+    gamma_max: f64,
     /// Connection cone length, in gamma_max.
-    #[arg(long)]
-    cone_length: Option<f64>,
-    /// Connection cone half-angle mu, degrees.
+    #[arg(long, default_value_t = FeatureParams::default().cone_length)]
+    cone_length: f64,
+    /// Connection cone half-angle mu, degrees (default 30).
     #[arg(long)]
     cone_angle: Option<f64>,
     /// Relaxation passes (paper: 1-2).
-    #[arg(long)]
-    relax: Option<usize>,
+    #[arg(long, default_value_t = FeatureParams::default().relax_passes)]
+    relax: usize,
     /// Across-line refinement of the line vertices: radius (d; 0 = off, the paper's growth points as they are).
-    #[arg(long)]
-    refine: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().refine)]
+    refine: f64,
     /// Across-line refinement: width of the strip around the line (d).
-    #[arg(long)]
-    refine_width: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().refine_width)]
+    refine_width: f64,
     /// Line vertices moved onto the maximum of the curvature profile across the line: half-width of the profile, in curvature fit radii (0 = off).
-    #[arg(long)]
-    crest: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().crest)]
+    crest: f64,
     /// Side of the cells polylines grow in (d).
-    #[arg(long)]
-    cell: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().cell)]
+    cell: f64,
     /// Feature points kept only where the curvature peaks across the line: the drop a crest must reach over 2.5 fit radii, in units of the curvature the fit noise makes (0 = off: the paper's whole band above alpha).
-    #[arg(long)]
-    peak: Option<f64>,
+    #[arg(long, default_value_t = FeatureParams::default().peak)]
+    peak: f64,
 }
 
 impl FeaturesArgs {
@@ -92,21 +92,21 @@ impl FeaturesArgs {
         let p = FeatureParams {
             curvature: self.fit.params()?,
             alpha: t.alpha,
-            phi: t.phi.unwrap_or(d.phi),
-            growth_radius: t.growth_radius.unwrap_or(d.growth_radius),
-            epsilon: t.epsilon.unwrap_or(d.epsilon),
-            delta: t.delta.unwrap_or(d.delta),
-            delta_max: t.delta_max.unwrap_or(d.delta_max),
-            rho: t.rho.unwrap_or(d.rho),
-            gamma_max: t.gamma_max.unwrap_or(d.gamma_max),
-            cone_length: t.cone_length.unwrap_or(d.cone_length),
+            phi: t.phi,
+            growth_radius: t.growth_radius,
+            epsilon: t.epsilon,
+            delta: t.delta,
+            delta_max: t.delta_max,
+            rho: t.rho,
+            gamma_max: t.gamma_max,
+            cone_length: t.cone_length,
             cone_angle: t.cone_angle.map_or(d.cone_angle, f64::to_radians),
-            relax_passes: t.relax.unwrap_or(d.relax_passes),
-            refine: t.refine.unwrap_or(d.refine),
-            refine_width: t.refine_width.unwrap_or(d.refine_width),
-            crest: t.crest.unwrap_or(d.crest),
-            cell: t.cell.unwrap_or(d.cell),
-            peak: t.peak.unwrap_or(d.peak),
+            relax_passes: t.relax,
+            refine: t.refine,
+            refine_width: t.refine_width,
+            crest: t.crest,
+            cell: t.cell,
+            peak: t.peak,
             ..d
         };
         if let Err(e) = p.validate() {

@@ -27,8 +27,10 @@ pub struct RenderArgs {
     /// A triangle mesh (PLY or OBJ), shaded grey.
     #[arg(long)]
     mesh: Option<PathBuf>,
+    /// Picture width in pixels.
     #[arg(long, default_value_t = 1200)]
     width: usize,
+    /// Picture height in pixels.
     #[arg(long, default_value_t = 900)]
     height: usize,
     /// Viewing direction x,y,z (the camera looks along it).
