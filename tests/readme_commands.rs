@@ -3,6 +3,7 @@
 //! fixtures named as the README names them, in README order, in a temporary
 //! folder: the README cannot drift from the binary.
 
+use scanmesh::io::{create_writer, Format, PointChunk, WriterSpec};
 use scanmesh::synth::{generate, mean_spacing_hint, Shape};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -31,21 +32,17 @@ fn fixture(rel: &str) -> PathBuf {
         .join(rel)
 }
 
-/// A small binary PLY of `shape` (x y z doubles).
+/// A small binary PLY of `shape`, through the library's own writer.
 fn write_ply(path: &Path, shape: &Shape, n: usize) {
     let sp = mean_spacing_hint(shape, n).expect("spacing");
     let scan = generate(shape, n, 0.1 * sp, 1).expect("scan");
-    let mut bytes = format!(
-        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nend_header\n",
-        scan.points.len()
-    )
-    .into_bytes();
-    for p in &scan.points {
-        for c in p.to_array() {
-            bytes.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    std::fs::write(path, bytes).expect("write ply");
+    let mut w = create_writer(path, &WriterSpec::new(Format::PlyBinaryLe)).expect("writer");
+    let chunk = PointChunk {
+        xyz: scan.points,
+        ..PointChunk::default()
+    };
+    w.write_chunk(&chunk, None).expect("write");
+    w.finish().expect("finish");
 }
 
 fn run(dir: &Path, line: &str) -> std::process::Output {

@@ -183,14 +183,13 @@ pub(crate) fn fit_quadratic<I>(samples: I) -> Result<[f64; 6], FitFlag>
 where
     I: Iterator<Item = DVec3> + Clone,
 {
-    if samples.clone().count() < MIN_FIT_POINTS {
+    let (count, reach2) = samples.clone().fold((0usize, 0.0f64), |(n, r), l| {
+        (n + 1, r.max(l.x * l.x + l.y * l.y))
+    });
+    if count < MIN_FIT_POINTS {
         return Err(FLAG_SPARSE);
     }
-    let scale = samples
-        .clone()
-        .map(|l| l.x * l.x + l.y * l.y)
-        .fold(0.0f64, f64::max)
-        .sqrt();
+    let scale = reach2.sqrt();
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(FLAG_DEGENERATE);
     }

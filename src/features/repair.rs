@@ -61,7 +61,6 @@ pub fn repair(
         let first = g.vertices.len() as u32;
         if pts.len() >= 2 {
             let last = first + pts.len() as u32 - 1;
-
             let span = TANGENT_SPAN * reach;
             ends.push((first, end_direction(pts.iter(), span), k as u32));
             ends.push((last, end_direction(pts.iter().rev(), span), k as u32));
