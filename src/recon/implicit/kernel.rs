@@ -1,19 +1,22 @@
-//! The implicit-reconstruction tile kernel (paper 1 sections 2.5-2.6): a
-//! sparse narrow band of lattice cubes near the samples, the signed distance
-//! at their corners, marching cubes on the cubes whose corners are all
-//! defined and not all beyond the data's edge ([`Known::Beyond`]); with
-//! `--closed`, on every cube that may change sign, every corner having one
-//! ([`super::closed`]). A tile owns the cubes whose min corner lies in its
-//! core box (half-open), so every cube is polygonised by exactly one tile.
+//! The implicit-reconstruction tile kernel (paper 1 sections 2.5-2.6): the
+//! signed distance at the corners of the lattice cubes near the samples,
+//! marching cubes on the cubes whose corners are all defined and not all
+//! beyond the data's edge ([`Known::Beyond`]). Open surfaces: the cubes the
+//! zero set crosses, found by walking the surface from the cubes holding
+//! samples ([`super::follow`]); with `--closed`, every cube of the band that
+//! may change sign, every corner having a value ([`super::closed`]). A tile
+//! owns the cubes whose min corner lies in its core box (half-open), so
+//! every cube is polygonised by exactly one tile.
 //!
-//! Deviation: the paper marches the whole bounding box; the band here is the
-//! cubes within one cube of a sample's cube. A surface piece farther from
-//! every sample than a cube is not supported by the data (the cube edge is
-//! about rho + delta), and the band keeps the work proportional to the
-//! surface rather than the volume.
+//! Deviation: the paper marches the whole bounding box; here only cubes
+//! within the band (a few spacings of a sample's cube) are asked. A surface
+//! piece farther from every sample than that is not supported by the data,
+//! and the band keeps the work proportional to the surface rather than the
+//! volume.
 
 use super::closed::{self, Everywhere};
 use super::dilate::dilate;
+use super::follow::{Walk, FOLLOW_STEPS};
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
@@ -134,7 +137,7 @@ pub(crate) fn tile_bytes(points: u64, cubes: u64, per_cube: u64) -> u64 {
 /// A corner as a `u64` that sorts like the triple: its x-edge key, which
 /// the stitcher needs anyway, so a corner out of key range is refused here.
 /// Sorting keys rather than triples is several times faster.
-fn corner_key(c: [i64; 3]) -> Result<u64, LatticeError> {
+pub(super) fn corner_key(c: [i64; 3]) -> Result<u64, LatticeError> {
     edge_key(c, 0)
 }
 
@@ -143,7 +146,7 @@ pub(crate) fn corner_of(key: u64) -> [i64; 3] {
     edge_from_key(key).map_or([0; 3], |(c, _)| c)
 }
 
-const CORNERS: [[i64; 3]; 8] = [
+pub(super) const CORNERS: [[i64; 3]; 8] = [
     [0, 0, 0],
     [1, 0, 0],
     [0, 1, 0],
@@ -205,16 +208,26 @@ impl TileKernel for ImplicitKernel {
             normals: &normals,
             index: &index,
         };
-        let (cubes, corners) = match &self.everywhere {
+        let (cubes, corners, visited) = match &self.everywhere {
             None => {
-                let cubes = band(&self.lattice, &points, &tile.core, self.band)?;
-                let corners = self.corner_values(&samples, tile, &cubes)?;
-                (cubes, corners)
+                let walk = Walk {
+                    lattice: &self.lattice,
+                    core: &tile.core,
+                    band: self.band,
+                    steps: FOLLOW_STEPS,
+                };
+                let followed =
+                    walk.follow(&points, |keys| self.evaluate_corners(&samples, tile, keys))?;
+                (followed.cubes, followed.corners, followed.visited)
             }
-            Some(e) => self.closed_cubes(e, &samples, tile)?,
+            Some(e) => {
+                let (cubes, corners) = self.closed_cubes(e, &samples, tile)?;
+                let visited = cubes.len();
+                (cubes, corners, visited)
+            }
         };
         let mut out = ImplicitTile {
-            cubes: cubes.len(),
+            cubes: visited,
             undefined_corners: corners.iter().filter(|c| c.1.is_none()).count(),
             ..ImplicitTile::default()
         };
@@ -244,7 +257,7 @@ impl ImplicitKernel {
     /// whether it is near the samples.
     fn band_reach(&self) -> f64 {
         let cubes = match self.everywhere {
-            None => self.band + 1,
+            None => self.band + 1 + FOLLOW_STEPS,
             Some(_) => self.band + closed::COARSE + 3,
         };
         cubes as f64 * self.lattice.cell * 1.001
@@ -303,21 +316,14 @@ impl ImplicitKernel {
         Ok((triangles, away))
     }
 
-    /// Signed distance at every corner of `cubes`, sorted by corner.
-    fn corner_values(
+    /// Signed distance at sorted, distinct corner `keys`.
+    fn evaluate_corners(
         &self,
         samples: &Samples,
         tile: &TilePoints,
-        cubes: &[[i64; 3]],
-    ) -> Result<Vec<CornerValue>, KernelError> {
-        let cube_keys = cubes
-            .iter()
-            .map(|&c| corner_key(c))
-            .collect::<Result<Vec<u64>, _>>()
-            .map_err(KernelError::failed)?;
-        let corners = dilate(&cube_keys, 0..=1).map_err(KernelError::failed)?;
-        drop(cube_keys);
-        let evaluated: Vec<Corner> = corners
+        keys: &[u64],
+    ) -> Result<Vec<Option<Known>>, KernelError> {
+        let evaluated: Vec<Corner> = keys
             .par_iter()
             .map_init(Vec::new, |nbr, &key| {
                 let p = self.lattice.corner(corner_of(key));
@@ -329,23 +335,22 @@ impl ImplicitKernel {
             Corner::Value(_) | Corner::Beyond(_) => m,
         });
         KernelError::unless_short(short, tile.margin)?;
-        Ok(corners
+        Ok(evaluated
             .into_iter()
-            .zip(evaluated)
-            .map(|(c, v)| (c, v.known().unwrap_or(None)))
+            .map(|v| v.known().unwrap_or(None))
             .collect())
     }
 }
 
 /// Cubes per parallel task of the marching loop.
-const CUBES_PER_TASK: usize = 4096;
+pub(super) const CUBES_PER_TASK: usize = 4096;
 
 /// Reads the corner values of cubes visited in increasing order. Corner
 /// keys order like (x, y, z) triples, so for each of the eight corner
 /// offsets the keys of successive cubes' corners increase too: eight
 /// cursors that only move forward replace eight binary searches per cube
 /// (most of the marching loop's time, in cache misses).
-struct CornerCursor<'a> {
+pub(super) struct CornerCursor<'a> {
     corners: &'a [CornerValue],
     at: [usize; 8],
     /// Every cube with all corners defined is drawn (`--closed`), not
@@ -355,7 +360,7 @@ struct CornerCursor<'a> {
 
 impl<'a> CornerCursor<'a> {
     /// Cursors placed for cubes from `first` on.
-    fn new(
+    pub(super) fn new(
         corners: &'a [CornerValue],
         first: [i64; 3],
         everywhere: bool,
@@ -373,14 +378,15 @@ impl<'a> CornerCursor<'a> {
     /// projects onto the data.
     /// With the values, whether the winding number gave one of them (the
     /// cube lies away from the data, `--closed`).
-    fn values(&mut self, cube: [i64; 3]) -> Result<Option<([f64; 8], bool)>, KernelError> {
+    pub(super) fn values(
+        &mut self,
+        cube: [i64; 3],
+    ) -> Result<Option<([f64; 8], bool)>, KernelError> {
         let keys = corner_keys(cube)?;
         let mut values = [0.0; 8];
         let (mut on_data, mut away) = (false, false);
         for ((at, key), value) in self.at.iter_mut().zip(keys).zip(values.iter_mut()) {
-            while self.corners.get(*at).is_some_and(|e| e.0 < key) {
-                *at += 1;
-            }
+            *at = seek(self.corners, *at, key);
             match self.corners.get(*at) {
                 Some(&(k, Some(known))) if k == key => {
                     on_data |= matches!(known, Known::OnData(_));
@@ -391,6 +397,17 @@ impl<'a> CornerCursor<'a> {
             }
         }
         Ok((on_data || self.everywhere).then_some((values, away)))
+    }
+}
+
+/// The first index from `at` on whose key is not below `key`: a few steps
+/// forward, then a bisection, so a cursor crossing a long run of corners
+/// (the walk's sparse frontiers) does not step through it one by one.
+fn seek(corners: &[CornerValue], at: usize, key: u64) -> usize {
+    let near = corners.len().min(at + 8);
+    match corners[at.min(near)..near].iter().position(|e| e.0 >= key) {
+        Some(i) => at + i,
+        None => near + corners[near..].partition_point(|e| e.0 < key),
     }
 }
 

@@ -10,6 +10,7 @@ pub(crate) mod closed;
 mod closed_tile;
 pub(crate) mod cover;
 pub(crate) mod dilate;
+pub(crate) mod follow;
 pub(crate) mod kernel;
 pub mod lattice;
 pub mod mc_table;

@@ -7,6 +7,7 @@
 //! writer's audit checks it.
 
 use super::closed::{self, Everywhere};
+use super::follow::FOLLOW_STEPS;
 use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
 use super::sdf::Field;
@@ -241,7 +242,8 @@ pub fn reconstruct_implicit(
     let mut kernel = ImplicitKernel {
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
-        initial_margin: 4.0 * report.cell + 2.0 * reach,
+        // The surface walk's reach (the band and its steps) beyond the core.
+        initial_margin: (band + 1 + FOLLOW_STEPS) as f64 * report.cell + 2.0 * reach,
         band,
         field: params.field,
         spacing,
@@ -250,7 +252,7 @@ pub fn reconstruct_implicit(
     };
     if params.closed {
         kernel.everywhere = Some(everywhere(store, &kernel)?);
-        kernel.initial_margin += (closed::COARSE + 2) as f64 * report.cell;
+        kernel.initial_margin = (closed::COARSE + 6) as f64 * report.cell + 2.0 * reach;
     }
     // A closed surface is watertight, manifold, consistently wound and
     // encloses a positive volume in every piece; a mesh that is not is

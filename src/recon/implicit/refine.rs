@@ -17,7 +17,7 @@
 //! bits.
 
 use super::lattice::{edge_from_key, Lattice};
-use super::mls::{edge_root, mls_value};
+use super::mls::{edge_root, MlsValue};
 use super::polygonize::CubeVertex;
 use super::sdf::{Known, Samples};
 use crate::pipeline::KernelError;
@@ -64,14 +64,12 @@ pub fn refine_vertices(
                 let t = (f0 / (f0 - f1)).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON);
                 return Ok(Ok(at(t)));
             }
-            let t = match edge_root(s, tile, (p0, f0), (p1, f1), nbr) {
-                Ok(t) => t,
+            let (t, fitted) = match edge_root(s, tile, (p0, f0), (p1, f1), nbr) {
+                Ok(root) => root,
                 Err(short) => return Ok(Err(short)),
             };
-            match chord_offset(lattice.cell, s, tile, at(t), a, nbr) {
-                Ok(dt) => Ok(Ok(at((t + dt).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON)))),
-                Err(short) => Ok(Err(short)),
-            }
+            let dt = fitted.map_or(0.0, |v| chord_offset(lattice.cell, &v, a));
+            Ok(Ok(at((t + dt).clamp(EDGE_EPSILON, 1.0 - EDGE_EPSILON))))
         })
         .collect::<Result<_, _>>()?;
     let short = moved
@@ -103,9 +101,10 @@ pub fn refine_vertices(
 pub const CHORD_OFFSET: f64 = 0.12;
 
 /// The offset that moves the piecewise-linear mesh's mean onto the curved
-/// field (the chord error's bias), from the fitted sphere's curvature at
-/// `pos`, as a move along the vertex's lattice edge (axis `axis`), in
-/// cells: the move whose component along the field's normal is the bias.
+/// field (the chord error's bias), from the curvature and normal of `v`,
+/// the sphere fitted on the way to the root (a fraction of a cell from
+/// it), as a move along the vertex's lattice edge (axis `axis`), in cells:
+/// the move whose component along the field's normal is the bias.
 ///
 /// Deviation from paper 1 section 2.6 (vertices on the zero set): an
 /// interpolating mesh is biased towards the inside of every convex part by
@@ -121,23 +120,13 @@ pub const CHORD_OFFSET: f64 = 0.12;
 /// triangles stay inside the cube, as marching cubes' are. The move is
 /// capped at [`MAX_EDGE_MOVE`] of the edge, so where the edge runs nearly
 /// tangent to the surface the vertex does not slide far along it.
-fn chord_offset(
-    cell: f64,
-    s: &Samples,
-    tile: &TilePoints,
-    pos: DVec3,
-    axis: usize,
-    nbr: &mut Vec<crate::spatial::Neighbour>,
-) -> Result<f64, f64> {
-    let Some(v) = mls_value(s, tile, pos, nbr)? else {
-        return Ok(0.0);
-    };
+fn chord_offset(cell: f64, v: &MlsValue, axis: usize) -> f64 {
     let along = v.normal.normalize_or_zero()[axis];
     if along.abs() < 1e-6 {
-        return Ok(0.0);
+        return 0.0;
     }
     let shift = CHORD_OFFSET * cell * v.curvature;
-    Ok((shift / along).clamp(-MAX_EDGE_MOVE, MAX_EDGE_MOVE))
+    (shift / along).clamp(-MAX_EDGE_MOVE, MAX_EDGE_MOVE)
 }
 
 /// Largest move along the edge [`chord_offset`] makes, as a share of it.
