@@ -320,3 +320,38 @@ fn nearest_from_any_hint_is_the_nearest() {
         }
     }
 }
+
+/// The k nearest with the search bounded by an earlier answer: whatever
+/// `out` holds on entry (a nearby query's answer, a far one's, too few
+/// points, indices past the index), the answer is the oracle's.
+#[test]
+fn knn_near_any_earlier_answer_is_the_oracles() {
+    for seed in [31u64, 32] {
+        let mut rng = Rng::new(seed);
+        let mut points = sphere_surface(&mut rng, 3000);
+        for i in 0..40 {
+            points.push(points[i * 11]);
+        }
+        let tie: Vec<u64> = (0..points.len() as u64).rev().collect();
+        for cell in [0.02, 0.1, 0.5] {
+            let grid = GridIndex::with_cell(&points, &tie, cell).expect("grid");
+            let mut out = Vec::new();
+            // The sphere lies at a UTM-like offset: the origin is far.
+            let far = DVec3::ZERO;
+            for i in 0..400 {
+                let k = [1, 5, 16, 40][i % 4];
+                let q = points[rng.index(points.len())] + rng.vec3(-0.05, 0.05);
+                match i % 5 {
+                    // A stale answer from far away.
+                    3 => grid.knn_near(far + rng.vec3(-2.0, 2.0), 40, &mut out),
+                    // Indices past the index.
+                    4 => out.iter_mut().for_each(|n| n.index = u32::MAX - n.index),
+                    _ => {}
+                }
+                grid.knn_near(q, k, &mut out);
+                let want = brute_knn(&points, &tie, q, k, None);
+                assert_eq!(out, want, "seed {seed} cell {cell} query {i} k {k}");
+            }
+        }
+    }
+}

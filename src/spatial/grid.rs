@@ -23,6 +23,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::brute::dist2;
 use super::{check_input, IndexError, KnnIndex, Neighbour};
 use crate::geom::Aabb;
 
@@ -45,6 +46,7 @@ const FAR_CELL: f64 = (1u64 << 40) as f64;
 
 /// Uniform-grid exact kNN index over borrowed points.
 pub struct GridIndex<'a> {
+    points: &'a [DVec3],
     tie: &'a [u64],
     origin: DVec3,
     cell: f64,
@@ -142,6 +144,7 @@ impl<'a> GridIndex<'a> {
             .collect();
         keys.par_sort_unstable();
         let mut grid = GridIndex {
+            points,
             tie,
             origin,
             cell,
@@ -396,6 +399,35 @@ impl GridIndex<'_> {
             }
             (inner, r) = (r, r + 1);
         }
+    }
+}
+
+impl GridIndex<'_> {
+    /// The `k` nearest points to `q` into `out`, exactly as `knn(q, k,
+    /// None, out)` gives them, with the search bounded from the start by
+    /// the points `out` holds on entry (an earlier answer over this index,
+    /// for a query nearby): `k` of them lie within the farthest one's
+    /// distance, so no point beyond it can be among the nearest, and the
+    /// scan inserts and visits fewer. Any entry gives the same answer.
+    pub fn knn_near(&self, q: DVec3, k: usize, out: &mut Vec<Neighbour>) {
+        let bound = match out.get(..k) {
+            Some(hints) if k > 0 => {
+                hints
+                    .iter()
+                    .fold(0.0f64, |m, h| match self.points.get(h.index as usize) {
+                        Some(&p) => m.max(dist2(p, q)),
+                        None => f64::INFINITY,
+                    })
+            }
+            _ => f64::INFINITY,
+        };
+        out.clear();
+        if k == 0 || self.sorted.is_empty() {
+            return;
+        }
+        let mut s = Search::new(q, k, None, self.tie, self.tolerance(q), out);
+        s.bound = bound;
+        self.run(&mut s, q);
     }
 }
 

@@ -157,18 +157,9 @@ impl Walk<'_> {
         Ok(steps)
     }
 
-    /// Cube index bounds (inclusive) of the cubes within `steps` of an
-    /// owned one: a little wider is harmless, narrower is not.
+    /// The cubes within `steps` of an owned one (and a few more).
     fn region(&self) -> [[i64; 2]; 3] {
-        let (o, c) = (self.lattice.origin, self.lattice.cell);
-        // Clamped before the cast: an untiled run's core is infinite.
-        let index = |v: f64| ((v / c).floor().clamp(-FAR, FAR)) as i64;
-        std::array::from_fn(|a| {
-            [
-                index(self.core.min[a] - o[a]) - self.steps - 1,
-                index(self.core.max[a] - o[a]) + self.steps + 1,
-            ]
-        })
+        cube_range(self.lattice, self.core, self.steps)
     }
 
     /// Whether a cube holding a sample (`holds`, sorted) lies within the
@@ -260,7 +251,22 @@ fn merge(a: Vec<CornerValue>, b: Vec<CornerValue>) -> Vec<CornerValue> {
 /// Index bound far beyond any key (keys hold 21 bits an axis).
 const FAR: f64 = (1u64 << 40) as f64;
 
-fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
+/// Cube index bounds (inclusive) holding every cube within `pad` cubes of
+/// one whose min corner lies in `core`: a little wider is harmless,
+/// narrower is not.
+pub(super) fn cube_range(lattice: &Lattice, core: &Aabb, pad: i64) -> [[i64; 2]; 3] {
+    let (o, c) = (lattice.origin, lattice.cell);
+    // Clamped before the cast: an untiled run's core is infinite.
+    let index = |v: f64| ((v / c).floor().clamp(-FAR, FAR)) as i64;
+    std::array::from_fn(|a| {
+        [
+            index(core.min[a] - o[a]) - pad - 1,
+            index(core.max[a] - o[a]) + pad + 1,
+        ]
+    })
+}
+
+pub(super) fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
     (0..3).all(|a| region[a][0] <= c[a] && c[a] <= region[a][1])
 }
 

@@ -16,7 +16,7 @@
 
 use super::closed::{self, Everywhere};
 use super::dilate::dilate;
-use super::follow::{Walk, FOLLOW_STEPS};
+use super::follow::{cube_range, inside, Walk, FOLLOW_STEPS};
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
@@ -467,7 +467,11 @@ fn band(
     core: &Aabb,
     reach: i64,
 ) -> Result<Vec<[i64; 3]>, KernelError> {
-    let occupied = occupied(lattice, points)?;
+    // Only sample cubes within reach of the core count (the margin holds
+    // more, for the walk's steps).
+    let range = cube_range(lattice, core, reach);
+    let mut occupied = occupied(lattice, points)?;
+    occupied.retain(|&k| inside(&range, corner_of(k)));
     let near = dilate(&occupied, -reach..=reach).map_err(KernelError::failed)?;
     Ok(near
         .into_iter()

@@ -28,9 +28,9 @@ pub(crate) const Z_MIN: i64 = -(1 << (Z_BITS - 1));
 pub(crate) const Z_MAX: i64 = (1 << (Z_BITS - 1)) - 1;
 
 const AXIS_BITS: u32 = 2;
-const Z_SHIFT: u32 = AXIS_BITS;
-const Y_SHIFT: u32 = Z_SHIFT + Z_BITS;
-const X_SHIFT: u32 = Y_SHIFT + XY_BITS;
+pub(crate) const Z_SHIFT: u32 = AXIS_BITS;
+pub(crate) const Y_SHIFT: u32 = Z_SHIFT + Z_BITS;
+pub(crate) const X_SHIFT: u32 = Y_SHIFT + XY_BITS;
 const XY_MASK: u64 = (1 << XY_BITS) - 1;
 const Z_MASK: u64 = (1 << Z_BITS) - 1;
 const AXIS_MASK: u64 = (1 << AXIS_BITS) - 1;

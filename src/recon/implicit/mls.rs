@@ -27,7 +27,7 @@
 
 use super::cover::{covered, surrounds};
 use super::sdf::{complete, projection_on_data, Corner, Samples};
-use crate::spatial::{KnnIndex, Neighbour};
+use crate::spatial::Neighbour;
 use crate::tiling::TilePoints;
 use glam::DVec3;
 
@@ -61,7 +61,8 @@ pub fn mls_value(
     p: DVec3,
     nbr: &mut Vec<Neighbour>,
 ) -> Result<Option<MlsValue>, f64> {
-    s.index.knn(p, MLS_NEIGHBOURS, None, nbr);
+    // The buffer's last answer (a corner or vertex nearby) bounds the search.
+    s.index.knn_near(p, MLS_NEIGHBOURS, nbr);
     let (Some(first), Some(last)) = (nbr.first(), nbr.last()) else {
         return Ok(None);
     };
