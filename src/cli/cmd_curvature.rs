@@ -127,7 +127,7 @@ fn print_summary(r: &CurvatureReport, secs: f64, out: &Path) {
     let m = &r.meta;
     let [sparse, degenerate, ill, unoriented] = m.flagged;
     super::report::summary(format!(
-        "curvature: {} points, {} tiles ({} reloaded), d {:.4e}, {:?}, |k| median {:.4e} p90 {:.4e}, \
+        "curvature: {} points, {} tiles ({} reloaded), d {:.4e}, {}, |k| median {:.4e} p90 {:.4e}, \
          residual RMS {:.4e} max {:.4e}, flagged: {} sparse, {} degenerate, {} ill-conditioned, \
          {} unoriented, {:.2} s, peak {} -> {}",
         m.points,

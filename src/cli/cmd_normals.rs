@@ -17,7 +17,8 @@ use std::time::Instant;
 pub struct NormalsArgs {
     /// Input point file or store directory.
     pub input: PathBuf,
-    /// Output point file (.ply binary by default, or .xyz/.csv).
+    /// Output point file: .ply (binary; --ascii for text), .xyz, .csv,
+    /// .las, .laz or .pcd, normals as that format keeps them.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Neighbours per point (paper: 8..15).
@@ -236,7 +237,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
 pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
     let Some((mut format, gz)) = format_from_name(path) else {
         bail!(
-            "{}: unknown output format (use .ply, .xyz, .csv, .las or .laz)",
+            "{}: unknown output format (use .ply, .xyz, .csv, .las, .laz or .pcd)",
             path.display()
         );
     };

@@ -79,6 +79,18 @@ pub enum CurvatureHood {
     },
 }
 
+/// As the summary line says it: `radius 3.2008e-2`, `12 nearest`,
+/// `12 topological neighbours`.
+impl std::fmt::Display for CurvatureHood {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CurvatureHood::Radius(r) => write!(f, "radius {r:.4e}"),
+            CurvatureHood::Knn(k) => write!(f, "{k} nearest"),
+            CurvatureHood::Topological { k, .. } => write!(f, "{k} topological neighbours"),
+        }
+    }
+}
+
 /// How the neighbourhood is chosen, before the data's spacing is known.
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
 pub enum HoodChoice {
