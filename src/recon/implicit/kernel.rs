@@ -35,6 +35,8 @@ use rayon::prelude::*;
 #[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct ImplicitTile {
     pub triangles: Vec<[CubeVertex; 3]>,
+    /// Cubes whose corners the field was asked for: the walk's (open),
+    /// the band's (`--closed`).
     pub cubes: usize,
     pub undefined_corners: usize,
     /// Triangles in cubes a corner of which the winding number decided.
@@ -250,9 +252,11 @@ impl TileKernel for ImplicitKernel {
 }
 
 impl ImplicitKernel {
-    /// How far beyond the core the samples are needed. The band looks one
-    /// cube beyond owned cubes, whose far corners lie one cube beyond the
-    /// core: every sample within two cubes. With `--closed`, a coarse
+    /// How far beyond the core the samples are needed. Open: the walk's
+    /// distances count for cubes within [`FOLLOW_STEPS`] of an owned one,
+    /// each of which asks whether a sample cube lies within the band of
+    /// it: every sample within band + steps + 1 cubes (the field's own
+    /// neighbours beyond that ask for more margin). With `--closed`, a coarse
     /// corner up to [`closed::COARSE`] cubes beyond the core is asked
     /// whether it is near the samples.
     fn band_reach(&self) -> f64 {

@@ -135,7 +135,8 @@ pub struct ImplicitReport {
     pub vertices: u64,
     /// Triangles of the mesh written.
     pub triangles: u64,
-    /// Cubes polygonised over all tiles.
+    /// Cubes whose corners the field was asked for, over all tiles (the
+    /// surface walk's when open, the band's with `--closed`).
     pub cubes: u64,
     /// With `--closed`: triangles drawn in cubes a corner of which the
     /// winding number decided, away from the data (holes closed, and the
