@@ -85,13 +85,17 @@ impl Field {
             let mut from = self.shifted(k, lo)?;
             let to = self.shifted(k, hi)?;
             if let Some(l) = last {
-                // Same column and overlapping: continue after the last key.
-                from = from.max(l + (1 << self.shift));
+                // Same column and overlapping: continue after the last key
+                // (the key range's very last key has nothing after it).
+                from = from.max(l.saturating_add(1 << self.shift));
             }
             let mut at = from;
             while at <= to {
                 out.push(at);
-                at += 1 << self.shift;
+                let Some(next) = at.checked_add(1 << self.shift) else {
+                    break;
+                };
+                at = next;
             }
             last = Some(last.map_or(to, |l| l.max(to)));
         }
@@ -181,5 +185,9 @@ mod tests {
         let edge = key([0, 0, (1 << 19) - 1]);
         assert!(dilate(&[edge], 0..=1).is_err());
         assert!(dilate(&[], -1..=1).unwrap().is_empty());
+        // The range's very last corner still dilates inwards.
+        use crate::recon::implicit::lattice::{XY_MAX, Z_MAX};
+        let top = key([XY_MAX, XY_MAX, Z_MAX]);
+        assert_eq!(dilate(&[top], -1..=0).unwrap().len(), 8);
     }
 }
