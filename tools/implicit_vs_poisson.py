@@ -5,12 +5,16 @@ Not part of CI (needs Open3D: `pip install open3d`, and a reference mesh):
 
     python3 tools/implicit_vs_poisson.py d1m.ply dragon_vrip.ply.gz \
         --spacing 1.365e-4 [--scanmesh target/release/scanmesh] \
-        [--depth 9] [--repeat 3] [--extra '--cell 2e-4'] [--skip-peer]
+        [--depth 9] [--repeat 3] [--extra '--cell 2e-4'] [--skip-peer] \
+        [--normals-given --peer-input d1m_normals.ply]
 
-Runs are back to back, alternating, `--repeat` times; times are wall and
-CPU (user + sys of the child) medians, the ratio is CPU's (a shared
-machine's wall time depends on the others' load) (normals included on both sides: reconstruct computes them from
-the bare points, Open3D estimates and orients its own). Distances come
+Runs are back to back, alternating, `--repeat` times, the machine's
+one-minute load printed before each (quote figures from an idle machine);
+times are wall and CPU (user + sys of the child) medians, and the ratio is
+of the wall medians, the figure issue 43 asks for. Normals: reconstruct
+computes them from the bare points; Open3D estimates and orients its own,
+unless `--normals-given` hands it the input's (write them first with
+`scanmesh normals in.ply -o in_n.ply` and pass that file as `--peer-input`). Distances come
 from `scanmesh eval --reference`, both ways, averaged, and are printed in
 units of `--spacing` (the *input's* mean nearest-neighbour distance), not
 the reference's spacing `eval` uses. `p99.9` is the larger of the two
@@ -83,6 +87,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--extra", default="", help="extra reconstruct options")
     ap.add_argument("--skip-peer", action="store_true")
+    ap.add_argument("--normals-given", action="store_true", help="Poisson reads the normals of --peer-input")
+    ap.add_argument("--peer-input", help="the peer's input (default: the same file)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="implicit_vs_poisson_")
     extra = a.extra.split()
@@ -96,28 +102,29 @@ def main():
     if not a.skip_peer:
         peer = f"open3d poisson d{a.depth}"
         runs[peer] = [
-            sys.executable, os.path.join(HERE, "open3d_peer.py"), "poisson", a.input,
+            sys.executable, os.path.join(HERE, "open3d_peer.py"), "poisson", a.peer_input or a.input,
             f"{tmp}/poisson.ply", "--depth", str(a.depth),
-        ]
+        ] + (["--normals-given"] if a.normals_given else [])
         meshes[peer] = f"{tmp}/poisson.ply"
     times = {name: [] for name in runs}
     for _ in range(a.repeat):
         for name, cmd in runs.items():
+            print(f"load {os.getloadavg()[0]:.2f} before {name}", file=sys.stderr)
             times[name].append(timed(cmd))
     cpu = {name: statistics.median(c for _, c in ts) for name, ts in times.items()}
-    peer_time = cpu[peer] if not a.skip_peer else None
+    wall = {name: statistics.median(w for w, _ in ts) for name, ts in times.items()}
+    peer_time = wall[peer] if not a.skip_peer else None
     print(f"input {a.input}, distances in input spacings ({a.spacing:g}), both ways averaged")
     print(f"{'run':<22} {'mean':>7} {'there':>7} {'back':>7} {'p99.9':>7} {'hausd.':>7} {'wall':>7} {'cpu':>7} {'ratio':>6}  mesh")
     for name in runs:
         e = evaluate(a.scanmesh, meshes[name], a.reference, a.spacing)
-        wall = statistics.median(w for w, _ in times[name])
         t = cpu[name]
-        ratio = f"{t / peer_time:.2f}" if peer_time else "-"
+        ratio = f"{wall[name] / peer_time:.2f}" if peer_time else "-"
         print(
             f"{name:<22} {e['mean_sp']:7.4f} {e['there_sp']:7.4f} {e['back_sp']:7.4f} "
-            f"{e['p999_sp']:7.2f} {e['hausdorff_sp']:7.2f} {wall:6.2f}s {t:6.2f}s {ratio:>6}  {summary(e['quality'])}"
+            f"{e['p999_sp']:7.2f} {e['hausdorff_sp']:7.2f} {wall[name]:6.2f}s {t:6.2f}s {ratio:>6}  {summary(e['quality'])}"
         )
-    print(f"times: medians of {a.repeat} alternating runs, ratio of CPU (user + sys): " + "; ".join(
+    print(f"times: medians of {a.repeat} alternating runs, ratio of wall times: " + "; ".join(
         f"{n} {', '.join(f'{w:.2f}/{c:.2f}' for w, c in ts)}" for n, ts in times.items()))
 
 
