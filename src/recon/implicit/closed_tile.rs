@@ -12,8 +12,9 @@ use super::closed::{
     cells_round_near, cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes,
     CoarseValues, Everywhere, Supers, COARSE,
 };
+use super::cubes::{corner_of, occupied, owns};
 use super::dilate::dilate;
-use super::kernel::{corner_of, occupied, owns, ImplicitKernel};
+use super::kernel::ImplicitKernel;
 use super::refine::CornerValue;
 use super::sdf::{Known, Samples};
 use crate::pipeline::KernelError;

@@ -22,8 +22,8 @@
 //! by every sample-holding cube there, finds its own cubes' distances
 //! exactly as a walk over the whole lattice does.
 
+use super::cubes::{corner_key, corner_of, occupied, owns, CornerCursor, CUBES_PER_TASK};
 use super::dilate::dilate;
-use super::kernel::{corner_key, corner_of, occupied, owns, CornerCursor, CUBES_PER_TASK};
 use super::lattice::{in_key_range, Lattice};
 use super::refine::CornerValue;
 use super::sdf::Known;
@@ -302,7 +302,7 @@ const FACES: [([i64; 3], [usize; 4]); 6] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recon::implicit::kernel::CORNERS;
+    use crate::recon::implicit::cubes::CORNERS;
 
     #[test]
     fn faces_name_the_corners_on_their_side() {

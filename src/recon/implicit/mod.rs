@@ -9,6 +9,7 @@
 pub(crate) mod closed;
 mod closed_tile;
 pub(crate) mod cover;
+pub(crate) mod cubes;
 pub(crate) mod dilate;
 pub(crate) mod follow;
 pub(crate) mod kernel;

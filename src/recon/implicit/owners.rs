@@ -7,7 +7,7 @@
 //! dragon (64 tiles), about 4 million of each at a billion points, some
 //! 220 MiB in hash tables beside the tiles.
 
-use super::kernel::owns;
+use super::cubes::owns;
 use super::lattice::{edge_from_key, Lattice};
 use crate::geom::Aabb;
 

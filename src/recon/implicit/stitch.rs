@@ -7,7 +7,7 @@
 //! holds the front between stitched and unstitched tiles, not every seam. Output indices are given in first-appearance
 //! order, so the mesh is the same for a given tiling and thread count.
 
-use super::kernel::owns;
+use super::cubes::owns;
 use super::lattice::{edge_from_key, Lattice};
 use super::owners::TileOwners;
 use super::polygonize::CubeVertex;
