@@ -86,9 +86,10 @@ impl Walk<'_> {
         for depth in 0..=self.steps {
             visited += frontier.len();
             let corners = dilate(&frontier, 0..=1).map_err(KernelError::failed)?;
-            let need = difference(&corners, &values);
+            let need = difference(&corners, &values, |e| e.0);
             let got = evaluate(&need)?;
-            values = merge(values, need.into_iter().zip(got).collect());
+            let new: Vec<CornerValue> = need.into_iter().zip(got).collect();
+            values = merge(&values, &new, |e| e.0);
             let last = depth == self.steps;
             let steps: Vec<Vec<Step>> = frontier
                 .par_chunks(CUBES_PER_TASK)
@@ -101,8 +102,8 @@ impl Walk<'_> {
             }
             next.par_sort_unstable();
             next.dedup();
-            let next = difference_keys(&next, &seen);
-            seen = merge_keys(&seen, &next);
+            let next = difference(&next, &seen, |&k| k);
+            seen = merge(&seen, &next, |&k| k);
             let near: Vec<bool> = next
                 .par_iter()
                 .map(|&k| self.in_band(&holds, corner_of(k)))
@@ -193,36 +194,24 @@ struct Step {
     onward: [Option<u64>; 6],
 }
 
-/// The keys of sorted `keys` not in sorted `values`.
-fn difference(keys: &[u64], values: &[CornerValue]) -> Vec<u64> {
+/// The keys of sorted `keys` not in `set`, sorted by `key_of`.
+fn difference<T>(keys: &[u64], set: &[T], key_of: impl Fn(&T) -> u64) -> Vec<u64> {
     let mut at = 0;
     keys.iter()
         .copied()
         .filter(|&k| {
-            at += values[at..].partition_point(|e| e.0 < k);
-            values.get(at).is_none_or(|e| e.0 != k)
+            at += set[at..].partition_point(|e| key_of(e) < k);
+            set.get(at).is_none_or(|e| key_of(e) != k)
         })
         .collect()
 }
 
-/// The keys of sorted `a` not in sorted `b`.
-fn difference_keys(a: &[u64], b: &[u64]) -> Vec<u64> {
-    let mut at = 0;
-    a.iter()
-        .copied()
-        .filter(|&k| {
-            at += b[at..].partition_point(|&e| e < k);
-            b.get(at) != Some(&k)
-        })
-        .collect()
-}
-
-/// Sorted union of two sorted, disjoint key sets.
-fn merge_keys(a: &[u64], b: &[u64]) -> Vec<u64> {
+/// Sorted union of two lists sorted by `key_of`, with no key in both.
+fn merge<T: Copy>(a: &[T], b: &[T], key_of: impl Fn(&T) -> u64) -> Vec<T> {
     let mut out = Vec::with_capacity(a.len() + b.len());
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
-        if a[i] < b[j] {
+        if key_of(&a[i]) < key_of(&b[j]) {
             out.push(a[i]);
             i += 1;
         } else {
@@ -233,24 +222,6 @@ fn merge_keys(a: &[u64], b: &[u64]) -> Vec<u64> {
     out.extend_from_slice(&a[i..]);
     out.extend_from_slice(&b[j..]);
     out
-}
-
-/// Sorted union of two sorted corner lists with distinct keys.
-fn merge(a: Vec<CornerValue>, b: Vec<CornerValue>) -> Vec<CornerValue> {
-    if a.is_empty() {
-        return b;
-    }
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut a, mut b) = (a.into_iter().peekable(), b.into_iter().peekable());
-    loop {
-        let take_a = match (a.peek(), b.peek()) {
-            (Some(x), Some(y)) => x.0 < y.0,
-            (Some(_), None) => true,
-            (None, Some(_)) => false,
-            (None, None) => return out,
-        };
-        out.extend(if take_a { a.next() } else { b.next() });
-    }
 }
 
 /// Index bound far beyond any key (keys hold 21 bits an axis).
