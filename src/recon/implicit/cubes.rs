@@ -119,6 +119,51 @@ pub fn owns(lattice: &Lattice, core: &Aabb, cube: [i64; 3]) -> bool {
     (0..3).all(|a| core.min[a] <= p[a] && p[a] < core.max[a])
 }
 
+/// Index bound far beyond any key (keys hold 21 bits an axis).
+const FAR: f64 = (1u64 << 40) as f64;
+
+/// Cube index bounds (inclusive) holding every cube within `pad` cubes of
+/// one whose min corner lies in `core`: a little wider is harmless,
+/// narrower is not.
+pub(crate) fn cube_range(lattice: &Lattice, core: &Aabb, pad: i64) -> [[i64; 2]; 3] {
+    let (o, c) = (lattice.origin, lattice.cell);
+    // Clamped before the cast: an untiled run's core is infinite.
+    let index = |v: f64| ((v / c).floor().clamp(-FAR, FAR)) as i64;
+    std::array::from_fn(|a| {
+        [
+            index(core.min[a] - o[a]) - pad - 1,
+            index(core.max[a] - o[a]) + pad + 1,
+        ]
+    })
+}
+
+pub(crate) fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
+    (0..3).all(|a| region[a][0] <= c[a] && c[a] <= region[a][1])
+}
+
+/// The cubes [`owns`] gives the tile with core box `core`, as inclusive
+/// index bounds per axis (an empty axis has lower > upper): the test is one
+/// comparison per axis, so its cubes form a box.
+pub(crate) fn owned_range(lattice: &Lattice, core: &Aabb) -> [[i64; 2]; 3] {
+    let range = cube_range(lattice, core, 0);
+    std::array::from_fn(|a| {
+        let owned = |i: i64| {
+            let mut cube = [0; 3];
+            cube[a] = i;
+            let v = lattice.corner(cube)[a];
+            core.min[a] <= v && v < core.max[a]
+        };
+        let [mut lo, mut hi] = range[a];
+        while lo <= hi && !owned(lo) {
+            lo += 1;
+        }
+        while hi >= lo && !owned(hi) {
+            hi -= 1;
+        }
+        [lo, hi]
+    })
+}
+
 /// The cubes holding a sample, sorted keys.
 pub(crate) fn occupied(lattice: &Lattice, points: &[DVec3]) -> Result<Vec<u64>, KernelError> {
     let mut occupied = points

@@ -9,7 +9,9 @@
 //! where the direct way sorted 27 keys a cube, and the sorts were about a
 //! tenth of a reconstruction's CPU time (perf, 1M-point torus).
 
-use super::lattice::{edge_from_key, LatticeError, XY_BITS, X_SHIFT, Y_SHIFT, Z_BITS, Z_SHIFT};
+use super::lattice::{
+    edge_from_key, LatticeError, XY_BITS, XY_MIN, X_SHIFT, Y_SHIFT, Z_BITS, Z_MIN, Z_SHIFT,
+};
 use std::ops::RangeInclusive;
 
 /// The sorted set `{c + d e_axis : c in keys, d in steps}` for a sorted,
@@ -58,6 +60,11 @@ impl Field {
         ((key >> self.shift) & self.mask) as i64
     }
 
+    /// The coordinate's corner index.
+    fn index(self, key: u64) -> i64 {
+        self.get(key) + if self.axis == 2 { Z_MIN } else { XY_MIN }
+    }
+
     /// `key` moved by `d` along the field: the same key `edge_key` gives
     /// the moved corner, by arithmetic on the field alone.
     fn shifted(self, key: u64, d: i64) -> Result<u64, LatticeError> {
@@ -103,6 +110,31 @@ impl Field {
     }
 }
 
+impl Field {
+    /// [`Field::dilate_runs`]' length, clipped to the corner indices
+    /// `[lo, hi]` of this (the z) field.
+    fn count_runs(self, keys: &[u64], steps: RangeInclusive<i64>, [lo, hi]: [i64; 2]) -> u64 {
+        let mut count = 0u64;
+        // The column (the key above this field) and the highest index counted.
+        let mut last: Option<(u64, i64)> = None;
+        for &k in keys {
+            let (column, z) = (k >> (self.shift + Z_BITS), self.index(k));
+            let mut from = (z + steps.start()).max(lo);
+            let to = (z + steps.end()).min(hi);
+            let mut end = to;
+            if let Some((_, e)) = last.filter(|l| l.0 == column) {
+                from = from.max(e + 1);
+                end = end.max(e);
+            }
+            if from <= to {
+                count += (to - from + 1) as u64;
+            }
+            last = Some((column, end));
+        }
+        count
+    }
+}
+
 /// The sorted set `{c + d : c in keys, d in steps^3}`: [`dilate_axis`] along
 /// z, y, then x.
 pub fn dilate(keys: &[u64], steps: RangeInclusive<i64>) -> Result<Vec<u64>, LatticeError> {
@@ -111,6 +143,29 @@ pub fn dilate(keys: &[u64], steps: RangeInclusive<i64>) -> Result<Vec<u64>, Latt
         set = dilate_axis(&set, axis, steps.clone())?;
     }
     Ok(set)
+}
+
+/// How many corners of `dilate(keys, steps)` lie in the box `within`
+/// (inclusive corner indices per axis), without building the set: x and y
+/// are dilated and clipped to the box, then each z column's intervals are
+/// counted, clipped.
+///
+/// Why: a tile's memory need counts its band's cubes before it runs; the
+/// band itself is never used (the walk asks far fewer cubes), and building
+/// it was a tenth of an open run's CPU time (perf, 1M noisy dragon).
+pub fn dilated_count(
+    keys: &[u64],
+    steps: RangeInclusive<i64>,
+    within: &[[i64; 2]; 3],
+) -> Result<u64, LatticeError> {
+    let mut set = keys.to_vec();
+    for axis in [0, 1] {
+        set = dilate_axis(&set, axis, steps.clone())?;
+        let field = Field::of(axis)?;
+        let [lo, hi] = within[axis];
+        set.retain(|&k| (lo..=hi).contains(&field.index(k)));
+    }
+    Ok(Field::of(2)?.count_runs(&set, steps, within[2]))
 }
 
 /// Union of sorted, duplicate-free vectors, sorted and duplicate-free.
@@ -177,6 +232,39 @@ mod tests {
         keys.dedup();
         for steps in [-1..=1, 0..=1, -2..=2, 0..=0, -3..=3, 1..=2] {
             assert_eq!(dilate(&keys, steps.clone()).unwrap(), brute(&cells, steps));
+        }
+    }
+
+    #[test]
+    fn count_equals_the_set_clipped_to_a_box() {
+        let mut state = 777u64;
+        let mut next = |m: i64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as i64).rem_euclid(m) - m / 2
+        };
+        let cells: Vec<[i64; 3]> = (0..400).map(|_| [next(30), next(14), next(24)]).collect();
+        let mut keys: Vec<u64> = cells.iter().map(|&c| key(c)).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let boxes = [
+            [[-100, 100], [-100, 100], [-100, 100]],
+            [[-3, 4], [-20, 20], [0, 0]],
+            [[0, 9], [-2, 1], [-5, 7]],
+            [[5, 4], [0, 1], [0, 1]],
+        ];
+        for steps in [-1..=1, -3..=3, 0..=2] {
+            let set = dilate(&keys, steps.clone()).unwrap();
+            for within in &boxes {
+                let inside = |k: &&u64| {
+                    let (c, _) = edge_from_key(**k).unwrap();
+                    (0..3).all(|a| within[a][0] <= c[a] && c[a] <= within[a][1])
+                };
+                let brute = set.iter().filter(inside).count() as u64;
+                let got = dilated_count(&keys, steps.clone(), within).unwrap();
+                assert_eq!(got, brute, "{steps:?} {within:?}");
+            }
         }
     }
 

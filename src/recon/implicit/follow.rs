@@ -22,7 +22,9 @@
 //! by every sample-holding cube there, finds its own cubes' distances
 //! exactly as a walk over the whole lattice does.
 
-use super::cubes::{corner_key, corner_of, occupied, owns, CornerCursor, CUBES_PER_TASK};
+use super::cubes::{
+    corner_key, corner_of, cube_range, inside, occupied, owns, CornerCursor, CUBES_PER_TASK,
+};
 use super::dilate::dilate;
 use super::lattice::{in_key_range, Lattice};
 use super::refine::CornerValue;
@@ -222,28 +224,6 @@ fn merge<T: Copy>(a: &[T], b: &[T], key_of: impl Fn(&T) -> u64) -> Vec<T> {
     out.extend_from_slice(&a[i..]);
     out.extend_from_slice(&b[j..]);
     out
-}
-
-/// Index bound far beyond any key (keys hold 21 bits an axis).
-const FAR: f64 = (1u64 << 40) as f64;
-
-/// Cube index bounds (inclusive) holding every cube within `pad` cubes of
-/// one whose min corner lies in `core`: a little wider is harmless,
-/// narrower is not.
-pub(super) fn cube_range(lattice: &Lattice, core: &Aabb, pad: i64) -> [[i64; 2]; 3] {
-    let (o, c) = (lattice.origin, lattice.cell);
-    // Clamped before the cast: an untiled run's core is infinite.
-    let index = |v: f64| ((v / c).floor().clamp(-FAR, FAR)) as i64;
-    std::array::from_fn(|a| {
-        [
-            index(core.min[a] - o[a]) - pad - 1,
-            index(core.max[a] - o[a]) + pad + 1,
-        ]
-    })
-}
-
-pub(super) fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
-    (0..3).all(|a| region[a][0] <= c[a] && c[a] <= region[a][1])
 }
 
 /// Offsets at Chebyshev distance exactly `r`.

@@ -15,9 +15,11 @@
 //! volume.
 
 use super::closed::{self, Everywhere};
-use super::cubes::{corner_of, occupied, owns, CornerCursor, CUBES_PER_TASK};
-use super::dilate::dilate;
-use super::follow::{cube_range, inside, Walk, FOLLOW_STEPS};
+use super::cubes::{
+    corner_of, cube_range, inside, occupied, owned_range, CornerCursor, CUBES_PER_TASK,
+};
+use super::dilate::dilated_count;
+use super::follow::{Walk, FOLLOW_STEPS};
 use super::lattice::{edge_from_key, Lattice};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
@@ -156,9 +158,9 @@ impl TileKernel for ImplicitKernel {
     /// field meets the winding number).
     fn bytes_for(&self, tile: &TilePoints) -> Option<u64> {
         let reach = self.band + i64::from(self.everywhere.is_some());
-        let cubes = band(&self.lattice, &tile.points, &tile.core, reach).ok()?;
+        let cubes = band_size(&self.lattice, &tile.points, &tile.core, reach).ok()?;
         let n = tile.points.len() as u64;
-        Some(tile_bytes(n, cubes.len() as u64, self.bytes_per_cube))
+        Some(tile_bytes(n, cubes, self.bytes_per_cube))
     }
 
     fn bytes_to_load(&self, points: u64) -> Option<u64> {
@@ -343,24 +345,20 @@ fn usable_samples(tile: &TilePoints, islands: bool) -> Result<Usable, MissingCol
     ))
 }
 
-/// Owned cubes within `reach` cubes of a sample's cube, sorted.
-fn band(
+/// How many owned cubes lie within `reach` cubes of a sample's cube.
+fn band_size(
     lattice: &Lattice,
     points: &[DVec3],
     core: &Aabb,
     reach: i64,
-) -> Result<Vec<[i64; 3]>, KernelError> {
+) -> Result<u64, KernelError> {
     // Only sample cubes within reach of the core count (the margin holds
     // more, for the walk's steps).
     let range = cube_range(lattice, core, reach);
     let mut occupied = occupied(lattice, points)?;
     occupied.retain(|&k| inside(&range, corner_of(k)));
-    let near = dilate(&occupied, -reach..=reach).map_err(KernelError::failed)?;
-    Ok(near
-        .into_iter()
-        .map(corner_of)
-        .filter(|&c| owns(lattice, core, c))
-        .collect())
+    dilated_count(&occupied, -reach..=reach, &owned_range(lattice, core))
+        .map_err(KernelError::failed)
 }
 
 #[cfg(test)]
@@ -373,6 +371,47 @@ mod tests {
             .map(|i| DVec3::new((i % n) as f64 * step, (i / n) as f64 * step, 0.0))
             .collect();
         TilePoints::whole(points)
+    }
+
+    /// The count equals the band built and filtered by ownership, for
+    /// cores that cut the cloud, hold it whole or are unbounded.
+    #[test]
+    fn band_size_counts_the_owned_band() {
+        use super::super::dilate::dilate;
+        let lattice = Lattice::new(DVec3::new(0.3, -0.2, 0.1), 0.7).expect("lattice");
+        let mut state = 99u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let points: Vec<DVec3> = (0..3000)
+            .map(|_| {
+                let (u, v) = (next() * 6.0, next() * 6.0);
+                DVec3::new(u * 3.0, v * 2.0, (u * 0.7).sin() * 2.0 + next() * 0.3)
+            })
+            .collect();
+        let cores = [
+            Aabb::new(DVec3::new(4.0, 3.0, -1.0), DVec3::new(10.5, 8.0, 0.9)),
+            Aabb::new(DVec3::splat(-50.0), DVec3::splat(50.0)),
+            Aabb::new(DVec3::splat(f64::NEG_INFINITY), DVec3::splat(f64::INFINITY)),
+        ];
+        for core in &cores {
+            for reach in [1, 3] {
+                let range = cube_range(&lattice, core, reach);
+                let mut occ = occupied(&lattice, &points).expect("occupied");
+                occ.retain(|&k| inside(&range, corner_of(k)));
+                let brute = dilate(&occ, -reach..=reach)
+                    .expect("dilate")
+                    .into_iter()
+                    .filter(|&k| super::super::cubes::owns(&lattice, core, corner_of(k)))
+                    .count() as u64;
+                let got = band_size(&lattice, &points, core, reach).expect("count");
+                assert_eq!(got, brute, "{core:?} {reach}");
+                assert!(got > 0);
+            }
+        }
     }
 
     /// A sparse region needs nearly the band of a dense one over the same
