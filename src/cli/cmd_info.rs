@@ -288,14 +288,19 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         Some(t) => t,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    let points = if is_store(&a.input) {
-        PointStore::open_shared(&a.input)?.len()
+    // The points, and the bytes a point of the store to build takes.
+    let (points, store) = if is_store(&a.input) {
+        (PointStore::open_shared(&a.input)?.len(), 0)
     } else {
         let progress = super::progress::progress(a.quiet);
         let r = scanmesh::io::open_reader(&a.input, a.policy())?;
+        let store = scanmesh::store::store_bytes_per_point(r.info())?;
         match r.info().declared_count {
-            Some(n) => n,
-            None => inspect(&a.input, a.policy(), progress.as_ref())?.count,
+            Some(n) => (n, store),
+            None => (
+                inspect(&a.input, a.policy(), progress.as_ref())?.count,
+                store,
+            ),
         }
     };
     let cost: KernelCost = match a.command {
@@ -344,6 +349,13 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     outln!(
         "  fixed costs: {}",
         human_bytes(scanmesh::memory::plan::BASE_BYTES)
+    )?;
+    let disk = scanmesh::memory::DiskPlan::new(points, store, &cost);
+    outln!(
+        "disk at the peak: the store {}, scratch beside it {}, the output {} (about; --scratch-dir puts the first two elsewhere)",
+        human_bytes(disk.store),
+        human_bytes(disk.scratch),
+        human_bytes(disk.output)
     )?;
     Ok(())
 }

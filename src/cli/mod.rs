@@ -492,25 +492,26 @@ impl Settings {
         };
         place::check_writable_dir(&scratch_dir, "scratch")?;
         self.reclaim(&[&scratch_dir, &place::directory_of(output)]);
-        let count = if is_store(input) {
-            Some(PointStore::open(input)?.len())
+        // The points, and the bytes a point of the store to build takes.
+        let (count, store) = if is_store(input) {
+            (Some(PointStore::open(input)?.len()), 0)
         } else {
-            scanmesh::io::open_reader(input, self.read_options())
-                .with_context(|| format!("reading {}", input.display()))?
-                .info()
-                .declared_count
+            let reader = scanmesh::io::open_reader(input, self.read_options())
+                .with_context(|| format!("reading {}", input.display()))?;
+            let info = reader.info();
+            (
+                info.declared_count,
+                scanmesh::store::store_bytes_per_point(info)?,
+            )
         };
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
-            let (scratch, out) = (cost.scratch_per_point, cost.output_per_point);
+            let disk = scanmesh::memory::DiskPlan::new(n, store, cost);
             let output_dir = place::directory_of(output);
-            place::check_space(
-                &scratch_dir,
-                n.saturating_mul(scratch),
-                &output_dir,
-                n.saturating_mul(out),
-            )
-            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
+            place::check_space(&scratch_dir, disk.scratch_dir(), &output_dir, disk.output)
+                .context(
+                    "not enough free space (--scratch-dir puts the scratch files elsewhere)",
+                )?;
         }
         Ok(scratch_dir)
     }

@@ -58,7 +58,9 @@ pub struct KernelCost {
     pub resident_per_point: f64,
     /// Bytes per point of an output window (0: no input-order output).
     pub window_bytes_per_point: u64,
-    /// Scratch disk per point at the run's peak (store, columns, runs).
+    /// Scratch disk per point at the run's peak beside the store (columns,
+    /// checkpointed tiles, spills); the store's own bytes depend on the
+    /// input ([`crate::store::store_bytes_per_point`]).
     pub scratch_per_point: u64,
     /// Output file bytes per input point, roughly.
     pub output_per_point: u64,

@@ -71,10 +71,10 @@ pub fn cost() -> KernelCost {
         contracts_boundaries: false,
         resident_per_point: 0.0,
         window_bytes_per_point: 0,
-        // The store (20 B), the mesh spool and the edge uses of
+        // Beside the store: the mesh spool and the edge uses of
         // `mesh::fans` (three of 24 B per triangle); the mesh is about two
         // triangles per input point (vertices are the input points).
-        scratch_per_point: 20 + 2 * 12 + 2 * 3 * 24,
+        scratch_per_point: 2 * 12 + 2 * 3 * 24,
         output_per_point: 24 + 2 * 13,
         parallel_in_tile: false,
         margin_spacings: 0.0,

@@ -57,11 +57,32 @@ impl ImplicitParams {
     }
 }
 
-/// Mesh vertices per input point allowed for when planning the small-piece
-/// filter's page tables and the output's size: 0.64 on the 10M dragon at
-/// the default cell (3 spacings), more as the cell shrinks relative to the
-/// spacing (paper 1's cell, rho + delta, gave 0.1 to 0.17).
-const VERTICES_PER_POINT: f64 = 0.8;
+/// Mesh triangles per input point at a cell of 2.2 mean spacings, allowed
+/// for when planning the small-piece filter's page tables, the scratch
+/// disk and the output's size; a surface has about `(2.2 / cell)^2` as many
+/// at other cells. Measured (open, default cell): the 1M noisy dragon
+/// 2.38, the 1M terrain 1.77, a 110k aerial LAS (autzen) 1.96, a
+/// depth-camera pair 1.90; at 3 and 6 spacings the dragon 1.28 and 0.32
+/// (the rule gives 1.28 and 0.32). A 5.7k forest plot had 3.47: sparse
+/// scans of many small surfaces exceed it.
+const TRIANGLES_PER_POINT_AT_2_2: f64 = 2.5;
+
+/// With `--closed` an open scan (a terrain, a town) closes into a slab,
+/// top and bottom: about twice the triangles (terrain 1.91, autzen 1.93
+/// per point at 3 spacings where the open rule gives 0.95 and 1.05).
+const CLOSED_SLAB: f64 = 2.0;
+
+/// Scratch bytes per mesh triangle in the run directory: the marching
+/// cubes' checkpointed tile outputs. Measured with the run directory's
+/// size sampled every 50 ms: peak = store + 48 + 100.5 x triangles per
+/// point on the 1M dragon (open at 2.2 and 6 spacings, `--closed`), the 1M
+/// terrain and a 110k LAS, each within 3 %.
+const SCRATCH_PER_TRIANGLE: f64 = 101.0;
+/// Scratch bytes per point beside the store during marching cubes (the
+/// normals and flags columns and the normals' checkpointed tiles).
+const SCRATCH_BEFORE_TRIANGLES: u64 = 48;
+/// Output bytes per triangle: half a vertex (24 B) and a face (13 B).
+const OUTPUT_PER_TRIANGLE: f64 = 25.0;
 
 /// Peak bytes of a band cube ([`super::kernel`]'s measurements).
 fn bytes_per_cube(closed: bool) -> u64 {
@@ -73,6 +94,14 @@ fn bytes_per_cube(closed: bool) -> u64 {
 
 impl ImplicitParams {
     /// The lattice cell in mean spacings the plan assumes (the MLS field's).
+    /// Triangles per input point to plan for, at the default cell (a
+    /// `--cell` given in the input's units is not known in spacings before
+    /// the store is built; the plan then assumes the default).
+    fn triangles_per_point(&self) -> f64 {
+        let slab = if self.closed { CLOSED_SLAB } else { 1.0 };
+        TRIANGLES_PER_POINT_AT_2_2 * slab * (2.2 / self.cell_spacings()).powi(2)
+    }
+
     fn cell_spacings(&self) -> f64 {
         match self.closed {
             true => CLOSED_MLS_CELL_SPACINGS,
@@ -86,6 +115,7 @@ impl ImplicitParams {
     /// fixed 16 MiB, within the fixed costs: the read chunk and the
     /// histogram are gone by then).
     pub fn cost(&self) -> KernelCost {
+        let triangles = self.triangles_per_point();
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
         let normals = self.normals.cost();
         let marching = super::kernel::planned_bytes_per_loaded_point(
@@ -95,12 +125,14 @@ impl ImplicitParams {
         KernelCost {
             bytes_per_point: normals.bytes_per_point.max(marching),
             resident_per_point: if pieces {
-                VERTICES_PER_POINT * crate::mesh::pieces::BYTES_PER_VERTEX
+                triangles / 2.0 * crate::mesh::pieces::BYTES_PER_VERTEX
             } else {
                 0.0
             },
-            // Vertices (24 B) and faces (13 B, two per vertex) of the mesh.
-            output_per_point: (VERTICES_PER_POINT * 50.0) as u64,
+            scratch_per_point: normals
+                .scratch_per_point
+                .max(SCRATCH_BEFORE_TRIANGLES + (triangles * SCRATCH_PER_TRIANGLE) as u64),
+            output_per_point: (triangles * OUTPUT_PER_TRIANGLE).ceil() as u64,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: match self.closed {

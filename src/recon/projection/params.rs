@@ -130,8 +130,8 @@ impl ProjectionParams {
             // lattice job, a fraction of a byte per point.
             resident_per_point: 0.0,
             window_bytes_per_point: 0,
-            // The store (20) and the triangle spool (16 B, two per point).
-            scratch_per_point: 20 + 2 * 16,
+            // Beside the store: the triangle spool (16 B, two per point).
+            scratch_per_point: 2 * 16,
             // Vertices (3 f64) and faces (13 B, two per point).
             output_per_point: 24 + 2 * 13,
             parallel_in_tile: true,

@@ -1,0 +1,75 @@
+//! What a store holds on disk per point, known from the input's header
+//! before it is built: the first term of a run's disk plan (the stages'
+//! own scratch comes on top, [`crate::memory::plan::KernelCost`]).
+//!
+//! The columns: `xyz.f32` (12 B) and `index.u64` (8 B) in tile order, the
+//! exact coordinates in input order (`xyz.input`: 24 B as f64, 12 B on a LAS
+//! grid), the input's attributes (intensity, colour, ...), a LAS input's
+//! whole records (`las.input`), and the tile bounds (`blocks.f32`, 24 B per
+//! 512 points).
+
+use super::{Coordinates, StoreError, BLOCK};
+use crate::io::las_file::LasSource;
+use crate::io::{Format, SourceInfo};
+
+/// Bytes per point of the tile-ordered columns every store has.
+const TILE_COLUMNS: u64 = 12 + 8;
+
+/// Disk bytes per point of the store an input of this description builds.
+pub fn store_bytes_per_point(info: &SourceInfo) -> Result<u64, StoreError> {
+    let exact = Coordinates::for_input(info.las_transform).item_bytes() as u64;
+    let attributes = info.attributes.bytes_per_point() as u64;
+    let records = match info.format {
+        Format::Las | Format::Laz => u64::from(LasSource::read(&info.path)?.record_len()),
+        _ => 0,
+    };
+    Ok(TILE_COLUMNS + exact + attributes + records + 24u64.div_ceil(BLOCK))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::memory::MemoryReader;
+    use crate::io::{open_reader, PointReader, ReadOptions};
+    use crate::progress::NoProgress;
+    use crate::store::{build_store, BuildOptions};
+    use glam::DVec3;
+    use std::path::Path;
+
+    fn dir_bytes(dir: &Path) -> u64 {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().metadata().unwrap().len())
+            .sum()
+    }
+
+    /// The estimate is the store's size per point, to a few bytes of
+    /// manifest and LAS frame, for generated points and for real LAS and
+    /// LAZ files.
+    #[test]
+    fn the_estimate_is_the_built_stores_size() {
+        let tmp = tempfile::tempdir().unwrap();
+        let points: Vec<DVec3> = (0..20_000)
+            .map(|i| DVec3::new((i % 141) as f64, (i / 141) as f64, (i % 7) as f64 * 0.1))
+            .collect();
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+        let mut readers: Vec<Box<dyn PointReader>> =
+            vec![Box::new(MemoryReader::new("cloud", points, None))];
+        for name in ["autzen_trim_cut.laz", "32-1-472-150-76.laz", "autzen.las"] {
+            readers.push(open_reader(&fixtures.join(name), ReadOptions::default()).unwrap());
+        }
+        for (i, mut reader) in readers.into_iter().enumerate() {
+            let estimate = store_bytes_per_point(reader.info()).unwrap();
+            let name = reader.info().path.display().to_string();
+            let dir = tmp.path().join(format!("{i}.store"));
+            let store =
+                build_store(reader.as_mut(), &dir, &BuildOptions::default(), &NoProgress).unwrap();
+            let per_point = dir_bytes(&dir) as f64 / store.len() as f64;
+            let excess = per_point - estimate as f64;
+            assert!(
+                (-1.0..=1.0 + 8192.0 / store.len() as f64).contains(&excess),
+                "{name}: {per_point:.1} B a point built, {estimate} estimated"
+            );
+        }
+    }
+}

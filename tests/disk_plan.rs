@@ -1,0 +1,133 @@
+//! The disk plan (`info --plan`, and the free-space check before a run)
+//! against the disk runs use: the run directory's size sampled every few
+//! milliseconds while `normals` and `reconstruct` (open and `--closed`) run
+//! on generated scans of two shapes and on a real aerial LAZ. The peak must
+//! never pass the plan, and the plan must not be so loose that a full disk
+//! refuses runs that fit.
+
+use scanmesh::memory::DiskPlan;
+use scanmesh::normals::NormalParams;
+use scanmesh::recon::implicit::reconstruct::ImplicitParams;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// Bytes of the files under `dir` (0 while it does not exist).
+fn tree_bytes(dir: &Path) -> u64 {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .flatten()
+        .map(|e| match e.metadata() {
+            Ok(m) if m.is_dir() => tree_bytes(&e.path()),
+            Ok(m) => m.len(),
+            Err(_) => 0,
+        })
+        .sum()
+}
+
+/// Runs `scanmesh args` and returns the largest size `dir` reached.
+fn peak_while_running(args: &[String], dir: &Path) -> u64 {
+    let done = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let sampler = s.spawn(|| {
+            let mut peak = 0;
+            while !done.load(Ordering::Relaxed) {
+                peak = peak.max(tree_bytes(dir));
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            peak
+        });
+        let out = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+            .args(args)
+            .output()
+            .expect("run scanmesh");
+        done.store(true, Ordering::Relaxed);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        sampler.join().expect("sampler")
+    })
+}
+
+/// Bytes whatever the points: headers, manifests, run records.
+const FIXED: u64 = 1 << 20;
+
+fn scangen(shape: &str, n: usize, out: &Path) {
+    let status = Command::new(env!("CARGO_BIN_EXE_scangen"))
+        .args([shape, "-n", &n.to_string(), "--noise-spacing", "0.1", "-o"])
+        .arg(out)
+        .status()
+        .expect("run scangen");
+    assert!(status.success());
+}
+
+#[test]
+fn runs_stay_within_their_disk_plan() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let mut inputs: Vec<PathBuf> = Vec::new();
+    for shape in ["terrain", "torus"] {
+        let path = tmp.path().join(format!("{shape}.ply"));
+        scangen(shape, 120_000, &path);
+        inputs.push(path);
+    }
+    inputs
+        .push(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las/autzen_trim_cut.laz"));
+    let closed = |closed| {
+        ImplicitParams {
+            closed,
+            ..ImplicitParams::default()
+        }
+        .cost()
+    };
+    let runs = [
+        ("normals", None, NormalParams::default().cost()),
+        ("reconstruct", None, closed(false)),
+        ("reconstruct", Some("--closed"), closed(true)),
+    ];
+    for input in &inputs {
+        let reader =
+            scanmesh::io::open_reader(input, scanmesh::io::ReadOptions::default()).expect("open");
+        let info = reader.info();
+        let points = info.declared_count.expect("a declared count");
+        let store = scanmesh::store::store_bytes_per_point(info).expect("store bytes");
+        for (command, flag, cost) in &runs {
+            let run_dir = tmp.path().join("run");
+            let out = tmp.path().join("out.ply");
+            let mut args: Vec<String> = vec![
+                command.to_string(),
+                input.display().to_string(),
+                "-q".into(),
+                "-o".into(),
+                out.display().to_string(),
+                "--run-dir".into(),
+                run_dir.display().to_string(),
+            ];
+            args.extend(flag.map(str::to_string));
+            let peak = peak_while_running(&args, &run_dir);
+            let plan = DiskPlan::new(points, store, cost).scratch_dir();
+            let what = format!("{} {command} {flag:?}", input.display());
+            eprintln!("{what}: peak {peak} B, plan {plan} B");
+            assert!(
+                peak <= plan + FIXED,
+                "{what}: peak {peak} B over the plan's {plan} B"
+            );
+            assert!(
+                4 * peak >= plan,
+                "{what}: peak {peak} B, plan {plan} B: too loose"
+            );
+            let written = std::fs::metadata(&out).expect("output").len();
+            let planned = DiskPlan::new(points, store, cost).output;
+            assert!(
+                written <= planned + FIXED && 4 * written >= planned,
+                "{what}: output {written} B, planned {planned} B"
+            );
+            std::fs::remove_dir_all(&run_dir).ok();
+            std::fs::remove_file(&out).ok();
+        }
+    }
+}
