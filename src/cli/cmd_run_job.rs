@@ -95,7 +95,7 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     // Refused here, before the job is logged as started: --threads from
     // the script, --mem from the recorded command, against this node.
     common.mem_and_threads()?;
-    super::rundir::run_in_dir(command, args[1..].to_vec())
+    super::run_in_dir::run_in_dir(command, args[1..].to_vec())
 }
 
 fn parse_range(s: &str) -> Result<TileSet, String> {

@@ -22,6 +22,7 @@ mod hints;
 mod liveness;
 mod progress;
 mod report;
+mod run_in_dir;
 mod rundir;
 mod stdout;
 
@@ -476,7 +477,7 @@ impl Settings {
         if self.job == Job::Whole {
             checkpoints.remove_leftovers()?;
         }
-        rundir::watch(&checkpoints);
+        run_in_dir::watch(&checkpoints);
         store.keep_tiles(checkpoints);
         self.prepare(Workspace::kept(store), cost)
     }
@@ -591,7 +592,7 @@ pub fn run() -> Result<()> {
         .and_then(|()| match cli.command {
             Command::RunJob(a) => cmd_run_job::run(a),
             Command::Status(a) => cmd_status::run(a),
-            command => rundir::run_in_dir(command, std::env::args().skip(1).collect()),
+            command => run_in_dir::run_in_dir(command, std::env::args().skip(1).collect()),
         })
         .map_err(hints::with_flag_hints)
         .and_then(|()| within_the_promise(promised));
