@@ -17,6 +17,7 @@
 //! counts do, and a LAZ whose chunks hold more points than the header
 //! declares is refused the same way.
 
+use super::las_file::las_error;
 use super::policy::Admitter;
 use super::source::BUF_CAPACITY;
 use super::{
@@ -65,16 +66,6 @@ pub struct LasReader {
     next: u64,
     /// Bytes of one point record.
     record_len: usize,
-}
-
-pub(crate) fn las_error(path: &Path, e: las::Error) -> IoError {
-    match e {
-        las::Error::Io(e) => IoError::os(path, e),
-        e => IoError::Las {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        },
-    }
 }
 
 /// The header's box, when it is one (finite, `min <= max`).

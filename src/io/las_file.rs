@@ -38,6 +38,18 @@ pub(crate) const EXTRA_BYTES: RecordId = ("LASF_Spec", 4);
 /// User id of the GeoTIFF keys and WKT records.
 const PROJECTION: &str = "LASF_Projection";
 
+/// The `las` crate's error `e` about the file `path`, as an [`IoError`]
+/// (every LAS reader and writer reports through this).
+pub(crate) fn las_error(path: &Path, e: las::Error) -> IoError {
+    match e {
+        las::Error::Io(e) => IoError::os(path, e),
+        e => IoError::Las {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        },
+    }
+}
+
 /// The identifying fields every VLR and EVLR header has, as the file holds
 /// them (trailing bytes after a name's NUL included).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -212,8 +224,8 @@ impl LasSource {
         let os = |e| IoError::os(path, e);
         let mut file = File::open(path).map_err(os)?;
         let len = file.metadata().map_err(os)?.len();
-        let header = raw::Header::read_from(BufReader::new(&mut file))
-            .map_err(|e| super::las::las_error(path, e))?;
+        let header =
+            raw::Header::read_from(BufReader::new(&mut file)).map_err(|e| las_error(path, e))?;
         let head_len = u64::from(header.offset_to_point_data);
         if head_len > len || head_len < u64::from(header.header_size) {
             return Err(bad(
@@ -239,8 +251,7 @@ impl LasSource {
     /// (`head`) and from its first EVLR on (`tail`).
     pub(crate) fn from_parts(head_path: &Path, tail_path: &Path) -> Result<Self, IoError> {
         let head = std::fs::read(head_path).map_err(|e| IoError::os(head_path, e))?;
-        let header =
-            raw::Header::read_from(&head[..]).map_err(|e| super::las::las_error(head_path, e))?;
+        let header = raw::Header::read_from(&head[..]).map_err(|e| las_error(head_path, e))?;
         let tail = tail_start(&header).map(|start| TailFile {
             path: tail_path.to_path_buf(),
             offset: 0,

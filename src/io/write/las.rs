@@ -25,8 +25,8 @@
 
 use super::{check_chunk, open_output};
 use crate::geom::Aabb;
-use crate::io::las::las_error;
 use crate::io::las_extra::{plan, ExtraPlan};
+use crate::io::las_file::las_error;
 use crate::io::las_file::{Frame, RecordHeader, Stats, Vlr, LASZIP};
 use crate::io::{
     AtomicFile, Attribute, AttributeMaxima, AttributeValues, IoError, LasSource, LasTransform,
