@@ -56,7 +56,7 @@
 
 use super::paged::{Element, ExternalSets, Paged};
 use super::runs::{Order, RunSizes, SortedRuns};
-use super::write::scratch_beside;
+use super::scratch::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::IoError;
 use glam::DVec3;

@@ -20,6 +20,7 @@ mod paged;
 pub(crate) mod pieces;
 pub(crate) mod quality;
 pub(crate) mod runs;
+pub(crate) mod scratch;
 pub(crate) mod self_intersect;
 pub mod shapes;
 pub(crate) mod wound;

@@ -19,7 +19,8 @@
 //! written: a `--closed` run promises it ([`super::Promise::CLOSED`]).
 
 use super::paged::{ExternalSets, PagedU32, TABLE_BYTES_PER_ELEMENT};
-use super::write::{scratch_beside, Written};
+use super::scratch::scratch_beside;
+use super::write::Written;
 use super::{MeshError, MeshWriter};
 use crate::io::IoError;
 use glam::DVec3;

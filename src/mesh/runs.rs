@@ -19,7 +19,7 @@
 //! (twice while a round of merges runs).
 
 use super::paged::Element;
-use super::write::scratch_beside;
+use super::scratch::scratch_beside;
 use rayon::slice::ParallelSliceMut;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;

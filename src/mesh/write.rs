@@ -20,12 +20,13 @@
 
 use super::audit::{incomplete_path, Auditor, MeshAudit, Promise, Sizes};
 use super::error::non_finite_coordinate;
+use super::scratch::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::{AtomicFile, IoError};
 use glam::DVec3;
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The mesh file formats [`MeshWriter`] writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -319,16 +320,6 @@ impl MeshWriter {
             }
         }
     }
-}
-
-/// An unnamed scratch file in the directory of `path` (same file system,
-/// removed by the OS when closed or on a crash).
-pub(crate) fn scratch_beside(path: &Path) -> std::io::Result<File> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    tempfile::tempfile_in(&dir)
 }
 
 /// Writes the header; for PLY returns where the two counts sit.
