@@ -1,6 +1,6 @@
-//! The neighbourhood output files, written one input-order window at a time
-//! under a temporary name ([`AtomicFile`]) and renamed into place only when
-//! complete.
+//! The neighbourhood output files, written one input-order window
+//! ([`WindowLists`]) at a time under a temporary name ([`AtomicFile`]) and
+//! renamed into place only when complete.
 //!
 //! Binary CSR (`--format bin`), all integers little-endian:
 //!
@@ -22,7 +22,6 @@
 //! Text (`--format txt`): one line per point in input order, its id then its
 //! neighbours' ids, separated by single spaces.
 
-use super::spill::WindowLists;
 use crate::io::{AtomicFile, IoError};
 use std::io::Write;
 use std::os::unix::fs::FileExt;
@@ -88,6 +87,25 @@ pub enum OutputFormat {
     Csr,
     /// One text line per point.
     Text,
+}
+
+/// One output window's lists: `neighbours[offsets[i]..offsets[i + 1]]` is
+/// the list of point `first + i`.
+#[derive(Debug, Default)]
+pub struct WindowLists {
+    pub first: u64,
+    pub offsets: Vec<u64>,
+    pub neighbours: Vec<u64>,
+}
+
+impl WindowLists {
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    pub fn list(&self, i: usize) -> &[u64] {
+        &self.neighbours[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
 }
 
 /// Writes windows of lists, in input order, to a temporary file.

@@ -38,7 +38,8 @@ use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions
 use crate::spatial::topological::TopoParams;
 use crate::spatial::KnnBackend;
 use crate::store::{PointStore, StoreError};
-use spill::{Spill, WindowLists, Windows};
+use csr::WindowLists;
+use spill::{Spill, Windows};
 use std::path::Path;
 
 /// Largest k accepted: neighbourhoods are for local geometry, and a larger k

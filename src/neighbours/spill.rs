@@ -14,7 +14,7 @@
 //! positioned reads. The output pass reads one window at a time: memory is
 //! one window's lists, whatever the point count.
 
-use super::csr::IdWidth;
+use super::csr::{IdWidth, WindowLists};
 use super::kernel::NeighboursTile;
 use super::NeighboursError;
 use crate::io::scratch::ScratchFile;
@@ -148,25 +148,6 @@ impl Spill {
             raw: Vec::new(),
             slots: Vec::new(),
         })
-    }
-}
-
-/// One output window's lists: `neighbours[offsets[i]..offsets[i + 1]]` is
-/// the list of point `first + i`.
-#[derive(Debug, Default)]
-pub struct WindowLists {
-    pub first: u64,
-    pub offsets: Vec<u64>,
-    pub neighbours: Vec<u64>,
-}
-
-impl WindowLists {
-    pub fn len(&self) -> usize {
-        self.offsets.len().saturating_sub(1)
-    }
-
-    pub fn list(&self, i: usize) -> &[u64] {
-        &self.neighbours[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 }
 
