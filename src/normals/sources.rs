@@ -41,6 +41,7 @@ mod pairs;
 mod propagate;
 mod seeds;
 mod stacks;
+mod state;
 mod tiled;
 
 pub use hood::Neighbourhood;
@@ -53,7 +54,8 @@ use crate::spatial::IndexError;
 use glam::DVec3;
 use graph::Graph;
 use pairs::PairRule;
-use propagate::{propagate, Cloud, Seed};
+use propagate::{propagate, Seed};
+use state::Cloud;
 
 /// The paper's propagation threshold.
 pub const DEFAULT_TAU: f64 = 0.6;

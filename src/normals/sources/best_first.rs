@@ -7,7 +7,7 @@
 //! flips are the parities along the minimum spanning forest of the pairs
 //! ([`Edge`](crate::normals::forest::Edge) order).
 
-use super::propagate::State;
+use super::state::State;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 

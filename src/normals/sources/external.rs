@@ -8,7 +8,7 @@
 //! point is found when the tile is read, and found again in the write pass;
 //! only components that may span tiles keep theirs in memory.
 
-use super::propagate::faces_away;
+use super::state::faces_away;
 use super::Extreme;
 use crate::normals::labels::ForestLabels;
 use crate::normals::orient::rewrite_signs;

@@ -13,7 +13,7 @@
 //! `w < tau` would adjust nobody, so the result is the paper's.
 
 use super::pairs::propagates;
-use super::propagate::State;
+use super::state::State;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 

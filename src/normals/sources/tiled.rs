@@ -23,7 +23,7 @@
 
 use super::external::orient_external;
 use super::kernel::SourcesKernel;
-use super::propagate::faces_away;
+use super::state::faces_away;
 use super::{Extreme, Extremes, Neighbourhood, Order, SourceParams, Sources, SourcesError};
 use crate::normals::orient::anchors::Anchoring;
 use crate::normals::orient::{rewrite_signs, BYTES_PER_POINT};
