@@ -30,6 +30,17 @@ use crate::store::PointStore;
 use crate::tiling::{Beyond, TilePoints};
 use glam::DVec3;
 
+/// Kernel bytes per loaded point, for tile sizing: the triangulation's
+/// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
+/// edge index, the tile's own columns; rounded up from the 800 B the 1M
+/// untiled run shows, for the points a tile waiting for memory holds, the
+/// seam side, and the store points the proofs read beyond the tile
+/// (`tiling::Beyond`: 24 B each, at most a shell of twice the margin).
+/// The 3M noisy dragon under `--mem 768MiB` still peaks at 867 MiB: freed
+/// tile memory stays in the workers' allocator arenas (ARCHITECTURE.md,
+/// memory model).
+pub(crate) const BYTES_PER_POINT: u64 = 1000;
+
 /// One tile's share of the surface.
 #[derive(Debug, Default)]
 pub struct DelaunayTile {
@@ -72,7 +83,7 @@ impl TileKernel for DelaunayKernel<'_> {
     /// The doubt's depth varies by tile (a reload may load six times the
     /// core), so reloads wait for memory (`pipeline::shares`).
     fn bytes_per_loaded_point(&self) -> Option<u64> {
-        Some(super::reconstruct::BYTES_PER_POINT)
+        Some(BYTES_PER_POINT)
     }
 
     fn run(&self, tile: &TilePoints) -> Result<DelaunayTile, KernelError> {

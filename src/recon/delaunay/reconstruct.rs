@@ -22,7 +22,7 @@
 //! disk.
 
 use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
-use super::kernel::{DelaunayKernel, DelaunayTile};
+use super::kernel::{DelaunayKernel, DelaunayTile, BYTES_PER_POINT};
 use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
 use crate::mesh::fans::{Fans, Mended};
@@ -43,16 +43,6 @@ use std::path::Path;
 /// for 1.25 times that when short. At 90 the 1M dragon reloaded 5 of 8
 /// tiles (44 s); at 110, 1 (32 s).
 const MARGIN_SPACINGS: f64 = 110.0;
-
-/// Kernel bytes per loaded point, for tile sizing: the triangulation's
-/// ~265 B (measured on the 1M dragon), two rounds of fans, the deletion's
-/// edge index, the tile's own columns; rounded up from the 800 B the 1M
-/// untiled run shows, for the points a tile waiting for memory holds, the
-/// seam side, and the store points the proofs read beyond the tile
-/// (`tiling::Beyond`: 24 B each, at most a shell of twice the margin). The 3M noisy dragon under `--mem 768MiB` still peaks at
-/// 867 MiB: freed tile memory stays in the workers' allocator arenas
-/// (ARCHITECTURE.md, memory model).
-pub(crate) const BYTES_PER_POINT: u64 = 1000;
 
 /// Loaded points per core point a tile's first load holds (measured on
 /// the 3M noisy dragon with 94k-point cores: 1.6 to 2.6); the plan sizes
