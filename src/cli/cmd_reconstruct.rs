@@ -5,10 +5,10 @@
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::mesh::MeshFormat;
+use scanmesh::recon::implicit::field::Field;
 use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport, ReconError,
 };
-use scanmesh::recon::implicit::sdf::Field;
 use scanmesh::recon::projection::ProjectionParams;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -19,11 +19,12 @@ use super::cubes::{
     corner_of, cube_range, inside, occupied, owned_range, CornerCursor, CUBES_PER_TASK,
 };
 use super::dilate::dilated_count;
+use super::field::Field;
 use super::follow::{Walk, FOLLOW_STEPS};
 use super::lattice::{edge_from_key, Lattice};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
-use super::sdf::{Corner, Field, Known, Samples};
+use super::sdf::{Corner, Known, Samples};
 use crate::geom::Aabb;
 use crate::normals::{FLAG_DEGENERATE, FLAG_UNORIENTED};
 use crate::pipeline::{KernelError, TileKernel};

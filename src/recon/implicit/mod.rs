@@ -11,6 +11,7 @@ mod closed_tile;
 pub(crate) mod cover;
 pub(crate) mod cubes;
 pub(crate) mod dilate;
+pub mod field;
 pub(crate) mod follow;
 pub(crate) mod kernel;
 pub mod lattice;

@@ -7,10 +7,10 @@
 //! writer's audit checks it.
 
 use super::closed::{self, Everywhere};
+use super::field::Field;
 use super::follow::FOLLOW_STEPS;
 use super::kernel::ImplicitKernel;
 use super::lattice::{Lattice, LatticeError};
-use super::sdf::Field;
 use super::stitch::Stitcher;
 use super::winding::cells::gather_store;
 use crate::mesh::{

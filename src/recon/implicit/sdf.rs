@@ -86,35 +86,6 @@ pub(crate) const CLOSED_PLANES: usize = 64;
 /// farthest of the [`CLOSED_PLANES`] samples.
 const CLOSED_WIDTH: f64 = 0.8;
 
-/// Which signed distance the corners and vertices take.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Field {
-    /// The moving-least-squares average of nearby planes (`super::mls`),
-    /// vertices moved onto its zero set along their lattice edges.
-    #[default]
-    Mls,
-    /// Paper 1 section 2.5: the nearest sample's plane (with `--closed`,
-    /// `CLOSED_PLANES` averaged), vertices linearly interpolated.
-    Paper1,
-}
-
-impl Field {
-    /// The field's value at lattice corner `p` (see [`signed_distance`]).
-    pub(crate) fn corner(
-        self,
-        s: &Samples,
-        tile: &TilePoints,
-        p: DVec3,
-        limit: f64,
-        nbr: &mut Vec<Neighbour>,
-    ) -> Corner {
-        match self {
-            Field::Mls => super::mls::mls_corner(s, tile, p, limit, nbr),
-            Field::Paper1 => signed_distance(s, tile, p, limit, nbr),
-        }
-    }
-}
-
 /// Evaluates `f` at `p`; `limit` is `rho + delta` (infinite for `--closed`).
 ///
 /// The nearest sample's plane is tried first, from a single-nearest query;
