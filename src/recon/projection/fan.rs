@@ -34,11 +34,14 @@
 
 use super::cloud::{Cloud, Neighbourhoods};
 use super::frame::{arcs_overlap, orient, strictly_inside};
-use super::holes::HOLE_MAX_ANGLE_COS;
 use super::star::{Arc, Limits, Star};
 use super::surface::{State, Surface, NONE};
 use crate::mesh::clearance::meet_within;
 use glam::DVec2;
+
+/// Largest corner angle of a triangle closing a small hole (`holes`): 179
+/// degrees.
+pub const HOLE_MAX_ANGLE_COS: f64 = -0.99985;
 
 /// A walk's current edge end.
 #[derive(Clone, Copy, Debug)]

@@ -7,7 +7,7 @@
 //! vertices as candidates.
 
 use super::cloud::{Cloud, Neighbourhoods};
-use super::fan::meets_nearby;
+use super::fan::{meets_nearby, HOLE_MAX_ANGLE_COS};
 use super::frame::pseudo_angle;
 use super::star::{Local, Star};
 use super::surface::{State, Surface};
@@ -15,9 +15,6 @@ use super::surface::{State, Surface};
 /// Longest hole (in edges) closed from one of its vertices whatever the
 /// reach of its neighbour list.
 pub const SMALL_HOLE: usize = 6;
-
-/// Largest corner angle of a triangle closing a small hole: 179 degrees.
-pub const HOLE_MAX_ANGLE_COS: f64 = -0.99985;
 
 /// The other boundary neighbour of `y` (not `prev`), when `y` has exactly
 /// two boundary edges.
