@@ -28,6 +28,7 @@ pub(crate) mod lock;
 pub mod manifest;
 mod reorder;
 pub(crate) mod sampling;
+mod slots;
 mod sort;
 mod source;
 pub mod spacing;

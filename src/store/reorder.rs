@@ -12,7 +12,7 @@
 //! threads flush them; each one names its slot, so the output does not
 //! depend on that order.
 
-use super::export::{Columns, Slots};
+use super::slots::{Columns, Slots};
 use super::{PointStore, StoreError, TileEntry};
 use crate::io::scratch::ScratchFile;
 use rayon::prelude::*;
