@@ -2,7 +2,8 @@
 //! through a [`super::MeshWriter`], in memory that does not grow with the
 //! mesh. This module owns the report ([`MeshAudit`]), what a run promises
 //! of its mesh ([`Promise`]) and how a promise fails ([`Failure`]), and the
-//! streaming counter the writer feeds (`Auditor`).
+//! streaming counter the writer feeds (`Auditor`); a mesh in memory is fed
+//! to it by `audit_mesh`.
 //!
 //! Counted, with [`super::quality`]'s definitions (the triangles with three
 //! distinct indices take part; a triangle with a repeated index is counted
@@ -57,8 +58,6 @@
 use super::paged::{Element, ExternalSets, Paged};
 use super::runs::{Order, RunSizes, SortedRuns};
 use super::scratch::scratch_beside;
-use super::{Mesh, MeshError};
-use crate::io::IoError;
 use glam::DVec3;
 use std::fmt;
 use std::fs::File;
@@ -111,7 +110,7 @@ pub struct MeshAudit {
 
 /// What a run promises of the mesh it writes; the writer checks it at the
 /// end and, when it is broken, writes the mesh under an incomplete name
-/// ([`incomplete_path`]) and fails with [`MeshError::PromiseBroken`].
+/// ([`incomplete_path`]) and fails with [`super::MeshError::PromiseBroken`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Promise {
     /// No boundary edge.
@@ -337,32 +336,6 @@ pub fn incomplete_path(path: &Path) -> PathBuf {
         name.push(ext);
     }
     path.with_file_name(name)
-}
-
-/// Audits `mesh` (validated first), with its scratch files in
-/// `scratch_dir`.
-pub fn audit_mesh(mesh: &Mesh, scratch_dir: &Path) -> Result<MeshAudit, MeshError> {
-    audit_mesh_sized(mesh, scratch_dir, Sizes::DEFAULT)
-}
-
-/// [`audit_mesh`] with the buffers of `sizes`.
-pub(crate) fn audit_mesh_sized(
-    mesh: &Mesh,
-    scratch_dir: &Path,
-    sizes: Sizes,
-) -> Result<MeshAudit, MeshError> {
-    mesh.validate()?;
-    let beside = scratch_dir.join("audit");
-    let os = |e| MeshError::Io(IoError::os(scratch_dir, e));
-    let mut auditor = Auditor::new(&beside, sizes).map_err(os)?;
-    const BATCH: usize = 1 << 16;
-    for chunk in mesh.vertices.chunks(BATCH) {
-        auditor.add_vertices(chunk).map_err(os)?;
-    }
-    for chunk in mesh.triangles.chunks(BATCH) {
-        auditor.add_triangles(chunk).map_err(os)?;
-    }
-    auditor.finish().map_err(os)
 }
 
 /// The audit's buffer sizes (tests shrink them to force many runs).

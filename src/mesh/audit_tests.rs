@@ -3,11 +3,13 @@
 //! buffers so small that hundreds of runs are merged in rounds.
 
 use super::*;
+use crate::mesh::audit_mesh::audit_mesh_sized;
 use crate::mesh::quality::quality;
 use crate::mesh::shapes::{grid, icosphere, torus};
 use crate::mesh::union_find::DisjointSets;
 use crate::mesh::write::MeshWriter;
 use crate::mesh::MeshFormat;
+use crate::mesh::{Mesh, MeshError};
 use crate::synth::Rng;
 use glam::DVec2;
 

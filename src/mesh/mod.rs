@@ -13,6 +13,7 @@
 
 pub mod angles;
 pub(crate) mod audit;
+pub(crate) mod audit_mesh;
 pub mod distance;
 pub(crate) mod error;
 pub(crate) mod fans;
@@ -36,7 +37,8 @@ mod topology;
 mod union_find;
 
 pub use angles::{angle_report, AngleReport};
-pub use audit::{audit_mesh, incomplete_path, Failure, MeshAudit, Promise};
+pub use audit::{incomplete_path, Failure, MeshAudit, Promise};
+pub use audit_mesh::audit_mesh;
 pub use distance::{
     compare, compare_with, point_to_mesh_distances, CompareOptions, DistanceReport, Reference,
 };

@@ -113,7 +113,7 @@ impl SameWay {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::audit::audit_mesh;
+    use crate::mesh::audit_mesh::audit_mesh;
     use crate::mesh::shapes::icosphere;
     use crate::mesh::Mesh;
     use crate::synth::Rng;
