@@ -348,7 +348,7 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     }
     outln!(
         "  fixed costs: {}",
-        human_bytes(scanmesh::memory::plan::BASE_BYTES)
+        human_bytes(scanmesh::memory::BASE_BYTES)
     )?;
     let disk = scanmesh::memory::DiskPlan::new(points, store, &cost);
     outln!(

@@ -10,8 +10,11 @@ pub struct MemoryBudget {
     pub threads: usize,
 }
 
-use super::plan::BASE_BYTES;
 use std::path::Path;
+
+/// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O
+/// buffers (the read chunk, the merge buffers of the edge runs).
+pub const BASE_BYTES: u64 = 48 << 20;
 
 impl MemoryBudget {
     /// A budget of `bytes` for `threads` workers (0 threads counts as 1).

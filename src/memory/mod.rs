@@ -1,12 +1,12 @@
 //! The memory promise (`--mem`): the budget, the plan that derives every
 //! size a run uses from it and from what a kernel declares it costs, the
-//! disk the same costs need, and the process's measured peak. A bottom layer: it knows no store, tile or
-//! kernel, only numbers.
+//! disk the same costs need, and the process's measured peak. A bottom
+//! layer: it knows no store, tile or kernel, only numbers.
 
 mod budget;
 mod disk;
 pub mod plan;
 
-pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget};
+pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget, BASE_BYTES};
 pub use disk::DiskPlan;
 pub use plan::{BudgetError, KernelCost, MemoryPlan};

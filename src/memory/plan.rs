@@ -20,11 +20,9 @@
 //!   `BYTES_PER_NODE` each;
 //! - export: a window of `window_points` input-order records.
 
+use super::budget::BASE_BYTES;
 use super::MemoryBudget;
 
-/// Bytes that are not tiles: binary, thread stacks, allocator slack, I/O
-/// buffers (the read chunk, the merge buffers of the edge runs).
-pub const BASE_BYTES: u64 = 48 << 20;
 /// Fewest core points a tile may hold: below this the margins (a few
 /// neighbourhood radii on every side) outweigh the core.
 pub const MIN_TILE_POINTS: u64 = 8192;
