@@ -352,10 +352,11 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
     )?;
     let disk = scanmesh::memory::DiskPlan::new(points, store, &cost);
     outln!(
-        "disk at the peak: the store {}, scratch beside it {}, the output {} (about; --scratch-dir puts the first two elsewhere)",
+        "disk at the peak: the store {}, scratch beside it {}, the output {} and scratch beside that {} (about; --scratch-dir puts the first two elsewhere)",
         human_bytes(disk.store),
         human_bytes(disk.scratch),
-        human_bytes(disk.output)
+        human_bytes(disk.output),
+        human_bytes(disk.beside_output)
     )?;
     Ok(())
 }

@@ -509,10 +509,13 @@ impl Settings {
         if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
             let disk = scanmesh::memory::DiskPlan::new(n, store, cost);
             let output_dir = place::directory_of(output);
-            place::check_space(&scratch_dir, disk.scratch_dir(), &output_dir, disk.output)
-                .context(
-                    "not enough free space (--scratch-dir puts the scratch files elsewhere)",
-                )?;
+            place::check_space(
+                &scratch_dir,
+                disk.scratch_dir(),
+                &output_dir,
+                disk.output_dir(),
+            )
+            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
         }
         Ok(scratch_dir)
     }

@@ -14,6 +14,8 @@ pub struct DiskPlan {
     pub scratch: u64,
     /// The output file.
     pub output: u64,
+    /// Unnamed scratch beside the output while it is written.
+    pub beside_output: u64,
 }
 
 impl DiskPlan {
@@ -24,6 +26,7 @@ impl DiskPlan {
             store: points.saturating_mul(store_per_point),
             scratch: points.saturating_mul(cost.scratch_per_point),
             output: points.saturating_mul(cost.output_per_point),
+            beside_output: points.saturating_mul(cost.beside_output_per_point),
         }
     }
 
@@ -31,6 +34,12 @@ impl DiskPlan {
     /// stages' scratch.
     pub fn scratch_dir(&self) -> u64 {
         self.store.saturating_add(self.scratch)
+    }
+
+    /// What the output's directory holds at the peak: the output and the
+    /// scratch beside it.
+    pub fn output_dir(&self) -> u64 {
+        self.output.saturating_add(self.beside_output)
     }
 }
 
@@ -48,13 +57,14 @@ mod tests {
             window_bytes_per_point: 0,
             scratch_per_point: 84,
             output_per_point: 37,
+            beside_output_per_point: 3,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: 0,
         };
         let plan = DiskPlan::new(1_000_000, 44, &cost);
         assert_eq!(plan.scratch_dir(), 128_000_000);
-        assert_eq!(plan.output, 37_000_000);
+        assert_eq!(plan.output_dir(), 40_000_000);
         assert_eq!(DiskPlan::new(u64::MAX, 44, &cost).scratch_dir(), u64::MAX);
     }
 }

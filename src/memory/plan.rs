@@ -58,10 +58,13 @@ pub struct KernelCost {
     pub window_bytes_per_point: u64,
     /// Scratch disk per point at the run's peak beside the store (columns,
     /// checkpointed tiles, spills); the store's own bytes depend on the
-    /// input ([`crate::store::store_bytes_per_point`]).
+    /// input (`store::store_bytes_per_point`).
     pub scratch_per_point: u64,
     /// Output file bytes per input point, roughly.
     pub output_per_point: u64,
+    /// Unnamed scratch bytes per input point beside the output while it is
+    /// written (the mesh audit's runs and sets, `mesh::audit`).
+    pub beside_output_per_point: u64,
     /// The kernel keeps every thread busy inside one tile (the projection's
     /// lattice jobs run in parallel), so tiles run one at a time and the
     /// plan gives that one tile what `threads + 1` would share: larger
@@ -332,6 +335,7 @@ mod tests {
             window_bytes_per_point: 48,
             scratch_per_point: 94,
             output_per_point: 37,
+            beside_output_per_point: 0,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: 0,

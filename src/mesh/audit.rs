@@ -64,6 +64,12 @@ use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+/// Scratch disk beside the output per mesh triangle: the runs' 36 B and
+/// half a vertex's 41 B (positions 24, the two sets 8, the sums 9), a
+/// closed mesh having half as many vertices as triangles. A round of
+/// merges (above ~120M triangles) doubles the runs' share.
+pub(crate) const SCRATCH_PER_TRIANGLE: f64 = 36.0 + 41.0 / 2.0;
+
 /// What the audit found in a mesh: plain data, serialised into a run's
 /// `--report` (see the module doc for the definitions).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]

@@ -36,6 +36,13 @@ mod sampling;
 mod topology;
 mod union_find;
 
+/// Unnamed scratch beside a mesh output per triangle while it is written,
+/// for the disk plan: the writer's face spool (13 B, `write`) and the
+/// audit's ([`audit::SCRATCH_PER_TRIANGLE`]). Measured on the 1M noisy
+/// dragon (the volume's use while it ran, less the files one can see):
+/// 63 B a triangle at the peak.
+pub(crate) const SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE: f64 = 13.0 + audit::SCRATCH_PER_TRIANGLE;
+
 pub use angles::{angle_report, AngleReport};
 pub use audit::{incomplete_path, Failure, MeshAudit, Promise};
 pub use audit_mesh::audit_mesh;

@@ -138,6 +138,7 @@ impl NeighbourParams {
             // dragon, 130 B on a 110k LAS).
             scratch_per_point: 16 + 4 * self.expected_size(),
             output_per_point: 8 + 4 * self.expected_size(),
+            beside_output_per_point: 0,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: 0,

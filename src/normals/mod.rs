@@ -242,6 +242,7 @@ impl NormalParams {
             scratch_per_point: 84,
             // x y z as double, normals as float, flags.
             output_per_point: 37,
+            beside_output_per_point: 0,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: 0,

@@ -66,6 +66,9 @@ pub fn cost() -> KernelCost {
         // triangles per input point (vertices are the input points).
         scratch_per_point: 2 * 12 + 2 * 3 * 24,
         output_per_point: 24 + 2 * 13,
+        // The face spool and the audit beside the output, two triangles
+        // per point.
+        beside_output_per_point: (2.0 * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE) as u64,
         parallel_in_tile: false,
         margin_spacings: 0.0,
         // `mesh::fans`' sort buffer fills beside the tiles; its merge runs

@@ -96,7 +96,7 @@ impl ImplicitParams {
     /// The lattice cell in mean spacings the plan assumes (the MLS field's).
     /// Triangles per input point to plan for, at the default cell (a
     /// `--cell` given in the input's units is not known in spacings before
-    /// the store is built; the plan then assumes the default).
+    /// the store is built; the memory plan then assumes the default).
     fn triangles_per_point(&self) -> f64 {
         let slab = if self.closed { CLOSED_SLAB } else { 1.0 };
         TRIANGLES_PER_POINT_AT_2_2 * slab * (2.2 / self.cell_spacings()).powi(2)
@@ -116,6 +116,10 @@ impl ImplicitParams {
     /// histogram are gone by then).
     pub fn cost(&self) -> KernelCost {
         let triangles = self.triangles_per_point();
+        // A `--cell` in the input's units is not known in spacings before
+        // the store is built: the disk plan then leaves the mesh's share
+        // out rather than refuse a coarse run by the default cell's count.
+        let on_disk = if self.cell.is_some() { 0.0 } else { triangles };
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
         let normals = self.normals.cost();
         let marching = super::kernel::planned_bytes_per_loaded_point(
@@ -131,8 +135,10 @@ impl ImplicitParams {
             },
             scratch_per_point: normals
                 .scratch_per_point
-                .max(SCRATCH_BEFORE_TRIANGLES + (triangles * SCRATCH_PER_TRIANGLE) as u64),
-            output_per_point: (triangles * OUTPUT_PER_TRIANGLE).ceil() as u64,
+                .max(SCRATCH_BEFORE_TRIANGLES + (on_disk * SCRATCH_PER_TRIANGLE) as u64),
+            output_per_point: (on_disk * OUTPUT_PER_TRIANGLE).ceil() as u64,
+            beside_output_per_point: (on_disk * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE)
+                as u64,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: match self.closed {

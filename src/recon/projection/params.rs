@@ -134,6 +134,9 @@ impl ProjectionParams {
             scratch_per_point: 2 * 16,
             // Vertices (3 f64) and faces (13 B, two per point).
             output_per_point: 24 + 2 * 13,
+            // The face spool and the audit beside the output, two triangles
+            // per point.
+            beside_output_per_point: (2.0 * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE) as u64,
             parallel_in_tile: true,
             margin_spacings: MARGIN_SPACINGS,
             resident_bytes: 0,
