@@ -216,20 +216,26 @@ mod tests {
         out
     }
 
-    #[test]
-    fn equals_the_sorted_offsets() {
-        // A seeded scatter of cells with clusters, negatives and gaps.
-        let mut state = 12345u64;
+    /// A seeded scatter of `n` cells within `spans` around the origin
+    /// (clusters, negatives and gaps), and their sorted keys.
+    fn scatter(seed: u64, n: usize, spans: [i64; 3]) -> (Vec<[i64; 3]>, Vec<u64>) {
+        let mut state = seed;
         let mut next = |m: i64| {
             state = state
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             ((state >> 33) as i64).rem_euclid(m) - m / 2
         };
-        let cells: Vec<[i64; 3]> = (0..500).map(|_| [next(40), next(12), next(30)]).collect();
+        let cells: Vec<[i64; 3]> = (0..n).map(|_| spans.map(&mut next)).collect();
         let mut keys: Vec<u64> = cells.iter().map(|&c| key(c)).collect();
         keys.sort_unstable();
         keys.dedup();
+        (cells, keys)
+    }
+
+    #[test]
+    fn equals_the_sorted_offsets() {
+        let (cells, keys) = scatter(12345, 500, [40, 12, 30]);
         for steps in [-1..=1, 0..=1, -2..=2, 0..=0, -3..=3, 1..=2] {
             assert_eq!(dilate(&keys, steps.clone()).unwrap(), brute(&cells, steps));
         }
@@ -237,17 +243,7 @@ mod tests {
 
     #[test]
     fn count_equals_the_set_clipped_to_a_box() {
-        let mut state = 777u64;
-        let mut next = |m: i64| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) as i64).rem_euclid(m) - m / 2
-        };
-        let cells: Vec<[i64; 3]> = (0..400).map(|_| [next(30), next(14), next(24)]).collect();
-        let mut keys: Vec<u64> = cells.iter().map(|&c| key(c)).collect();
-        keys.sort_unstable();
-        keys.dedup();
+        let (_, keys) = scatter(777, 400, [30, 14, 24]);
         let boxes = [
             [[-100, 100], [-100, 100], [-100, 100]],
             [[-3, 4], [-20, 20], [0, 0]],
