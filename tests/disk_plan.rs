@@ -131,3 +131,58 @@ fn runs_stay_within_their_disk_plan() {
         }
     }
 }
+
+/// `--scratch` refuses a run whose plan needs more, before it reads the
+/// input; with a `--cell` in the input's units the mesh's share is known
+/// only once the store is built, and is refused then, before any tile runs.
+#[test]
+fn a_scratch_limit_refuses_runs_that_need_more() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let input = tmp.path().join("terrain.ply");
+    scangen("terrain", 120_000, &input);
+    let out = tmp.path().join("out.ply");
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+            .args(args)
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .arg("-q")
+            .output()
+            .expect("run scanmesh");
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+        )
+    };
+    // The store and the normals' scratch: about 15 MB for 120k points.
+    let (ok, err) = run(&["normals", "--scratch", "4MiB"]);
+    assert!(!ok && err.contains("--scratch 4.00MiB"), "{err}");
+    assert!(err.contains("needs about"), "{err}");
+    assert!(!out.exists());
+    let (ok, err) = run(&["normals", "--scratch", "64MiB"]);
+    assert!(ok, "{err}");
+    std::fs::remove_file(&out).ok();
+    // A cell of about 2 spacings: the mesh's share (some 36 MB) passes
+    // the first check, which cannot count it, and not the second.
+    let (ok, err) = run(&["reconstruct", "--cell", "0.3", "--scratch", "25MiB"]);
+    assert!(!ok && err.contains("--scratch 25.0MiB"), "{err}");
+    assert!(!out.exists());
+    let (ok, err) = run(&["reconstruct", "--cell", "0.3", "--scratch", "80MiB"]);
+    assert!(ok, "{err}");
+    // A command with nothing to plan says so rather than ignore the limit.
+    std::fs::remove_file(&out).ok();
+    let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+        .arg("convert")
+        .arg(&input)
+        .arg(&out)
+        .args(["--scratch", "1GiB"])
+        .output()
+        .expect("run scanmesh");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("writes no planned scratch"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -20,6 +20,7 @@ pub struct ConvertArgs {
 
 pub fn run(a: ConvertArgs) -> Result<()> {
     let s = a.common.settings()?;
+    s.no_scratch_limit("convert")?;
     super::check_distinct(&a.input, &a.output)?;
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
     let progress = super::progress::progress(s.quiet);

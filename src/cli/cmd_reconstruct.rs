@@ -162,6 +162,11 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    if params.cell.is_some() {
+        // The run needs the spacing anyway; kept in the store's manifest.
+        let spacing = scanmesh::store::spacing::ensure_spacing(&mut run.ws.store)?;
+        s.check_stage_space(&run.ws.store, &a.output, &params.cost_with_spacing(spacing))?;
+    }
     let r = reconstruct_implicit(
         &mut run.ws.store,
         &params,

@@ -23,6 +23,7 @@ pub struct TileArgs {
 pub fn run(a: TileArgs) -> Result<()> {
     let s = a.common.settings()?;
     s.no_keep("a store of the selected points")?;
+    s.no_scratch_limit("tile")?;
     s.init_threads();
     if a.output.exists() && std::fs::read_dir(&a.output)?.next().is_some() {
         bail!("{}: exists and is not empty", a.output.display());

@@ -124,6 +124,11 @@ pub struct CommonArgs {
     /// the output), for outputs on a small or slow volume.
     #[arg(long, value_name = "DIR")]
     scratch_dir: Option<PathBuf>,
+    /// Most scratch disk the run may use, e.g. 50GiB (a quota below the
+    /// volume's free space): refused before it starts when its disk plan
+    /// (`info --plan`) needs more. Default: the free space.
+    #[arg(long, value_name = "SIZE")]
+    scratch: Option<String>,
     /// Write a JSON report of the run here: per stage wall and CPU time,
     /// peak RSS and disk traffic, the summary, the outcome, the version.
     #[arg(long, value_name = "FILE.json")]
@@ -233,6 +238,8 @@ pub struct Settings {
     /// points it leaves out too, flagged.
     pub keep_unselected: bool,
     pub scratch_dir: Option<PathBuf>,
+    /// `--scratch`: the most scratch disk the run may use.
+    pub scratch_limit: Option<u64>,
     /// The run directory (`--run-dir`) and this process's part of it.
     pub run: Option<rundir::RunDir>,
     pub job: Job,
@@ -323,6 +330,11 @@ impl CommonArgs {
             tile_points: self.tile_points,
             quiet: self.quiet,
             scratch_dir: self.scratch_dir.clone(),
+            scratch_limit: self
+                .scratch
+                .as_deref()
+                .map(|s| scanmesh::units::parse_size(s).with_context(|| format!("--scratch {s}")))
+                .transpose()?,
             scans: self.scans.clone(),
             select: self.select.selection(),
             keep_unselected: self.unselected == Unselected::Keep
@@ -508,6 +520,7 @@ impl Settings {
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
             let disk = scanmesh::memory::DiskPlan::new(n, store, cost);
+            self.within_scratch_limit(disk.scratch_dir())?;
             let output_dir = place::directory_of(output);
             place::check_space(
                 &scratch_dir,
@@ -518,6 +531,46 @@ impl Settings {
             .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
         }
         Ok(scratch_dir)
+    }
+
+    /// Checks, once the store is built, that the stages' scratch beside it
+    /// and the output fit: a plan that needed the store's spacing (a
+    /// `--cell` in the input's units) is known only now.
+    pub fn check_stage_space(
+        &self,
+        store: &PointStore,
+        output: &Path,
+        cost: &KernelCost,
+    ) -> Result<()> {
+        let disk = scanmesh::memory::DiskPlan::new(store.len(), 0, cost);
+        self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch))?;
+        let output_dir = place::directory_of(output);
+        place::check_space(store.dir(), disk.scratch, &output_dir, disk.output_dir())
+            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
+        Ok(())
+    }
+
+    /// Refuses `--scratch` for a command that keeps no scratch of its own
+    /// to plan (its store or file is the output), rather than ignore it.
+    pub fn no_scratch_limit(&self, command: &str) -> Result<()> {
+        match self.scratch_limit {
+            Some(_) => anyhow::bail!(
+                "--scratch: `{command}` writes no planned scratch (the limit is for normals, curvature, features, neighbors and reconstruct)"
+            ),
+            None => Ok(()),
+        }
+    }
+
+    /// Refuses a run whose scratch would pass `--scratch`.
+    fn within_scratch_limit(&self, needed: u64) -> Result<()> {
+        match self.scratch_limit {
+            Some(limit) if needed > limit => anyhow::bail!(
+                "--scratch {}: this run needs about {} of scratch disk (its disk plan; `scanmesh info --plan` prints it)",
+                scanmesh::units::human_bytes(limit),
+                scanmesh::units::human_bytes(needed)
+            ),
+            _ => Ok(()),
+        }
     }
 
     /// Removes what killed runs left in `dirs` (their scratch stores and

@@ -49,7 +49,7 @@ const MADE: [&str; 9] = [
 /// Options that vary between the processes of one run without changing
 /// its result, with whether each takes a value: left out of the
 /// comparison of command lines.
-const VOLATILE: [(&str, bool); 8] = [
+const VOLATILE: [(&str, bool); 9] = [
     ("--quiet", false),
     ("-q", false),
     ("--threads", true),
@@ -58,6 +58,7 @@ const VOLATILE: [(&str, bool); 8] = [
     ("--emit", true),
     ("--tasks", true),
     ("--run-dir", true),
+    ("--scratch", true),
 ];
 
 /// What identifies a run.

@@ -174,6 +174,21 @@ impl PointStore {
         Ok(store)
     }
 
+    /// Bytes of the store's files on disk (its columns, manifest and LAS
+    /// frame; not the run's tiles beside it).
+    pub fn bytes_on_disk(&self) -> u64 {
+        std::fs::read_dir(&self.dir)
+            .map(|entries| {
+                entries
+                    .flatten()
+                    .filter_map(|e| e.metadata().ok())
+                    .filter(|m| m.is_file())
+                    .map(|m| m.len())
+                    .sum()
+            })
+            .unwrap_or(0)
+    }
+
     /// Opens a store this process has just built: its checksums were
     /// computed from the bytes it wrote, so they are not read back.
     pub(crate) fn open_fresh(dir: &Path, lock: lock::StoreLock) -> Result<Self, StoreError> {
@@ -391,7 +406,7 @@ impl PointStore {
     }
 
     /// The store's directory.
-    pub(crate) fn dir(&self) -> &Path {
+    pub fn dir(&self) -> &Path {
         &self.dir
     }
 

@@ -98,8 +98,13 @@ impl ImplicitParams {
     /// `--cell` given in the input's units is not known in spacings before
     /// the store is built; the memory plan then assumes the default).
     fn triangles_per_point(&self) -> f64 {
+        self.triangles_at(self.cell_spacings())
+    }
+
+    /// Triangles per input point at a cell of `cell_spacings` spacings.
+    fn triangles_at(&self, cell_spacings: f64) -> f64 {
         let slab = if self.closed { CLOSED_SLAB } else { 1.0 };
-        TRIANGLES_PER_POINT_AT_2_2 * slab * (2.2 / self.cell_spacings()).powi(2)
+        TRIANGLES_PER_POINT_AT_2_2 * slab * (2.2 / cell_spacings.max(0.1)).powi(2)
     }
 
     fn cell_spacings(&self) -> f64 {
@@ -115,11 +120,26 @@ impl ImplicitParams {
     /// fixed 16 MiB, within the fixed costs: the read chunk and the
     /// histogram are gone by then).
     pub fn cost(&self) -> KernelCost {
+        self.cost_for(None)
+    }
+
+    /// [`Self::cost`] once the store's mean spacing is known: a `--cell`
+    /// given in the input's units is then known in spacings, and the disk
+    /// plan counts the mesh's share at that cell.
+    pub fn cost_with_spacing(&self, spacing: f64) -> KernelCost {
+        self.cost_for(Some(spacing))
+    }
+
+    fn cost_for(&self, spacing: Option<f64>) -> KernelCost {
         let triangles = self.triangles_per_point();
         // A `--cell` in the input's units is not known in spacings before
         // the store is built: the disk plan then leaves the mesh's share
         // out rather than refuse a coarse run by the default cell's count.
-        let on_disk = if self.cell.is_some() { 0.0 } else { triangles };
+        let on_disk = match (self.cell, spacing) {
+            (None, _) => triangles,
+            (Some(cell), Some(sp)) if cell > 0.0 && sp > 0.0 => self.triangles_at(cell / sp),
+            (Some(_), _) => 0.0,
+        };
         let pieces = self.min_piece_share().unwrap_or(0.0) > 0.0;
         let normals = self.normals.cost();
         let marching = super::kernel::planned_bytes_per_loaded_point(
