@@ -486,6 +486,29 @@ fn info_accepts_skip_invalid_and_counts_what_it_would_skip() {
     );
     let o = scanmesh(&["info", &input, "-q", "--plan", "--skip-invalid"]);
     assert!(stdout(&o).contains("plan for 15 points"));
+    // Every command with a disk plan prints it.
+    for command in [
+        "normals",
+        "reconstruct",
+        "neighbors",
+        "curvature",
+        "features",
+    ] {
+        let args = [
+            "info",
+            &input,
+            "-q",
+            "--plan",
+            "--skip-invalid",
+            "--command",
+            command,
+        ];
+        let text = stdout(&scanmesh(&args));
+        assert!(
+            text.contains("disk at the peak: the store"),
+            "{command}: {text}"
+        );
+    }
 }
 
 /// `info` reads as text (no Debug names, no quotes), and an error that

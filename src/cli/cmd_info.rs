@@ -3,6 +3,8 @@
 use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
+use scanmesh::features::params::FeatureParams;
+use scanmesh::features::CurvatureParams;
 use scanmesh::io::e57::is_e57_magic;
 use scanmesh::io::inspect::{inspect, inspect_scans, ScanInspection};
 use scanmesh::io::{Format, InvalidPolicy, LasSource, ReadOptions};
@@ -75,6 +77,8 @@ enum Planned {
     Normals,
     Reconstruct,
     Neighbors,
+    Curvature,
+    Features,
 }
 
 pub fn run(a: InfoArgs) -> Result<()> {
@@ -311,6 +315,8 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         }
         .cost(),
         Planned::Neighbors => NeighbourParams::default().cost(),
+        Planned::Curvature => CurvatureParams::default().cost(),
+        Planned::Features => FeatureParams::default().cost(),
     };
     let budget = MemoryBudget::new(mem, threads);
     let minimum = MemoryPlan::minimum_budget(threads, points, &cost);
