@@ -295,15 +295,20 @@ fn small_quantised_clouds_with_random_cells_match_oracle() {
     }
 }
 
+/// `points` with `n` exact copies of every `stride`-th one appended: ties
+/// the tie keys must decide.
+fn with_copies(mut points: Vec<DVec3>, n: usize, stride: usize) -> Vec<DVec3> {
+    for i in 0..n {
+        points.push(points[i * stride]);
+    }
+    points
+}
+
 #[test]
 fn nearest_from_any_hint_is_the_nearest() {
     for seed in [21u64, 22] {
         let mut rng = Rng::new(seed);
-        let mut points = clustered(&mut rng, 2000);
-        // Exact ties: copies of points, so the tie keys must decide.
-        for i in 0..50 {
-            points.push(points[i * 7]);
-        }
+        let points = with_copies(clustered(&mut rng, 2000), 50, 7);
         let tie: Vec<u64> = (0..points.len() as u64).rev().collect();
         // Cells of several sizes: the signed distance sizes its grid to the
         // lattice, far from the automatic size.
@@ -328,10 +333,7 @@ fn nearest_from_any_hint_is_the_nearest() {
 fn knn_near_any_earlier_answer_is_the_oracles() {
     for seed in [31u64, 32] {
         let mut rng = Rng::new(seed);
-        let mut points = sphere_surface(&mut rng, 3000);
-        for i in 0..40 {
-            points.push(points[i * 11]);
-        }
+        let points = with_copies(sphere_surface(&mut rng, 3000), 40, 11);
         let tie: Vec<u64> = (0..points.len() as u64).rev().collect();
         for cell in [0.02, 0.1, 0.5] {
             let grid = GridIndex::with_cell(&points, &tie, cell).expect("grid");

@@ -55,6 +55,12 @@ const BYTES_PER_LINE_VERTEX: f64 = 200.0;
 const CURVATURE_COLUMNS: u64 = 4 * super::curvature::VALUES as u64 + 1;
 
 impl CurvatureParams {
+    /// Scratch beside the store until the export: the normals' and the
+    /// curvature columns (`features` exports nothing per point).
+    fn scratch_before_export(&self) -> u64 {
+        self.normals.cost().scratch_per_point + CURVATURE_COLUMNS
+    }
+
     /// A `curvature` run: normals when needed, the kernel, the export in
     /// input order (a bucket and a write buffer of slot records per window
     /// point, and the reorder file on disk).
@@ -64,7 +70,7 @@ impl CurvatureParams {
         KernelCost {
             bytes_per_point: normals.bytes_per_point.max(CURVATURE_BYTES_PER_POINT),
             window_bytes_per_point: 2 * slot,
-            scratch_per_point: normals.scratch_per_point + CURVATURE_COLUMNS + slot,
+            scratch_per_point: self.scratch_before_export() + slot,
             output_per_point: RECORD as u64,
             parallel_in_tile: false,
             margin_spacings: 0.0,
@@ -85,7 +91,7 @@ impl FeatureParams {
             bytes_per_point: curvature.bytes_per_point.max(features.ceil() as u64),
             resident_per_point: line_bytes,
             window_bytes_per_point: 0,
-            scratch_per_point: self.curvature.normals.cost().scratch_per_point + CURVATURE_COLUMNS,
+            scratch_per_point: self.curvature.scratch_before_export(),
             // Vertices (24 B) and edges (9 B) of the PLY.
             output_per_point: (LINE_VERTICES_PER_POINT * 33.0).ceil() as u64,
             parallel_in_tile: false,
