@@ -43,7 +43,7 @@ fn cloud() -> PointChunk {
         normals: Some(normals),
         indices: None,
         attrs: Default::default(),
-        number_of_returns: Vec::new(),
+        ..PointChunk::default()
     }
 }
 

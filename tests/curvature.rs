@@ -8,7 +8,7 @@ mod common;
 use common::{median, with_store};
 use glam::DVec3;
 use scanmesh::features::curvature::{CurvatureReport, VALUES};
-use scanmesh::features::export::write_curvature_ply;
+use scanmesh::features::export::{curvature_output, write_curvature};
 use scanmesh::features::{
     compute_curvature, CurvatureParams, HoodChoice, CURVATURE, CURVATURE_FLAGS,
 };
@@ -53,7 +53,8 @@ fn run(points: &[DVec3], tile_points: u64, threads: usize, hood: HoodChoice) -> 
         let (values, flags) = read_back(store);
         let path = dir.join("c.ply");
         // A small window: several windows of the input-order writer.
-        write_curvature_ply(store, &path, 1000).expect("write");
+        let spec = curvature_output(&path).expect("a PLY holds the curvature");
+        write_curvature(store, &path, &spec, 1000, None, &NoProgress).expect("write");
         Out {
             report,
             values,

@@ -423,7 +423,7 @@ fn point_chunk(n: usize) -> PointChunk {
         normals: None,
         indices: None,
         attrs: Default::default(),
-        number_of_returns: Vec::new(),
+        ..PointChunk::default()
     }
 }
 
@@ -438,6 +438,51 @@ fn spec(format: Format) -> WriterSpec {
         )),
         las_transform: None,
         attributes: Default::default(),
+        ..WriterSpec::new(format)
+    }
+}
+
+/// A writer told how many points to expect fails when it gets another
+/// number, and leaves nothing under the name asked for (a short output
+/// must never look complete).
+#[test]
+fn a_declared_count_not_written_fails_and_leaves_nothing() {
+    let d = tmp();
+    for (name, format) in [
+        ("a.ply", Format::PlyBinaryLe),
+        ("a.pcd", Format::Pcd),
+        ("a.las", Format::Las),
+        ("a.laz", Format::Laz),
+        ("a.xyz", Format::Xyz),
+        ("a.e57", Format::E57),
+    ] {
+        for (declared, written) in [(10, 9), (10, 11), (0, 1)] {
+            let path = d.path().join(name);
+            let spec = WriterSpec {
+                count: Some(declared),
+                ..spec(format)
+            };
+            let mut w = create_writer(&path, &spec).expect("writer");
+            w.write_chunk(&point_chunk(written), None).expect("chunk");
+            let e = w.finish().expect_err("a count that was not met");
+            assert!(
+                e.to_string().contains(&format!(
+                    "{written} points written where {declared} were declared"
+                )),
+                "{name}: {e}"
+            );
+            assert_names_file(&e, &path);
+            assert!(!path.exists(), "{name}: a short output was left");
+        }
+        let path = d.path().join(name);
+        let spec = WriterSpec {
+            count: Some(7),
+            ..spec(format)
+        };
+        let mut w = create_writer(&path, &spec).expect("writer");
+        w.write_chunk(&point_chunk(7), None).expect("chunk");
+        assert_eq!(w.finish().expect("the count met"), 7, "{name}");
+        std::fs::remove_file(&path).expect("written");
     }
 }
 

@@ -67,6 +67,7 @@ fn spec(format: Format, with_normals: bool, with_flags: bool, b: Option<Aabb>) -
         bounds: b,
         las_transform: None,
         attributes: Default::default(),
+        ..WriterSpec::new(format)
     }
 }
 
@@ -81,7 +82,7 @@ fn write_cloud(path: &Path, spec: &WriterSpec, c: &Cloud, step: usize) -> u64 {
             normals: Some(c.normals[start..end].to_vec()),
             indices: None,
             attrs: Default::default(),
-            number_of_returns: Vec::new(),
+            ..PointChunk::default()
         };
         w.write_chunk(&chunk, Some(&c.flags[start..end])).unwrap();
     }

@@ -4,7 +4,12 @@ for LAS files scanmesh writes.
     las_laspy.py gen DIR            write the synthetic matrix into DIR
     las_laspy.py check              for each line IN<tab>OUT<tab>N of stdin,
                                     check OUT against IN; N=1: OUT gained
-                                    normals and flags as extra bytes
+                                    normals and flags as extra bytes;
+                                    N=REF.ply: OUT gained the curvature
+                                    REF holds (k1 k2 H K residual, flags)
+    las_laspy.py pcd PCD REF.ply    check a binary PCD against a PLY, both
+                                    read here with numpy, field by field,
+                                    bit for bit
 
 `gen` writes LAS 1.2 (point formats 0-3), 1.3 (0-5) and 1.4 (0-10) with
 every field over its legal range as laspy reads it: return numbers 0-7 in
@@ -121,8 +126,94 @@ def fail(what):
     sys.exit(1)
 
 
-def check(inp, out, normals):
+NORMALS = ["NormalX", "NormalY", "NormalZ", "scanmesh_flags"]
+CURVATURE = ["k1", "k2", "H", "K", "residual"]
+
+
+def read_ply(path):
+    """A binary little-endian PLY of one vertex element, as a numpy record array."""
+    types = {"double": "<f8", "float": "<f4", "uchar": "u1", "ushort": "<u2"}
+    with open(path, "rb") as f:
+        header = []
+        while not header or header[-1] != "end_header":
+            header.append(f.readline().decode("ascii").strip())
+        if "format binary_little_endian 1.0" not in header:
+            fail(f"{path}: not binary little-endian PLY")
+        n = int(next(h for h in header if h.startswith("element vertex")).split()[2])
+        props = [h.split() for h in header if h.startswith("property")]
+        dtype = np.dtype([(p[2], types[p[1]]) for p in props])
+        return np.frombuffer(f.read(), dtype=dtype, count=n)
+
+
+def read_pcd(path):
+    """A binary PCD (PCL's format, v0.7), as a numpy record array."""
+    with open(path, "rb") as f:
+        head = {}
+        while True:
+            line = f.readline().decode("ascii").strip()
+            if line.startswith("#"):
+                continue
+            key, _, rest = line.partition(" ")
+            head[key] = rest.split()
+            if key == "DATA":
+                break
+        if head["DATA"] != ["binary"]:
+            fail(f"{path}: DATA {head['DATA']}")
+        kinds = {("F", "4"): "<f4", ("F", "8"): "<f8", ("U", "1"): "u1", ("U", "2"): "<u2"}
+        dtype = np.dtype(
+            [(n, kinds[(t, s)]) for n, s, t in zip(head["FIELDS"], head["SIZE"], head["TYPE"])]
+        )
+        n = int(head["POINTS"][0])
+        if int(head["WIDTH"][0]) * int(head["HEIGHT"][0]) != n:
+            fail(f"{path}: WIDTH x HEIGHT is not POINTS")
+        return np.frombuffer(f.read(), dtype=dtype, count=n)
+
+
+def same_bits(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and np.array_equal(a.view(f"u{a.itemsize}"), b.view(f"u{b.itemsize}"))
+
+
+def check_curvature_values(values, ref, flags_name):
+    """`values` (by field name) hold `ref`'s curvature bit for bit, and the
+    curvature is itself consistent: H the mean and K the product of k1 >=
+    k2 wherever no flag is set, NaN wherever one is."""
+    for name in CURVATURE:
+        if not same_bits(values[name], ref[name]):
+            fail(f"{name} differs from the curvature PLY")
+    if not np.array_equal(np.asarray(values[flags_name]), ref["flags"]):
+        fail("flags differ")
+    ok = ref["flags"] == 0
+    if ok.sum() == 0:
+        fail("no point has curvature")
+    k1, k2 = ref["k1"][ok].astype(float), ref["k2"][ok].astype(float)
+    scale = np.abs(k1).max() + np.abs(k2).max()
+    if (k2 - k1 > 1e-6 * scale).any():
+        fail("k1 < k2 somewhere")
+    if np.abs(ref["H"][ok] - (k1 + k2) / 2).max() > 1e-4 * scale:
+        fail("H is not the mean of k1 and k2")
+    if np.abs(ref["K"][ok] - k1 * k2).max() > 1e-4 * scale * scale:
+        fail("K is not k1 k2")
+    if not np.isnan(ref["k1"][~ok]).all():
+        fail("a flagged point has a value")
+
+
+def check_pcd(pcd, ref_path):
+    CURRENT[0] = pcd
+    a, ref = read_pcd(pcd), read_ply(ref_path)
+    if len(a) != len(ref):
+        fail(f"{len(a)} points against {len(ref)}")
+    for d in ("x", "y", "z"):
+        if not same_bits(a[d], ref[d]):
+            fail(f"{d} differs")
+    check_curvature_values(a, ref, "flags")
+    print(f"ok {pcd}: {len(a)} points")
+
+
+def check(inp, out, gained):
     CURRENT[0] = out
+    extended = gained != "0"
+    names = NORMALS if gained == "1" else CURVATURE + ["scanmesh_flags"]
     a, b = laspy.read(inp), laspy.read(out)
     ha, hb = a.header, b.header
     if str(ha.version) != str(hb.version):
@@ -145,12 +236,12 @@ def check(inp, out, normals):
     va = [vlr_bytes(v) for v in ha.vlrs if v.user_id != "laszip encoded"]
     vb = [vlr_bytes(v) for v in hb.vlrs if v.user_id != "laszip encoded"]
     eb = ("LASF_Spec", 4)
-    grew = normals and not any(v[:2] == eb for v in va)
+    grew = extended and not any(v[:2] == eb for v in va)
     if len(vb) != len(va) + int(grew):
         fail(f"VLRs {[v[:2] for v in va]} -> {[v[:2] for v in vb]}")
     for x, y in zip(va, vb):
-        if x[:2] == eb and normals:
-            if x[:3] != y[:3] or y[3][: len(x[3])] != x[3] or len(y[3]) != len(x[3]) + 4 * 192:
+        if x[:2] == eb and extended:
+            if x[:3] != y[:3] or y[3][: len(x[3])] != x[3] or len(y[3]) != len(x[3]) + len(names) * 192:
                 fail("Extra Bytes VLR: the input's descriptors are not kept first")
         elif x != y:
             fail(f"VLR {x[:2]} differs")
@@ -158,11 +249,14 @@ def check(inp, out, normals):
     ebs = [vlr_bytes(v) for v in (hb.evlrs or [])]
     if ea != ebs:
         fail(f"EVLRs {[v[:2] for v in ea]} -> {[v[:2] for v in ebs]}")
-    if normals:
+    if extended:
         extra = list(hb.point_format.extra_dimension_names)
-        for name in ("NormalX", "NormalY", "NormalZ", "scanmesh_flags"):
+        for name in names:
             if name not in extra:
                 fail(f"no {name} among {extra}")
+    if extended and gained != "1":
+        check_curvature_values(b, read_ply(gained), "scanmesh_flags")
+    elif extended:
         n = np.stack([b.NormalX, b.NormalY, b.NormalZ], axis=1)
         length = np.linalg.norm(n, axis=1)
         if np.abs(length - 1.0).max() > 1e-5:
@@ -173,8 +267,10 @@ def check(inp, out, normals):
 if __name__ == "__main__":
     if sys.argv[1] == "gen":
         gen(sys.argv[2])
+    elif sys.argv[1] == "pcd":
+        check_pcd(sys.argv[2], sys.argv[3])
     else:
         for line in sys.stdin:
             if line.strip():
                 inp, out, n = line.rstrip("\n").split("\t")
-                check(inp, out, n == "1")
+                check(inp, out, n)

@@ -47,8 +47,12 @@ fn scanmesh(args: &[&str]) {
     run(cmd.args(args).arg("-q"), &format!("scanmesh {args:?}"));
 }
 
-/// Checks each (input, output, gained normals) with laspy, in one run.
-fn check(pairs: &[(PathBuf, PathBuf, bool)]) {
+/// What an output gained over its input: "0" nothing, "1" normals and
+/// flags, else the path of the curvature PLY whose values it gained.
+type Gained = String;
+
+/// Checks each (input, output, gained) with laspy, in one run.
+fn check(pairs: &[(PathBuf, PathBuf, Gained)]) {
     use std::io::Write;
     let mut child = Command::new("python3")
         .arg(script())
@@ -60,7 +64,6 @@ fn check(pairs: &[(PathBuf, PathBuf, bool)]) {
         .unwrap();
     let mut lines = String::new();
     for (i, o, n) in pairs {
-        let n = if *n { "1" } else { "0" };
         lines += &format!("{}\t{}\t{n}\n", i.display(), o.display());
     }
     child
@@ -88,17 +91,17 @@ fn s(p: &Path) -> &str {
 }
 
 /// `convert` to .las and .laz and `normals` to .las and .laz of `input`;
-/// the (input, output, gained normals) to check.
-fn through_both_commands(input: &Path, dir: &Path) -> Vec<(PathBuf, PathBuf, bool)> {
+/// the (input, output, gained) to check.
+fn through_both_commands(input: &Path, dir: &Path) -> Vec<(PathBuf, PathBuf, Gained)> {
     let stem = input.file_stem().unwrap().to_string_lossy();
     let mut made = Vec::new();
     for ext in ["las", "laz"] {
         let conv = dir.join(format!("{stem}_c.{ext}"));
         scanmesh(&["convert", s(input), s(&conv)]);
-        made.push((input.to_path_buf(), conv, false));
+        made.push((input.to_path_buf(), conv, "0".into()));
         let norm = dir.join(format!("{stem}_n.{ext}"));
         scanmesh(&["normals", s(input), "-o", s(&norm)]);
-        made.push((input.to_path_buf(), norm, true));
+        made.push((input.to_path_buf(), norm, "1".into()));
     }
     made
 }
@@ -145,5 +148,54 @@ fn laspy_reads_every_field_of_the_real_files_back() {
     ]
     .map(|name| through_both_commands(&fixtures.join(name), dir.path()))
     .concat();
+    check(&made);
+}
+
+/// `curvature` to .ply, .las, .laz and .pcd of `input`: the LAS outputs
+/// to check against the input with laspy, the PCD checked here against
+/// the PLY (both read by the script's own numpy readers).
+fn curvature_everywhere(input: &Path, dir: &Path) -> Vec<(PathBuf, PathBuf, Gained)> {
+    let stem = input.file_stem().unwrap().to_string_lossy();
+    let out = |ext: &str| dir.join(format!("{stem}_k.{ext}"));
+    let ply = out("ply");
+    for ext in ["ply", "las", "laz", "pcd"] {
+        scanmesh(&["curvature", s(input), "-o", s(&out(ext))]);
+    }
+    let mut cmd = Command::new("python3");
+    cmd.arg(script()).args(["pcd", s(&out("pcd")), s(&ply)]);
+    run(&mut cmd, &format!("PCD of {stem}"));
+    let gained = ply.display().to_string();
+    ["las", "laz"]
+        .map(|ext| (input.to_path_buf(), out(ext), gained.clone()))
+        .to_vec()
+}
+
+/// Curvature written through the output table: to LAS the input's own
+/// records as they came with k1 k2 H K residual and the flags as described
+/// extra bytes, to PCD as fields; every value bit for bit the PLY's, and
+/// the curvature consistent (H the mean, K the product of k1 >= k2).
+#[test]
+fn laspy_reads_curvature_written_to_las_and_pcd() {
+    if let Some(why) = laspy_missing() {
+        eprintln!("skipping: {why}");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut cmd = Command::new("python3");
+    let generated = dir.path().join("gen");
+    std::fs::create_dir(&generated).unwrap();
+    run(cmd.arg(script()).arg("gen").arg(&generated), "laspy gen");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    let inputs = [
+        fixtures.join("autzen.las"),
+        fixtures.join("32-1-472-150-76.laz"),
+        fixtures.join("extrabytes.las"),
+        generated.join("v12_f3.las"),
+        generated.join("v14_f6.las"),
+    ];
+    let made: Vec<_> = inputs
+        .iter()
+        .flat_map(|i| curvature_everywhere(i, dir.path()))
+        .collect();
     check(&made);
 }

@@ -62,7 +62,7 @@ fuzz_target!(|data: &[u8]| {
         2 => Some(vec![2, 0]),
         _ => Some(vec![usize::from(pick >> 3)]),
     };
-    let Ok(mut reader) = open_reader(&path, ReadOptions { policy, scans }) else {
+    let Ok(mut reader) = open_reader(&path, ReadOptions { policy, scans, select: Default::default() }) else {
         return;
     };
     let mut chunk = PointChunk::default();

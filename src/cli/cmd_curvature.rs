@@ -4,7 +4,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::features::curvature::CurvatureReport;
-use scanmesh::features::export::write_curvature_ply_keeping;
+use scanmesh::features::export::{curvature_output, write_curvature};
 use scanmesh::features::{compute_curvature, CurvatureParams, HoodChoice};
 use scanmesh::normals::{NormalParams, Orientation};
 use std::path::{Path, PathBuf};
@@ -14,7 +14,9 @@ use std::time::Instant;
 pub struct CurvatureArgs {
     /// Input point file or store directory.
     pub input: PathBuf,
-    /// Output PLY: x y z k1 k2 H K residual flags per point, in input order.
+    /// Output: x y z k1 k2 H K residual flags per point, in input order;
+    /// .ply, .pcd, .las or .laz (LAS: the values as extra bytes, a LAS
+    /// input's own records kept as they came).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -100,7 +102,7 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     let params = a.fit.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
-    check_ply(&a.output)?;
+    let spec = curvature_output(&a.output)?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
@@ -108,18 +110,11 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     let report = compute_curvature(store, &params, run.opts, progress.as_ref())?;
     let read = s.read_options();
     let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
-    write_curvature_ply_keeping(store, &a.output, run.plan.window_points, keep)
+    let window = run.plan.window_points;
+    write_curvature(store, &a.output, &spec, window, keep, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
     super::report::unselected_kept(s.keep_unselected);
     print_summary(&report, t0.elapsed().as_secs_f64(), &a.output);
-    Ok(())
-}
-
-fn check_ply(path: &Path) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str());
-    if !matches!(ext.map(str::to_ascii_lowercase).as_deref(), Some("ply")) {
-        bail!("{}: curvature is written as .ply", path.display());
-    }
     Ok(())
 }
 

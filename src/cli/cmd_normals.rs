@@ -4,7 +4,7 @@ use super::HoodKind;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use glam::DVec3;
-use scanmesh::io::{format_from_name, AttributeSet, Format, WriterSpec};
+use scanmesh::io::{AttributeSet, Carried, WriterSpec};
 use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation, Sensor,
 };
@@ -234,41 +234,15 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     Ok(())
 }
 
+/// The normals' output: every format of the table that holds normals,
+/// with flags where it holds them.
 pub fn output_spec(path: &Path, ascii: bool) -> Result<WriterSpec> {
-    let Some((mut format, gz)) = format_from_name(path) else {
-        bail!(
-            "{}: unknown output format (use .ply, .xyz, .csv, .las, .laz or .pcd)",
-            path.display()
-        );
+    let carried = Carried {
+        normals: true,
+        flags: true,
+        ..Carried::default()
     };
-    if gz {
-        bail!(
-            "{}: gzip output is not supported; drop the .gz",
-            path.display()
-        );
-    }
-    if format == Format::E57 {
-        bail!(
-            "{}: E57 has no standard field for normals; write .ply, .xyz or .pcd",
-            path.display()
-        );
-    }
-    if ascii && format == Format::PlyBinaryLe {
-        format = Format::PlyAscii;
-    }
-    Ok(WriterSpec {
-        with_normals: true,
-        with_flags: matches!(
-            format,
-            Format::PlyAscii
-                | Format::PlyBinaryLe
-                | Format::PlyBinaryBe
-                | Format::Pcd
-                | Format::Las
-                | Format::Laz
-        ),
-        ..WriterSpec::new(format)
-    })
+    Ok(scanmesh::io::output_spec(path, &carried, ascii)?)
 }
 
 /// The input's attributes that `output`'s format can hold; says which it

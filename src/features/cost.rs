@@ -10,7 +10,6 @@
 //! at 10M), so it must not copy the lines; holding each line twice over
 //! took the same run to 277 MiB (2026-11-24).
 
-use super::export::RECORD;
 use super::params::FeatureParams;
 use super::CurvatureParams;
 use crate::memory::plan::MARGIN_FACTOR;
@@ -61,17 +60,20 @@ impl CurvatureParams {
         self.normals.cost().scratch_per_point + CURVATURE_COLUMNS
     }
 
-    /// A `curvature` run: normals when needed, the kernel, the export in
-    /// input order (a bucket and a write buffer of slot records per window
-    /// point, and the reorder file on disk).
+    /// A `curvature` run: normals when needed, the kernel, the store's
+    /// point export in input order (its windows, which it shrinks for the
+    /// values they carry, and its reorder file of slot, values and flags
+    /// on disk).
     pub fn cost(&self) -> KernelCost {
         let normals = self.normals.cost();
-        let slot = RECORD as u64 + 4;
+        let values = 4 * super::curvature::VALUES as u64 + 1;
         KernelCost {
             bytes_per_point: normals.bytes_per_point.max(CURVATURE_BYTES_PER_POINT),
-            window_bytes_per_point: 2 * slot,
-            scratch_per_point: self.scratch_before_export() + slot,
-            output_per_point: RECORD as u64,
+            window_bytes_per_point: crate::normals::EXPORT_BYTES_PER_POINT,
+            scratch_per_point: self.scratch_before_export() + 4 + values,
+            // A PLY record: x y z double, then the values and flags (a
+            // LAS input's records, kept, are longer by their own length).
+            output_per_point: 24 + values,
             parallel_in_tile: false,
             margin_spacings: 0.0,
             ..normals

@@ -22,7 +22,6 @@ pub(crate) mod hood;
 pub(crate) mod kernel;
 pub(crate) mod lift;
 pub mod lines;
-pub(crate) mod order;
 pub mod params;
 pub(crate) mod peak;
 pub(crate) mod polyline;

@@ -77,6 +77,7 @@ pub fn convert_keeping(
         attributes: info.attributes.intersect(format.attributes()),
         bounds,
         las_transform: info.las_transform,
+        ..WriterSpec::new(format)
     };
     let las_in = matches!(info.format, Format::Las | Format::Laz);
     let las = match (las_in, is_las) {
@@ -99,13 +100,7 @@ pub fn convert_keeping(
     let mut writer = create_writer_with(output, &spec, &las)?;
     if keep {
         writer = Box::new(super::keep::KeepUnselected::wrap(
-            writer,
-            output,
-            input,
-            &read,
-            spec.with_normals,
-            spec.with_flags,
-            spec.attributes,
+            writer, output, input, &read, &spec,
         )?);
     }
     let mut chunk = PointChunk::default();

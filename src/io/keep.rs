@@ -15,7 +15,7 @@
 use super::select::Selector;
 use super::{
     open_reader, AttributeSet, AttributeValues, IoError, PointChunk, PointReader, PointWriter,
-    ReadOptions, Selection, DEFAULT_CHUNK,
+    ReadOptions, Selection, WriterSpec, DEFAULT_CHUNK,
 };
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
@@ -91,6 +91,13 @@ impl UnselectedRows {
     }
 }
 
+/// A row's computed fields: its normal, values and flag.
+struct Row<'a> {
+    normal: Vec3,
+    values: &'a [f32],
+    flag: u8,
+}
+
 /// A writer of processed points that writes the unselected points of
 /// the input between them.
 pub struct KeepUnselected {
@@ -99,31 +106,32 @@ pub struct KeepUnselected {
     rows: Option<UnselectedRows>,
     with_normals: bool,
     with_flags: bool,
+    /// Computed values per point (NaN for an unselected row).
+    values: usize,
     attributes: AttributeSet,
     out: PointChunk,
     out_flags: Vec<u8>,
 }
 
 impl KeepUnselected {
-    /// Wraps `inner`, which writes `output` with normals and flags as
-    /// asked and `attributes`, so that the points of `input` (read with
-    /// `read`'s policy) that `read`'s selection leaves out are written too.
+    /// Wraps `inner`, which writes `output` as `spec` asks, so that the
+    /// points of `input` (read with `read`'s policy) that `read`'s
+    /// selection leaves out are written too.
     pub fn wrap(
         inner: Box<dyn PointWriter>,
         output: &Path,
         input: &Path,
         read: &ReadOptions,
-        with_normals: bool,
-        with_flags: bool,
-        attributes: AttributeSet,
+        spec: &WriterSpec,
     ) -> Result<Self, IoError> {
         Ok(KeepUnselected {
             inner,
             path: output.to_path_buf(),
             rows: Some(UnselectedRows::open(input, read)?),
-            with_normals,
-            with_flags,
-            attributes,
+            with_normals: spec.with_normals,
+            with_flags: spec.with_flags,
+            values: spec.values.len(),
+            attributes: spec.attributes,
             out: PointChunk::default(),
             out_flags: Vec::new(),
         })
@@ -135,7 +143,15 @@ impl KeepUnselected {
         let Some(mut rows) = self.rows.take() else {
             return Ok(false);
         };
-        let more = rows.up_to_selected(|p, a, r| self.push(p, Vec3::NAN, a, r, UNSELECTED));
+        let none = [f32::NAN].repeat(self.values);
+        let more = rows.up_to_selected(|p, a, r| {
+            let row = Row {
+                normal: Vec3::NAN,
+                values: &none,
+                flag: UNSELECTED,
+            };
+            self.push(p, a, r, row)
+        });
         self.rows = Some(rows);
         more
     }
@@ -143,10 +159,9 @@ impl KeepUnselected {
     fn push(
         &mut self,
         p: DVec3,
-        normal: Vec3,
         a: &AttributeValues,
         record: Option<&[u8]>,
-        flag: u8,
+        row: Row,
     ) -> Result<(), IoError> {
         if self.out.xyz.is_empty() {
             self.out.clear();
@@ -156,8 +171,10 @@ impl KeepUnselected {
         }
         self.out.xyz.push(p);
         if let Some(n) = &mut self.out.normals {
-            n.push(normal);
+            n.push(row.normal);
         }
+        self.out.values.extend_from_slice(row.values);
+        let flag = row.flag;
         self.out.attrs.push(a);
         if let Some(r) = record {
             self.out.attrs.las.push(r);
@@ -195,10 +212,14 @@ impl PointWriter for KeepUnselected {
             if !self.up_to_selected()? {
                 return Err(self.short());
             }
-            let n = chunk.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
-            let f = flags.map_or(0, |f| f[i]);
+            let per = self.values;
+            let row = Row {
+                normal: chunk.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]),
+                values: chunk.values.get(per * i..per * (i + 1)).unwrap_or(&[]),
+                flag: flags.map_or(0, |f| f[i]),
+            };
             let record = chunk.attrs.las.record(i, chunk.len());
-            self.push(chunk.xyz[i], n, &chunk.attrs.get(i), record, f)?;
+            self.push(chunk.xyz[i], &chunk.attrs.get(i), record, row)?;
         }
         Ok(())
     }

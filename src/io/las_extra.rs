@@ -9,6 +9,7 @@
 //! fields of those names (a file scanmesh wrote, processed again).
 
 use super::las_file::{RecordHeader, Vlr, EXTRA_BYTES};
+use super::{ValueField, WriterSpec};
 use las::Header;
 
 const DESCRIPTOR: usize = 192;
@@ -105,8 +106,11 @@ fn descriptor(data_type: u8, options: u8, name: &str, description: &str) -> [u8;
     let mut d = [0u8; DESCRIPTOR];
     d[2] = data_type;
     d[3] = options;
-    d[NAME_AT..NAME_AT + name.len()].copy_from_slice(name.as_bytes());
-    d[DESCRIPTION_AT..DESCRIPTION_AT + description.len()].copy_from_slice(description.as_bytes());
+    // Both fields hold 32 bytes; a longer text is cut, never overruns.
+    let name = &name.as_bytes()[..name.len().min(NAME_LEN)];
+    let description = &description.as_bytes()[..description.len().min(32)];
+    d[NAME_AT..NAME_AT + name.len()].copy_from_slice(name);
+    d[DESCRIPTION_AT..DESCRIPTION_AT + description.len()].copy_from_slice(description);
     d
 }
 
@@ -116,6 +120,9 @@ fn descriptor(data_type: u8, options: u8, name: &str, description: &str) -> [u8;
 pub(crate) struct ExtraPlan {
     /// Offsets of the normal's x, y, z floats in the record.
     pub(crate) normals_at: Option<usize>,
+    /// Offset of each computed value's float in the record, in the
+    /// spec's order ([`WriterSpec::values`]).
+    pub(crate) values_at: Vec<usize>,
     /// Offset of the flags byte in the record.
     pub(crate) flags_at: Option<usize>,
     /// Bytes of an output record.
@@ -124,30 +131,64 @@ pub(crate) struct ExtraPlan {
     pub(crate) vlr: Option<Vlr>,
 }
 
+/// The computed fields a LAS output's records carry beside the input's.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Wanted {
+    pub(crate) normals: bool,
+    pub(crate) values: &'static [ValueField],
+    pub(crate) flags: bool,
+}
+
+impl Wanted {
+    /// What `spec` asks a writer to carry.
+    pub(crate) fn of(spec: &WriterSpec) -> Self {
+        Wanted {
+            normals: spec.with_normals,
+            values: spec.values,
+            flags: spec.with_flags,
+        }
+    }
+}
+
 /// Plans records of `base` standard bytes followed by the input's `extra`
-/// bytes described by `input` (its Extra Bytes VLR, if any), with normals
-/// and flags when asked: into fields of their names where the input has
-/// them, else appended and described. Undescribed input bytes are
-/// described as undocumented (type 0) so that what follows them is
-/// found. `Err` says why the input's description cannot be extended.
+/// bytes described by `input` (its Extra Bytes VLR, if any), with the
+/// `wanted` normals, values and flags: into fields of their names where
+/// the input has them, else appended in that order and described.
+/// Undescribed input bytes are described as undocumented (type 0) so that
+/// what follows them is found. `Err` says why the input's description
+/// cannot be extended.
 pub(crate) fn plan(
     base: usize,
     extra: usize,
     input: Option<&Vlr>,
-    normals: bool,
-    flags: bool,
+    wanted: Wanted,
 ) -> Result<ExtraPlan, String> {
+    let Wanted {
+        normals,
+        values,
+        flags,
+    } = wanted;
     let described = match input {
         Some(v) => fields(&v.data)
             .map_err(|t| format!("its Extra Bytes VLR describes a field of unknown type {t}"))?,
         None => Vec::new(),
     };
     let in_place = find_normal_fields(&described, extra).filter(|_| normals);
+    let values_in_place: Vec<Option<usize>> = values
+        .iter()
+        .map(|v| find(&described, v.name, FLOAT, extra))
+        .collect();
     let flags_in_place = find(&described, FLAGS_NAME, U8, extra).filter(|_| flags);
     let add_normals = normals && in_place.is_none();
+    let add_values = values_in_place.iter().any(Option::is_none);
     let add_flags = flags && flags_in_place.is_none();
+    let mut values_at: Vec<Option<usize>> = values_in_place
+        .iter()
+        .map(|a| a.map(|a| base + a))
+        .collect();
     let mut plan = ExtraPlan {
         normals_at: in_place.map(|n| base + n[0]),
+        values_at: Vec::new(),
         flags_at: flags_in_place.map(|f| base + f),
         record_len: 0,
         vlr: None,
@@ -159,7 +200,7 @@ pub(crate) fn plan(
         ));
     }
     let mut len = base + extra;
-    if add_normals || add_flags {
+    if add_normals || add_values || add_flags {
         let total: usize = described.iter().map(|f| f.size).sum();
         if total > extra {
             return Err(format!(
@@ -185,6 +226,13 @@ pub(crate) fn plan(
                 data.extend(descriptor(FLOAT, 0, name, "unit normal (scanmesh)"));
             }
         }
+        for (v, at) in values.iter().zip(values_at.iter_mut()) {
+            if at.is_none() {
+                *at = Some(len);
+                len += 4;
+                data.extend(descriptor(FLOAT, 0, v.name, v.description));
+            }
+        }
         if add_flags {
             plan.flags_at = Some(len);
             len += 1;
@@ -202,6 +250,8 @@ pub(crate) fn plan(
         );
         plan.vlr = Some(Vlr { header, data });
     }
+    // Every value has its place now: the input's field or an appended one.
+    plan.values_at = values_at.into_iter().flatten().collect();
     plan.record_len = u16::try_from(len)
         .map_err(|_| format!("its records would be {len} bytes, more than LAS allows"))?;
     Ok(plan)
@@ -210,6 +260,21 @@ pub(crate) fn plan(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn both() -> Wanted {
+        Wanted {
+            normals: true,
+            flags: true,
+            ..Wanted::default()
+        }
+    }
+
+    fn normals_only() -> Wanted {
+        Wanted {
+            normals: true,
+            ..Wanted::default()
+        }
+    }
 
     fn described(names: &[(&str, u8)]) -> Vlr {
         let mut data = Vec::new();
@@ -225,7 +290,7 @@ mod tests {
     #[test]
     fn new_fields_follow_the_inputs_extra_bytes() {
         let input = described(&[("Amplitude", 9), ("Deviation", 3)]);
-        let p = plan(34, 6, Some(&input), true, true).unwrap();
+        let p = plan(34, 6, Some(&input), both()).unwrap();
         assert_eq!(
             (p.normals_at, p.flags_at, p.record_len),
             (Some(40), Some(52), 53)
@@ -253,7 +318,7 @@ mod tests {
             ("NormalZ", 9),
             ("scanmesh_flags", 1),
         ]);
-        let p = plan(30, 13, Some(&input), true, true).unwrap();
+        let p = plan(30, 13, Some(&input), both()).unwrap();
         assert_eq!(
             (p.normals_at, p.flags_at, p.record_len),
             (Some(30), Some(42), 43)
@@ -263,7 +328,7 @@ mod tests {
 
     #[test]
     fn undescribed_bytes_are_described_before_new_fields() {
-        let p = plan(20, 300, None, true, false).unwrap();
+        let p = plan(20, 300, None, normals_only()).unwrap();
         assert_eq!((p.normals_at, p.record_len), (Some(320), 332));
         let f = fields(&p.vlr.unwrap().data).unwrap();
         let sizes: Vec<usize> = f.iter().map(|f| f.size).collect();
@@ -273,10 +338,10 @@ mod tests {
     #[test]
     fn a_description_longer_than_the_bytes_is_not_extended() {
         let input = described(&[("A", 10)]);
-        let e = plan(20, 4, Some(&input), true, false).unwrap_err();
+        let e = plan(20, 4, Some(&input), normals_only()).unwrap_err();
         assert!(e.contains("describes 8 bytes"), "{e}");
         // Nothing to add: the input's records are written as they are.
-        let p = plan(20, 4, Some(&input), false, false).unwrap();
+        let p = plan(20, 4, Some(&input), Wanted::default()).unwrap();
         assert_eq!((p.record_len, p.vlr.is_none()), (24, true));
     }
 }

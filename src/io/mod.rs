@@ -20,6 +20,7 @@ pub(crate) mod las_file;
 pub mod memory;
 pub(crate) mod obj;
 pub(crate) mod open;
+pub mod output;
 pub(crate) mod pcd;
 pub mod place;
 pub(crate) mod ply;
@@ -40,6 +41,7 @@ pub use error::IoError;
 pub use las_file::LasSource;
 pub use obj::read_obj_mesh;
 pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
+pub use output::{output_spec, Carried};
 pub use ply::read_mesh;
 pub use select::{LeftOut, Returns, Selection};
 pub use write::{create_writer, create_writer_with, LasOutput};
@@ -103,6 +105,14 @@ impl Format {
             Format::Xyz => AttributeSet::EMPTY,
         }
     }
+
+    /// Whether this format holds computed per-point values as named fields
+    /// ([`WriterSpec::values`]): PLY properties, PCD fields, LAS extra
+    /// bytes. XYZ text has no names for its columns (a reader takes the
+    /// fourth to sixth as a normal), E57 no standard field for them.
+    pub fn holds_values(self) -> bool {
+        !matches!(self, Format::Xyz | Format::E57)
+    }
 }
 
 /// A bounded batch of consecutive input records.
@@ -127,6 +137,10 @@ pub struct PointChunk {
     /// LAS/LAZ only: each point's number of returns (what a selection of
     /// last returns reads); empty for other formats.
     pub number_of_returns: Vec<u8>,
+    /// Computed per-point values a writer's spec names
+    /// ([`WriterSpec::values`]), that many per point, point after point;
+    /// readers leave it empty.
+    pub values: Vec<f32>,
 }
 
 impl PointChunk {
@@ -148,6 +162,7 @@ impl PointChunk {
         }
         self.attrs.clear();
         self.number_of_returns.clear();
+        self.values.clear();
     }
     /// Input index of the `i`-th point of this chunk.
     pub fn index_of(&self, i: usize) -> u64 {
@@ -280,6 +295,18 @@ pub struct WriterSpec {
     pub with_normals: bool,
     /// Write a per-point `flags` byte (u8) property where the format allows.
     pub with_flags: bool,
+    /// Computed values written after the normals, one f32 field each, in
+    /// this order ([`PointChunk::values`]); formats that cannot hold them
+    /// are refused ([`Format::holds_values`]).
+    pub values: &'static [ValueField],
+    /// Says what the file holds, where the format has a place for it (a
+    /// PLY comment, a PCD comment line); `None`: "written by scanmesh".
+    pub comment: Option<&'static str>,
+    /// The number of points to be written, when known before the first:
+    /// a PLY header then states it plainly (else a fixed-width count is
+    /// patched at the end), and `finish` fails unless exactly that many
+    /// were written.
+    pub count: Option<u64>,
     /// Attributes to write; each must be one the format can hold
     /// ([`Format::attributes`]) and every chunk must carry.
     pub attributes: AttributeSet,
@@ -298,11 +325,26 @@ impl WriterSpec {
             format,
             with_normals: false,
             with_flags: false,
+            values: &[],
+            comment: None,
+            count: None,
             attributes: AttributeSet::EMPTY,
             bounds: None,
             las_transform: None,
         }
     }
+}
+
+/// One computed value per point that an output carries as a field of its
+/// own: its name in the output and what it means (a LAS extra bytes
+/// description holds 32 bytes of it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ValueField {
+    /// The field's name (a PLY property, a PCD field, a LAS extra bytes
+    /// name: at most 32 bytes).
+    pub name: &'static str,
+    /// What the value is, at most 32 bytes.
+    pub description: &'static str,
 }
 
 /// A streaming sink of points. Output goes to a temporary name and appears

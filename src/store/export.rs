@@ -25,8 +25,8 @@
 //! of a scratch file (`super::reorder`) and each window read back from it.
 
 use super::reorder::Reorder;
-use super::slots::{Columns, Slots};
-use super::{PointStore, StoreError, FLAGS, NORMALS};
+use super::slots::{Columns, Slots, TileValues};
+use super::{ColumnSpec, Item, PointStore, StoreError, FLAGS, NORMALS};
 use crate::io::{
     create_writer_with, Attribute, Format, LasOutput, PointChunk, PointWriter, WriterSpec,
 };
@@ -58,18 +58,76 @@ pub fn export_points_keeping(
     keep: Option<(&Path, &crate::io::ReadOptions)>,
     progress: &dyn Progress,
 ) -> Result<u64, StoreError> {
-    let cols = Columns {
-        normals: if spec.with_normals {
-            Some(store.column(&NORMALS)?)
-        } else {
-            None
-        },
-        flags: if spec.with_flags {
-            Some(store.column(&FLAGS)?)
-        } else {
-            None
-        },
-    };
+    let computed = Computed::normals_for(spec);
+    export_columns(store, path, spec, &computed, window_points, keep, progress)
+}
+
+/// The store's computed columns an export writes beside the points: the
+/// normals, the values ([`WriterSpec::values`], one f32 of the column each)
+/// and the flags, each present exactly when the spec asks for it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Computed {
+    /// The column of normals (3 x f32).
+    pub normals: Option<ColumnSpec>,
+    /// The column of values (as many f32 as the spec names).
+    pub values: Option<ColumnSpec>,
+    /// The column of flags (u8).
+    pub flags: Option<ColumnSpec>,
+}
+
+impl Computed {
+    /// The normals pass's columns ([`NORMALS`], [`FLAGS`]), as `spec`
+    /// asks for them.
+    pub fn normals_for(spec: &WriterSpec) -> Self {
+        Computed {
+            normals: spec.with_normals.then_some(NORMALS),
+            values: None,
+            flags: spec.with_flags.then_some(FLAGS),
+        }
+    }
+
+    /// Opens the columns, checked against what `spec` asks to write.
+    fn open(&self, store: &PointStore, spec: &WriterSpec) -> Result<Columns, StoreError> {
+        let per_point = spec.values.len();
+        let fits = self.normals.is_some() == spec.with_normals
+            && self.flags.is_some() == spec.with_flags
+            && match self.values {
+                Some(c) => c.item == Item::F32(per_point),
+                None => per_point == 0,
+            };
+        if !fits {
+            return Err(StoreError::Corrupt {
+                path: store.dir().to_path_buf(),
+                reason: format!(
+                    "the export's columns ({self:?}) are not what its output asks for \
+                     (normals {}, {per_point} values, flags {})",
+                    spec.with_normals, spec.with_flags
+                ),
+            });
+        }
+        let open = |c: Option<ColumnSpec>| c.map(|c| store.column(&c)).transpose();
+        Ok(Columns {
+            normals: open(self.normals)?,
+            values: open(self.values)?,
+            per_point,
+            flags: open(self.flags)?,
+        })
+    }
+}
+
+/// Writes `store` to `path` in input order with the `computed` columns
+/// `spec` names, and the rows `keep` asks for as
+/// [`export_points_keeping`] does; returns the rows written.
+pub fn export_columns(
+    store: &PointStore,
+    path: &Path,
+    spec: &WriterSpec,
+    computed: &Computed,
+    window_points: u64,
+    keep: Option<(&Path, &crate::io::ReadOptions)>,
+    progress: &dyn Progress,
+) -> Result<u64, StoreError> {
+    let cols = computed.open(store, spec)?;
     let mut spec = spec.clone();
     if spec.las_transform.is_none() {
         spec.las_transform = store.coordinates().las_transform();
@@ -97,13 +155,7 @@ pub fn export_points_keeping(
     let mut writer = create_writer_with(path, &spec, &las)?;
     if let Some((input, read)) = keep {
         writer = Box::new(crate::io::keep::KeepUnselected::wrap(
-            writer,
-            path,
-            input,
-            read,
-            spec.with_normals,
-            spec.with_flags,
-            spec.attributes,
+            writer, path, input, read, &spec,
         )?);
     }
     let n = store.len();
@@ -112,8 +164,9 @@ pub fn export_points_keeping(
         _ => 0,
     };
     // Two windows of half the size: one filled while the other is written.
+    let extra_bytes = record_bytes + 4 * spec.values.len() as u64;
     let window =
-        (attribute_window(window_points, spec.attributes, record_bytes) / 2).clamp(1, n.max(1));
+        (attribute_window(window_points, spec.attributes, extra_bytes) / 2).clamp(1, n.max(1));
     progress.begin("write", n);
     let buckets = if window < n && cols.any() {
         Some(Reorder::build(store, &cols, window)?)
@@ -162,14 +215,14 @@ struct Window {
 const WINDOW_BYTES_PER_POINT: u64 = 48;
 
 /// Points of a window planned at `window_points` without attributes, shrunk
-/// so that a window carrying `attributes` and LAS records of
-/// `record_bytes` takes no more memory.
+/// so that a window carrying `attributes` and `extra_bytes` more a point
+/// (LAS records, computed values) takes no more memory.
 fn attribute_window(
     window_points: u64,
     attributes: crate::io::AttributeSet,
-    record_bytes: u64,
+    extra_bytes: u64,
 ) -> u64 {
-    let extra = attributes.bytes_per_point() as u64 + record_bytes;
+    let extra = attributes.bytes_per_point() as u64 + extra_bytes;
     window_points * WINDOW_BYTES_PER_POINT / (WINDOW_BYTES_PER_POINT + extra)
 }
 
@@ -215,10 +268,20 @@ fn fill_windows(
         win.flags.clear();
         win.flags
             .resize(if cols.flags.is_some() { len } else { 0 }, 0);
+        chunk.values.clear();
+        chunk.values.resize(
+            match cols.values {
+                Some(_) => len * cols.per_point,
+                None => 0,
+            },
+            0.0,
+        );
         let slots = Slots {
             first: w0,
             len,
             normals: chunk.normals.as_deref_mut(),
+            values: cols.values.as_ref().map(|_| chunk.values.as_mut_slice()),
+            per_point: cols.per_point,
             flags: cols.flags.as_ref().map(|_| win.flags.as_mut_slice()),
         };
         match (buckets, cols.any()) {
@@ -280,21 +343,20 @@ fn fill_window(store: &PointStore, cols: &Columns, slots: Slots) -> Result<(), S
 /// Places the points whose input ids fall in `part`, passing over all tiles.
 fn fill_part(store: &PointStore, cols: &Columns, mut part: Slots) -> Result<(), StoreError> {
     let range = part.range();
-    let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut ids, mut tv) = (Vec::new(), TileValues::default());
     for t in store.tiles() {
         store.read_indices(t.start, t.count, &mut ids)?;
         if !ids.iter().any(|i| range.contains(i)) {
             continue;
         }
-        cols.read(t, &mut nrm, &mut flg)?;
+        cols.read(t, &mut tv)?;
         for (k, &id) in ids.iter().enumerate() {
             if !range.contains(&id) {
                 continue;
             }
-            let normal = nrm.get(3 * k..3 * k + 3).unwrap_or(&[0.0; 3]);
-            let f = flg.get(k).copied().unwrap_or(0);
+            let (normal, values, f) = tv.of(k, cols.per_point);
             let slot = (id - range.start) as usize;
-            part.place(slot, normal, f);
+            part.place(slot, &normal, values, f);
         }
     }
     Ok(())

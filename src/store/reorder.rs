@@ -6,13 +6,14 @@
 //! store once per window (15 times for 10M points in 256 MiB).
 //!
 //! Record: the point's offset in its window (u32), then its normal (3 x
-//! f32) and flags byte if the output carries them; little-endian. The
+//! f32), its values (f32 each) and flags byte if the output carries them;
+//! little-endian. The
 //! coordinates are not carried: the export reads the input's own, in input
 //! order. Within a region records land in whatever order the
 //! threads flush them; each one names its slot, so the output does not
 //! depend on that order.
 
-use super::slots::{Columns, Slots};
+use super::slots::{Columns, Slots, TileValues};
 use super::{PointStore, StoreError, TileEntry};
 use crate::io::scratch::ScratchFile;
 use rayon::prelude::*;
@@ -34,12 +35,14 @@ pub(super) struct Reorder {
 #[derive(Clone, Copy)]
 struct Layout {
     normals: bool,
+    /// Values a point (0 when the output carries none).
+    values: usize,
     flags: bool,
 }
 
 impl Layout {
     fn bytes(&self) -> usize {
-        4 + if self.normals { 12 } else { 0 } + usize::from(self.flags)
+        4 + if self.normals { 12 } else { 0 } + 4 * self.values + usize::from(self.flags)
     }
 }
 
@@ -59,6 +62,10 @@ impl Reorder {
             count: store.len(),
             layout: Layout {
                 normals: cols.normals.is_some(),
+                values: match cols.values {
+                    Some(_) => cols.per_point,
+                    None => 0,
+                },
                 flags: cols.flags.is_some(),
             },
         };
@@ -88,10 +95,11 @@ impl Reorder {
     ) -> Result<(), StoreError> {
         let rec = self.layout.bytes();
         let mut buckets: Vec<Vec<u8>> = (0..cursors.len()).map(|_| Vec::new()).collect();
-        let (mut ids, mut nrm, mut flg) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut ids, mut tv) = (Vec::new(), TileValues::default());
+        let per = self.layout.values;
         for t in tiles {
             store.read_indices(t.start, t.count, &mut ids)?;
-            cols.read(t, &mut nrm, &mut flg)?;
+            cols.read(t, &mut tv)?;
             for (k, &id) in ids.iter().enumerate() {
                 if id >= self.count {
                     return Err(self.corrupt(format!("input index {id} of {}", self.count)));
@@ -102,13 +110,17 @@ impl Reorder {
                     b.reserve_exact(cap * rec);
                 }
                 b.extend_from_slice(&((id % self.window) as u32).to_le_bytes());
+                let (normal, values, flags) = tv.of(k, per);
                 if self.layout.normals {
-                    nrm[3 * k..3 * k + 3]
+                    normal
                         .iter()
                         .for_each(|v| b.extend_from_slice(&v.to_le_bytes()));
                 }
+                values
+                    .iter()
+                    .for_each(|v| b.extend_from_slice(&v.to_le_bytes()));
                 if self.layout.flags {
-                    b.push(flg[k]);
+                    b.push(flags);
                 }
                 if b.len() >= cap * rec {
                     self.flush(w, b, cursors)?;
@@ -175,6 +187,8 @@ impl Reorder {
         let rec = self.layout.bytes();
         let range = part.range();
         let mut normal = [0f32; 3];
+        let mut values = vec![0f32; self.layout.values];
+        let values_at = if self.layout.normals { 16 } else { 4 };
         for r in records.chunks_exact(rec) {
             let id = first + u64::from(u32::from_le_bytes([r[0], r[1], r[2], r[3]]));
             if !range.contains(&id) {
@@ -184,8 +198,11 @@ impl Reorder {
             if self.layout.normals {
                 normal = [f32_at(4), f32_at(8), f32_at(12)];
             }
+            for (j, v) in values.iter_mut().enumerate() {
+                *v = f32_at(values_at + 4 * j);
+            }
             let flags = if self.layout.flags { r[rec - 1] } else { 0 };
-            part.place((id - range.start) as usize, &normal, flags);
+            part.place((id - range.start) as usize, &normal, &values, flags);
         }
     }
 

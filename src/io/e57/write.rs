@@ -182,6 +182,7 @@ impl PointWriter for E57Writer {
             Some(Ok(Err(e))) => return Err(e),
             _ => return Err(self.worker_error()),
         }
+        crate::io::write::check_count(&self.path, &self.spec, self.count)?;
         if let Some(atomic) = self.atomic.take() {
             atomic.commit()?;
         }

@@ -23,9 +23,9 @@
 //! i32. Without a given transform, [`choose_las_transform`] picks one from
 //! the bounds; a point outside the i32 range is an error, never clamped.
 
-use super::{check_chunk, open_output};
+use super::{check_chunk, open_output, Checked};
 use crate::geom::Aabb;
-use crate::io::las_extra::{plan, ExtraPlan};
+use crate::io::las_extra::{plan, ExtraPlan, Wanted};
 use crate::io::las_file::las_error;
 use crate::io::las_file::{Frame, RecordHeader, Stats, Vlr, LASZIP};
 use crate::io::{
@@ -347,8 +347,7 @@ impl LasWriter {
             usize::from(base),
             usize::from(extra_in),
             source.extra_bytes_vlr(),
-            spec.with_normals,
-            spec.with_flags,
+            Wanted::of(spec),
         )
         .map_err(cannot)?;
         if extra.vlr.is_some() && source.extra_bytes_in_evlrs() {
@@ -381,8 +380,7 @@ impl LasWriter {
         let transform = built_transform(path, spec)?;
         let layout = built_layout(path, spec, las)?;
         let base = layout.len();
-        let extra = plan(base, 0, None, spec.with_normals, spec.with_flags)
-            .map_err(|e| unsupported(path, e))?;
+        let extra = plan(base, 0, None, Wanted::of(spec)).map_err(|e| unsupported(path, e))?;
         let added = extra.record_len - base as u16;
         let mut vlrs: Vec<Vlr> = extra.vlr.iter().cloned().collect();
         let laz = match compressed {
@@ -497,12 +495,7 @@ fn return_number(rec: &[u8], format: u8) -> u8 {
 
 impl LasWriter {
     /// Fills the output records of `chunk` into `self.buf`.
-    fn fill(
-        &mut self,
-        chunk: &PointChunk,
-        normals: Option<&[glam::Vec3]>,
-        flags: Option<&[u8]>,
-    ) -> Result<(), IoError> {
+    fn fill(&mut self, chunk: &PointChunk, c: &Checked) -> Result<(), IoError> {
         let n = chunk.len();
         let out_len = usize::from(self.extra.record_len);
         self.buf.clear();
@@ -530,10 +523,13 @@ impl LasWriter {
                     (q, return_number(rec, layout.format))
                 }
             };
-            if let (Some(at), Some(ns)) = (self.extra.normals_at, normals) {
+            if let (Some(at), Some(ns)) = (self.extra.normals_at, c.normals) {
                 LittleEndian::write_f32_into(&ns[i].to_array(), &mut rec[at..at + 12]);
             }
-            if let (Some(at), Some(fs)) = (self.extra.flags_at, flags) {
+            for (&at, v) in self.extra.values_at.iter().zip(c.values_of(i)) {
+                LittleEndian::write_f32(&mut rec[at..at + 4], *v);
+            }
+            if let (Some(at), Some(fs)) = (self.extra.flags_at, c.flags) {
                 rec[at] = fs[i];
             }
             self.stats.add(q, ret);
@@ -567,8 +563,7 @@ impl PointWriter for LasWriter {
     fn write_chunk(&mut self, chunk: &PointChunk, flags: Option<&[u8]>) -> Result<(), IoError> {
         let c = check_chunk(&self.path, &self.spec, chunk, flags, self.stats.count)?;
         self.check_records(chunk)?;
-        let (normals, flags) = (c.normals, c.flags);
-        self.fill(chunk, normals, flags)?;
+        self.fill(chunk, &c)?;
         let path = &self.path;
         let written = match &mut self.out {
             Some(Out::Las(w)) => w.write_all(&self.buf),
@@ -581,6 +576,7 @@ impl PointWriter for LasWriter {
     fn finish(mut self: Box<Self>) -> Result<u64, IoError> {
         let path = self.path.clone();
         let os = |e| IoError::os(&path, e);
+        super::check_count(&path, &self.spec, self.stats.count)?;
         let (Some(out), Some(atomic)) = (self.out.take(), self.atomic.take()) else {
             return Err(unsupported(&path, "writer already finished".into()));
         };

@@ -39,6 +39,16 @@ pub fn create_writer_with(
             reason: "gzip output is not supported; compress the finished file".into(),
         });
     }
+    if !spec.values.is_empty() && !spec.format.holds_values() {
+        let names: Vec<&str> = spec.values.iter().map(|v| v.name).collect();
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!(
+                "this format has no named field for {}; write .ply, .pcd, .las or .laz",
+                names.join(", ")
+            ),
+        });
+    }
     let unheld = spec.attributes.without(spec.format.attributes());
     if !unheld.is_empty() {
         return Err(IoError::Unsupported {
@@ -70,15 +80,43 @@ fn open_output(path: &Path) -> Result<(AtomicFile, BufWriter<File>), IoError> {
     Ok((atomic, BufWriter::with_capacity(OUT_BUF, file)))
 }
 
-/// What a chunk carries for the spec: normals and flags, each present
-/// exactly when the spec asks for it.
+/// Fails unless a writer given a known count ([`WriterSpec::count`])
+/// wrote exactly that many points; called before the output is committed,
+/// so a short output never appears under its name.
+pub(crate) fn check_count(path: &Path, spec: &WriterSpec, written: u64) -> Result<(), IoError> {
+    match spec.count {
+        Some(declared) if declared != written => Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!("{written} points written where {declared} were declared"),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// What a chunk carries for the spec: normals, values and flags, each
+/// present exactly when the spec asks for it.
 pub(crate) struct Checked<'a> {
     normals: Option<&'a [Vec3]>,
+    /// `spec.values.len()` values per point.
+    values: Option<&'a [f32]>,
+    /// Values per point.
+    per: usize,
     flags: Option<&'a [u8]>,
     /// The chunk's attributes, when the spec asks for some (the spec's
     /// set says which to write).
     attrs: Option<&'a Attributes>,
     set: super::AttributeSet,
+}
+
+impl Checked<'_> {
+    /// Point `i`'s computed values (none when the spec asks for none).
+    #[inline]
+    pub(crate) fn values_of(&self, i: usize) -> &[f32] {
+        match self.values {
+            Some(v) => &v[self.per * i..self.per * (i + 1)],
+            None => &[],
+        }
+    }
 }
 
 /// Checks `chunk` against `spec`; `written` is the number of points already
@@ -105,6 +143,17 @@ pub(crate) fn check_chunk<'a>(
         (true, Some(f)) if f.len() == n => Some(f),
         (true, _) => return Err(misuse(format!("writer needs {n} flags for this chunk"))),
     };
+    let per = spec.values.len();
+    let values = match (per, chunk.values.len()) {
+        (0, _) => None,
+        (_, got) if got == n * per => Some(chunk.values.as_slice()),
+        (_, got) => {
+            return Err(misuse(format!(
+                "writer needs {} values for this chunk, it has {got}",
+                n * per
+            )))
+        }
+    };
     let attrs = match spec.attributes.is_empty() {
         true => None,
         false => Some(&chunk.attrs),
@@ -129,6 +178,8 @@ pub(crate) fn check_chunk<'a>(
     }
     Ok(Checked {
         normals,
+        values,
+        per,
         flags,
         attrs,
         set: spec.attributes,

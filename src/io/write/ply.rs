@@ -1,7 +1,9 @@
 //! PLY point writer: binary (little- or big-endian) or ASCII; `x y z` as
-//! double, `nx ny nz` as float, `flags` as uchar. The vertex count is written
+//! double, `nx ny nz` as float, the spec's computed values as float, `flags`
+//! as uchar. The vertex count is written
 //! as a fixed-width placeholder and patched in `finish`, so the points
-//! stream straight to disk.
+//! stream straight to disk (a count the spec declares is written as it is,
+//! and checked in `finish`).
 //!
 //! Attributes follow: `intensity` ushort, `red green blue` uchar (the type
 //! every PLY viewer reads; 16-bit colour keeps its high byte),
@@ -52,12 +54,25 @@ fn header(spec: &WriterSpec) -> (String, Vec<u64>) {
         Format::PlyBinaryBe => "binary_big_endian",
         _ => "binary_little_endian",
     };
-    let mut h = format!("ply\nformat {format} 1.0\ncomment written by scanmesh\nelement vertex ");
-    let count_at = h.len() as u64;
-    h += &format!("{:0w$}\n", 0, w = COUNT_WIDTH);
+    let comment = spec.comment.unwrap_or("written by scanmesh");
+    let mut h = format!("ply\nformat {format} 1.0\ncomment {comment}\nelement vertex ");
+    let count_at = match spec.count {
+        Some(n) => {
+            h += &format!("{n}\n");
+            Vec::new()
+        }
+        None => {
+            let at = h.len() as u64;
+            h += &format!("{:0w$}\n", 0, w = COUNT_WIDTH);
+            vec![at]
+        }
+    };
     h += "property double x\nproperty double y\nproperty double z\n";
     if spec.with_normals {
         h += "property float nx\nproperty float ny\nproperty float nz\n";
+    }
+    for v in spec.values {
+        h += &format!("property float {}\n", v.name);
     }
     if spec.with_flags {
         h += "property uchar flags\n";
@@ -72,7 +87,7 @@ fn header(spec: &WriterSpec) -> (String, Vec<u64>) {
         };
     }
     h += "end_header\n";
-    (h, vec![count_at])
+    (h, count_at)
 }
 
 fn pcd_header(spec: &WriterSpec) -> (String, Vec<u64>) {
@@ -93,6 +108,9 @@ fn pcd_header(spec: &WriterSpec) -> (String, Vec<u64>) {
             add(n, "4", "F");
         }
     }
+    for v in spec.values {
+        add(v.name, "4", "F");
+    }
     if spec.with_flags {
         add("flags", "1", "U");
     }
@@ -105,8 +123,12 @@ fn pcd_header(spec: &WriterSpec) -> (String, Vec<u64>) {
             Attribute::GpsTime => add("gps_time", "8", "F"),
         }
     }
+    let comment = match spec.comment {
+        Some(c) => format!("# {c}\n"),
+        None => String::new(),
+    };
     let mut h = format!(
-        "# .PCD v0.7 - Point Cloud Data file format (written by scanmesh)\nVERSION 0.7\n\
+        "# .PCD v0.7 - Point Cloud Data file format (written by scanmesh)\n{comment}VERSION 0.7\n\
          FIELDS {fields}\nSIZE {size}\nTYPE {kind}\nCOUNT {count}\nWIDTH "
     );
     let width_at = h.len() as u64;
@@ -185,6 +207,10 @@ fn encode_binary<B: ByteOrder>(
                 buf.extend_from_slice(&b8[..4]);
             }
         }
+        for &v in c.values_of(i) {
+            B::write_f32(&mut b8, v);
+            buf.extend_from_slice(&b8[..4]);
+        }
         if let Some(f) = c.flags {
             buf.push(f[i]);
         }
@@ -244,6 +270,9 @@ pub(crate) fn encode_text(buf: &mut Vec<u8>, chunk: &PointChunk, c: &Checked, ra
         if let Some(n) = c.normals {
             let _ = write!(buf, " {} {} {}", n[i].x, n[i].y, n[i].z);
         }
+        for v in c.values_of(i) {
+            let _ = write!(buf, " {v}");
+        }
         if let Some(f) = c.flags {
             let _ = write!(buf, " {}", f[i]);
         }
@@ -292,6 +321,7 @@ impl PointWriter for PlyWriter {
             count,
             ..
         } = *self;
+        super::check_count(&path, &spec, count)?;
         let os = |e| IoError::os(&path, e);
         let width = if spec.format == Format::Pcd {
             if count > u64::from(u32::MAX >> 1) {

@@ -46,11 +46,13 @@ impl PointWriter for XyzWriter {
     fn finish(self: Box<Self>) -> Result<u64, IoError> {
         let XyzWriter {
             path,
+            spec,
             out,
             atomic,
             count,
             ..
         } = *self;
+        super::check_count(&path, &spec, count)?;
         out.into_inner()
             .map_err(|e| IoError::os(&path, e.into_error()))?;
         atomic.commit()?;
