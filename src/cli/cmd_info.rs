@@ -79,6 +79,7 @@ enum Planned {
     Neighbors,
     Curvature,
     Features,
+    Outliers,
 }
 
 pub fn run(a: InfoArgs) -> Result<()> {
@@ -317,6 +318,7 @@ fn print_plan(a: &InfoArgs) -> Result<()> {
         Planned::Neighbors => NeighbourParams::default().cost(),
         Planned::Curvature => CurvatureParams::default().cost(),
         Planned::Features => FeatureParams::default().cost(),
+        Planned::Outliers => scanmesh::outliers::OutlierParams::default().cost(),
     };
     let budget = MemoryBudget::new(mem, threads);
     let minimum = MemoryPlan::minimum_budget(threads, points, &cost);

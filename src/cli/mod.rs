@@ -10,6 +10,7 @@ mod cmd_features;
 mod cmd_info;
 mod cmd_neighbors;
 mod cmd_normals;
+mod cmd_outliers;
 mod cmd_reconstruct;
 mod cmd_reconstruct_delaunay;
 mod cmd_reconstruct_projection;
@@ -66,6 +67,8 @@ enum Command {
     Normals(cmd_normals::NormalsArgs),
     /// Per-point principal, mean and Gaussian curvature (paper 5), in input order.
     Curvature(cmd_curvature::CurvatureArgs),
+    /// Statistical outlier scores (PCL's and Open3D's rule), outliers flagged, in input order.
+    Outliers(cmd_outliers::OutliersArgs),
     /// Valley-ridge feature lines (paper 5) as polylines (.ply edges or .obj lines).
     Features(cmd_features::FeaturesArgs),
     /// Topological (paper 3) or k nearest neighbours of every point, in input order.
@@ -686,6 +689,7 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Tile(a) => cmd_tile::run(a),
         Command::Normals(a) => cmd_normals::run(a),
         Command::Curvature(a) => cmd_curvature::run(a),
+        Command::Outliers(a) => cmd_outliers::run(a),
         Command::Features(a) => cmd_features::run(a),
         Command::Neighbors(a) => cmd_neighbors::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
@@ -708,6 +712,7 @@ impl Command {
             Command::Tile(a) => Some(&a.common),
             Command::Normals(a) => Some(&a.common),
             Command::Curvature(a) => Some(&a.common),
+            Command::Outliers(a) => Some(&a.common),
             Command::Features(a) => Some(&a.common),
             Command::Neighbors(a) => Some(&a.common),
             Command::Reconstruct(a) => Some(&a.common),
@@ -723,6 +728,7 @@ impl Command {
             Command::Neighbors(a) => Some(&mut a.common),
             Command::Reconstruct(a) => Some(&mut a.common),
             Command::Curvature(a) => Some(&mut a.common),
+            Command::Outliers(a) => Some(&mut a.common),
             Command::Features(a) => Some(&mut a.common),
             _ => None,
         }
@@ -735,6 +741,7 @@ impl Command {
             Command::Neighbors(a) => Some((&a.input, &a.output)),
             Command::Reconstruct(a) => Some((&a.input, &a.output)),
             Command::Curvature(a) => Some((&a.input, &a.output)),
+            Command::Outliers(a) => Some((&a.input, &a.output)),
             Command::Features(a) => Some((&a.input, &a.output)),
             _ => None,
         }

@@ -1,58 +1,10 @@
 //! Order-free statistics of the curvature pass, summed over tiles in any
-//! grouping to the same bits: fixed-point sums (a float sum would depend on
-//! the tiling) and the project's log histograms for quantiles.
+//! grouping to the same bits: fixed-point sums (`crate::stats`; a float sum
+//! would depend on the tiling) and the project's log histograms for
+//! quantiles.
 
+pub(crate) use crate::stats::ExactSum;
 use crate::store::sampling::LogHistogram;
-
-/// Fixed-point units per `scale`.
-const UNIT: f64 = (1u64 << 40) as f64;
-
-/// A sum of non-negative values in units of `scale / 2^40`, and their count.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExactSum {
-    scale: f64,
-    sum: u128,
-    count: u64,
-}
-
-impl ExactSum {
-    pub fn new(scale: f64) -> Self {
-        ExactSum {
-            scale: if scale > 0.0 && scale.is_finite() {
-                scale
-            } else {
-                1.0
-            },
-            sum: 0,
-            count: 0,
-        }
-    }
-
-    /// Adds `v` (NaN and negative values count as zero).
-    pub fn add(&mut self, v: f64) {
-        let units = (v / self.scale * UNIT).round();
-        // Saturating: an absurd value must not wrap the sum.
-        self.sum += if units > 0.0 {
-            units.min(1e30) as u128
-        } else {
-            0
-        };
-        self.count += 1;
-    }
-
-    pub fn merge(&mut self, o: &ExactSum) {
-        self.sum += o.sum;
-        self.count += o.count;
-    }
-
-    /// Mean of the values (0 for none).
-    pub fn mean(&self) -> f64 {
-        if self.count == 0 {
-            return 0.0;
-        }
-        self.sum as f64 / UNIT * self.scale / self.count as f64
-    }
-}
 
 /// What the curvature pass measured, for reports and for the feature
 /// thresholds' defaults.
@@ -106,32 +58,5 @@ impl CurvatureStats {
     /// RMS of the fits' residuals over the points that have a fit.
     pub fn rms(&self) -> f64 {
         self.residual2.mean().sqrt()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exact_sum_is_grouping_free() {
-        let vals: Vec<f64> = (0..1000)
-            .map(|i| (i as f64 * 0.37).sin().abs() * 1e-4)
-            .collect();
-        let mut all = ExactSum::new(1e-4);
-        vals.iter().for_each(|v| all.add(*v));
-        let mut parts = ExactSum::new(1e-4);
-        for chunk in vals.chunks(37).rev() {
-            let mut p = ExactSum::new(1e-4);
-            chunk.iter().for_each(|v| p.add(*v));
-            parts.merge(&p);
-        }
-        assert_eq!(all, parts);
-        let want = vals.iter().sum::<f64>() / vals.len() as f64;
-        assert!(
-            (all.mean() - want).abs() < 1e-12 * want.max(1e-12),
-            "{}",
-            all.mean()
-        );
     }
 }
