@@ -530,3 +530,40 @@ fn info_is_plain_text_and_errors_say_each_cause_once() {
     assert!(err.contains("missing.ply"), "{err}");
     assert_eq!(err.matches("No such file").count(), 1, "{err}");
 }
+
+/// Commands that keep no run directory neither list nor take its options
+/// (they listed `--run-dir`, `--restart`, `--emit` and `--tasks` and then
+/// refused them); the commands that keep one list them all.
+#[test]
+fn only_commands_that_keep_a_run_list_its_options() {
+    let run_options = ["--run-dir", "--restart", "--emit", "--tasks"];
+    for args in [
+        &["convert", "in.ply", "out.ply"][..],
+        &["tile", "in.ply", "-o", "out"],
+        &["demo"],
+    ] {
+        let command = args[0];
+        let help = scanmesh(&[command, "--help"]);
+        let text = String::from_utf8_lossy(&help.stdout);
+        for option in run_options {
+            assert!(!text.contains(option), "{command} --help lists {option}");
+        }
+        let o = scanmesh(&[args, &["--run-dir", "d"]].concat());
+        assert_fails_naming(&o, "unexpected argument '--run-dir'");
+        assert!(!Path::new("d").exists());
+    }
+    for command in [
+        "normals",
+        "curvature",
+        "outliers",
+        "features",
+        "neighbors",
+        "reconstruct",
+    ] {
+        let help = scanmesh(&[command, "--help"]);
+        let text = String::from_utf8_lossy(&help.stdout);
+        for option in run_options {
+            assert!(text.contains(option), "{command} --help lacks {option}");
+        }
+    }
+}

@@ -23,6 +23,8 @@ pub struct CurvatureArgs {
     fit: FitArgs,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 /// The curvature fit's options (shared with `features`).
@@ -98,7 +100,7 @@ impl FitArgs {
 }
 
 pub fn run(a: CurvatureArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     let params = a.fit.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;

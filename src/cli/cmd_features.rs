@@ -28,6 +28,8 @@ pub struct FeaturesArgs {
     thresholds: Thresholds,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 /// Every threshold of paper 5, lengths in mean spacings d (defaults from
@@ -117,7 +119,7 @@ impl FeaturesArgs {
 }
 
 pub fn run(a: FeaturesArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     s.no_keep("feature lines")?;
     let params = a.params()?;
     s.init_threads();

@@ -37,6 +37,8 @@ pub struct NeighborsArgs {
     max_iterations: usize,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -68,7 +70,7 @@ impl NeighborsArgs {
 }
 
 pub fn run(a: NeighborsArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     s.no_keep("lists over the selected points only (keeping the others is not implemented for neighbors yet)")?;
     let params = a.params()?;
     s.init_threads();

@@ -59,6 +59,8 @@ pub struct NormalsArgs {
     ascii: bool,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
@@ -198,7 +200,7 @@ impl NormalsArgs {
 }
 
 pub fn run(a: NormalsArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     let params = a.params()?;
     params.validate()?;
     s.init_threads();

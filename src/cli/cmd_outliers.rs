@@ -28,10 +28,12 @@ pub struct OutliersArgs {
     ratio: f64,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 pub fn run(a: OutliersArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     let params = OutlierParams {
         k: a.k,
         ratio: a.ratio,

@@ -74,6 +74,8 @@ pub struct ReconstructArgs {
     ascii: bool,
     #[command(flatten)]
     pub common: super::CommonArgs,
+    #[command(flatten)]
+    pub run: super::RunDirArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -121,7 +123,7 @@ impl ReconstructArgs {
 }
 
 pub fn run(a: ReconstructArgs) -> Result<()> {
-    let s = a.common.settings()?;
+    let s = a.common.settings_in(&a.run)?;
     s.no_keep("a mesh")?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;

@@ -88,13 +88,15 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     let mut command = Cli::try_parse_from(&args)
         .with_context(|| format!("{}: the recorded command line", a.dir.display()))?
         .command;
-    let Some(common) = command.common_mut() else {
+    let Some(run) = command.run_args_mut() else {
         bail!("{}: the recorded command keeps no run", a.dir.display());
     };
-    common.job = a.job();
+    run.job = a.job();
     // Refused here, before the job is logged as started: --threads from
     // the script, --mem from the recorded command, against this node.
-    common.mem_and_threads()?;
+    if let Some(common) = command.common() {
+        common.mem_and_threads(false)?;
+    }
     super::run_in_dir::run_in_dir(command, args[1..].to_vec())
 }
 

@@ -136,9 +136,15 @@ pub struct CommonArgs {
     /// peak RSS and disk traffic, the summary, the outcome, the version.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+}
+
+/// The run directory's options, taken by the commands that can keep one
+/// (normals, curvature, outliers, features, neighbors, reconstruct); the
+/// others do not list them.
+#[derive(Args, Clone, Debug, Default)]
+pub struct RunDirArgs {
     /// Keep the run in DIR (its store, finished tiles, log): the same
-    /// command again resumes where it stopped (normals, neighbors,
-    /// reconstruct).
+    /// command again resumes where it stopped.
     #[arg(long, value_name = "DIR")]
     run_dir: Option<PathBuf>,
     /// With --run-dir: discard what DIR holds and start afresh.
@@ -291,7 +297,7 @@ impl CommonArgs {
     /// node may be larger than the login node), so they are only parsed
     /// here: [`CommonArgs::check_against_this_machine`] warns, and each
     /// job refuses them where it runs.
-    fn mem_and_threads(&self) -> Result<(u64, usize)> {
+    fn mem_and_threads(&self, emit: bool) -> Result<(u64, usize)> {
         let mem = scanmesh::units::parse_size(&self.mem)
             .with_context(|| format!("--mem {}", self.mem))?;
         let threads = match self.threads {
@@ -299,7 +305,7 @@ impl CommonArgs {
             Some(t) => t,
             None => cores(),
         };
-        if self.emit.is_none() {
+        if !emit {
             if let Some(why) = too_many_threads(threads).or_else(|| too_much_memory(mem)) {
                 bail!(why);
             }
@@ -309,9 +315,9 @@ impl CommonArgs {
 
     /// `--mem` and `--threads` checked against this machine: refused
     /// beyond it, or with `--emit` a warning on stderr for each.
-    fn check_against_this_machine(&self) -> Result<()> {
-        let (mem, threads) = self.mem_and_threads()?;
-        if self.emit.is_some() {
+    fn check_against_this_machine(&self, emit: bool) -> Result<()> {
+        let (mem, threads) = self.mem_and_threads(emit)?;
+        if emit {
             for why in [too_many_threads(threads), too_much_memory(mem)]
                 .into_iter()
                 .flatten()
@@ -322,8 +328,14 @@ impl CommonArgs {
         Ok(())
     }
 
+    /// The settings of a command that keeps no run directory.
     fn settings(&self) -> Result<Settings> {
-        let (mem, threads) = self.mem_and_threads()?;
+        self.settings_in(&RunDirArgs::default())
+    }
+
+    /// The settings of a command run in `run`'s directory, if it names one.
+    fn settings_in(&self, run: &RunDirArgs) -> Result<Settings> {
+        let (mem, threads) = self.mem_and_threads(run.emit.is_some())?;
         if self.tile_points == Some(0) {
             bail!("--tile-points must be at least 1");
         }
@@ -342,12 +354,8 @@ impl CommonArgs {
             select: self.select.selection(),
             keep_unselected: self.unselected == Unselected::Keep
                 && !self.select.selection().is_all(),
-            run: self
-                .run_dir
-                .as_deref()
-                .map(rundir::RunDir::at)
-                .transpose()?,
-            job: self.job.clone(),
+            run: run.run_dir.as_deref().map(rundir::RunDir::at).transpose()?,
+            job: run.job.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -638,14 +646,15 @@ pub fn run() -> Result<()> {
     }
     // Before a run directory is made or written: a refused --mem must not
     // leave a run behind that the corrected command line then differs from.
+    let emit = cli.command.run_args().is_some_and(|r| r.emit.is_some());
     let checked = cli
         .command
         .common()
-        .map_or(Ok(()), CommonArgs::check_against_this_machine);
+        .map_or(Ok(()), |c| c.check_against_this_machine(emit));
     let promised = cli
         .command
         .common()
-        .and_then(|c| c.mem_and_threads().ok())
+        .and_then(|c| c.mem_and_threads(emit).ok())
         .map(|(mem, _)| mem);
     let outcome = checked
         .and_then(|()| match cli.command {
@@ -722,14 +731,27 @@ impl Command {
 }
 
 impl Command {
-    fn common_mut(&mut self) -> Option<&mut CommonArgs> {
+    /// The run directory's options of a command that can keep one.
+    fn run_args(&self) -> Option<&RunDirArgs> {
         match self {
-            Command::Normals(a) => Some(&mut a.common),
-            Command::Neighbors(a) => Some(&mut a.common),
-            Command::Reconstruct(a) => Some(&mut a.common),
-            Command::Curvature(a) => Some(&mut a.common),
-            Command::Outliers(a) => Some(&mut a.common),
-            Command::Features(a) => Some(&mut a.common),
+            Command::Normals(a) => Some(&a.run),
+            Command::Neighbors(a) => Some(&a.run),
+            Command::Reconstruct(a) => Some(&a.run),
+            Command::Curvature(a) => Some(&a.run),
+            Command::Outliers(a) => Some(&a.run),
+            Command::Features(a) => Some(&a.run),
+            _ => None,
+        }
+    }
+
+    fn run_args_mut(&mut self) -> Option<&mut RunDirArgs> {
+        match self {
+            Command::Normals(a) => Some(&mut a.run),
+            Command::Neighbors(a) => Some(&mut a.run),
+            Command::Reconstruct(a) => Some(&mut a.run),
+            Command::Curvature(a) => Some(&mut a.run),
+            Command::Outliers(a) => Some(&mut a.run),
+            Command::Features(a) => Some(&mut a.run),
             _ => None,
         }
     }

@@ -37,22 +37,22 @@ fn damaged_tiles() -> Vec<PathBuf> {
 /// starts or resumes the run there, or prints its job script (`--emit`),
 /// or says there is nothing left to do.
 pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
-    let Some(common) = command.common() else {
+    let (Some(common), Some(run_args)) = (command.common(), command.run_args()) else {
         return super::dispatch(command);
     };
-    let Some(dir) = common.run_dir.clone() else {
+    let Some(dir) = run_args.run_dir.clone() else {
         return super::dispatch(command);
     };
     let (input, output) = command
         .paths()
         .map(|(i, o)| (i.to_path_buf(), o.to_path_buf()))
         .ok_or_else(|| {
-            anyhow!("--run-dir is for normals, neighbors, reconstruct, curvature and features")
+            anyhow!("--run-dir: this command has no input and output to keep a run of")
         })?;
     // Before the directory is made: a missing input leaves nothing behind.
     std::fs::metadata(&input).with_context(|| format!("reading {}", input.display()))?;
     let run = RunDir::create(&dir)?;
-    let job = common.job.clone();
+    let job = run_args.job.clone();
     if job == Job::Whole {
         let id = RunIdentity {
             scanmesh_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -60,11 +60,11 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
             cwd: std::env::current_dir()?,
             input: fingerprint(&input)?,
         };
-        run.begin(&id, common.restart)?;
-        if let Some(kind) = common.emit {
+        run.begin(&id, run_args.restart)?;
+        if let Some(kind) = run_args.emit {
             let stages = command.tile_stages()?;
-            let settings = common.settings()?;
-            let script = super::emit::script(kind, &run, &stages, common.tasks, &settings);
+            let settings = common.settings_in(run_args)?;
+            let script = super::emit::script(kind, &run, &stages, run_args.tasks, &settings);
             return super::stdout::write(format_args!("{script}"));
         }
         if let Some(summary) = run.finished(&output, &input)? {
