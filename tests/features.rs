@@ -203,13 +203,16 @@ fn line_files_read_back() {
     let dir = tempfile::tempdir().unwrap();
     for (name, ascii) in [("l.ply", false), ("la.ply", true)] {
         let path = dir.path().join(name);
-        lines.write(&path, DVec3::ZERO, ascii).unwrap();
+        let format = scanmesh::io::mesh_format(&path, ascii).unwrap();
+        lines.write(&path, DVec3::ZERO, format).unwrap();
         let back = LineGraph::read(&path).unwrap();
         assert_eq!(back.vertices, lines.vertices, "{name}");
         assert_eq!(back.edges, lines.edges, "{name}");
     }
     let obj = dir.path().join("l.obj");
-    lines.write(&obj, DVec3::ZERO, false).unwrap();
+    lines
+        .write(&obj, DVec3::ZERO, scanmesh::io::MeshFormat::Obj)
+        .unwrap();
     let text = std::fs::read_to_string(&obj).unwrap();
     assert_eq!(
         text.lines().filter(|l| l.starts_with("v ")).count(),
@@ -219,9 +222,10 @@ fn line_files_read_back() {
         text.lines().filter(|l| l.starts_with("l ")).count(),
         lines.edges.len()
     );
-    assert!(lines
-        .write(&dir.path().join("l.xyz"), DVec3::ZERO, false)
-        .is_err());
+    let e = scanmesh::io::mesh_format(&dir.path().join("l.xyz"), false).unwrap_err();
+    assert!(e
+        .to_string()
+        .contains("l.xyz: unknown mesh format (use .ply or .obj)"));
 }
 
 #[test]

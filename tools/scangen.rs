@@ -119,10 +119,11 @@ fn main() -> Result<()> {
         let Some(lines) = shape.feature_lines() else {
             bail!("{}: has no known feature lines", shape.name());
         };
+        let format = scanmesh::io::mesh_format(path, false)?;
         scanmesh::features::lines::LineGraph::from_segments(&lines).write(
             path,
             glam::DVec3::ZERO,
-            false,
+            format,
         )?;
     }
     if let Some(path) = &a.truth_mesh {

@@ -124,24 +124,14 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     let params = a.params()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
-    let ext = a
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("ply") | Some("obj")) {
-        bail!(
-            "{}: feature lines are written as .ply or .obj",
-            a.output.display()
-        );
-    }
+    let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
     let progress = super::progress::progress(s.quiet || a.json);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;
     let (graph, report) = extract_lines(store, &params, run.opts, progress.as_ref())?;
     graph
-        .write(&a.output, store.origin(), a.ascii)
+        .write(&a.output, store.origin(), format)
         .with_context(|| format!("writing {}", a.output.display()))?;
     let secs = t0.elapsed().as_secs_f64();
     if a.json {

@@ -100,16 +100,7 @@ enum Plane {
 }
 
 pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    Ok(match ext.as_deref() {
-        Some("ply") if ascii => MeshFormat::PlyAscii,
-        Some("ply") => MeshFormat::PlyBinary,
-        Some("obj") => MeshFormat::Obj,
-        _ => bail!("{}: unknown mesh format (use .ply or .obj)", path.display()),
-    })
+    Ok(scanmesh::io::mesh_format(path, ascii)?)
 }
 
 impl ReconstructArgs {

@@ -3,7 +3,7 @@
 //! PLY with `element vertex` (x, y, z double) and `element edge` (vertex1,
 //! vertex2 int, kind uchar: 1 ridge, 2 valley), or OBJ with `l` records.
 
-use crate::io::{AtomicFile, IoError};
+use crate::io::{AtomicFile, IoError, MeshFormat};
 use crate::synth::LineKind;
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
@@ -229,26 +229,17 @@ impl LineGraph {
         self.corners.iter().filter(|c| **c).count()
     }
 
-    /// Writes PLY (binary little-endian, or ASCII) or OBJ by the
-    /// extension, vertices offset by `origin`.
-    pub fn write(&self, path: &Path, origin: DVec3, ascii: bool) -> Result<(), IoError> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+    /// Writes `format` (the output table's [`crate::io::mesh_format`] for
+    /// the path), vertices offset by `origin`.
+    pub fn write(&self, path: &Path, origin: DVec3, format: MeshFormat) -> Result<(), IoError> {
         let mut file = AtomicFile::create(path)?;
         {
             let mut out = BufWriter::with_capacity(1 << 20, file.file());
             let os = |e| IoError::os(path, e);
-            match ext.as_deref() {
-                Some("obj") => self.obj(&mut out, origin).map_err(os)?,
-                Some("ply") => self.ply(&mut out, origin, ascii).map_err(os)?,
-                _ => {
-                    return Err(IoError::Unsupported {
-                        path: path.to_path_buf(),
-                        reason: "feature lines are written as .ply or .obj".into(),
-                    })
-                }
+            match format {
+                MeshFormat::Obj => self.obj(&mut out, origin).map_err(os)?,
+                MeshFormat::PlyBinary => self.ply(&mut out, origin, false).map_err(os)?,
+                MeshFormat::PlyAscii => self.ply(&mut out, origin, true).map_err(os)?,
             }
             out.flush().map_err(os)?;
         }

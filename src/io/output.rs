@@ -1,12 +1,49 @@
 //! The table from an output's file name to its writer: which format a name
 //! asks for and whether that format holds what a command writes per point
-//! (normals, computed values, flags). Every command that writes points asks
-//! here ([`output_spec`]), so a new per-point output or a new format
-//! touches this table and its writer, not the commands (PDAL's
+//! (normals, computed values, flags), and which mesh format a mesh's or a
+//! polyline's name asks for. Every command that writes points asks here
+//! ([`output_spec`]), every one that writes a mesh or lines too
+//! ([`mesh_format`]), so a new per-point output or a new format touches
+//! this table and its writer, not the commands (PDAL's
 //! `StageFactory::inferWriterDriver` is the model).
 
 use super::{format_from_name, Format, IoError, ValueField, WriterSpec};
 use std::path::Path;
+
+/// The mesh (and polyline) file formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Binary little-endian PLY.
+    PlyBinary,
+    /// ASCII PLY.
+    PlyAscii,
+    /// Wavefront OBJ (vertices and faces, or `l` lines).
+    Obj,
+}
+
+/// The mesh formats by the extensions that ask for them.
+const MESH_WRITERS: [(&str, MeshFormat); 2] =
+    [("ply", MeshFormat::PlyBinary), ("obj", MeshFormat::Obj)];
+
+/// The mesh format an output named `path` asks for (`ascii`: a PLY as
+/// text); an unknown extension is an error naming the file and the ones
+/// that would do.
+pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat, IoError> {
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let ext = name.rsplit_once('.').map_or("", |(_, e)| e);
+    match MESH_WRITERS.iter().find(|(e, _)| *e == ext) {
+        Some((_, MeshFormat::PlyBinary)) if ascii => Ok(MeshFormat::PlyAscii),
+        Some((_, format)) => Ok(*format),
+        None => Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: "unknown mesh format (use .ply or .obj)".into(),
+        }),
+    }
+}
 
 /// What a command writes per point beside the coordinates (and the
 /// input's attributes, which the command sets on the spec it gets back).
@@ -176,6 +213,18 @@ mod tests {
         assert!(e.contains("unknown output format (use .ply, .pcd, .las or .laz)"));
         let e = spec("a.ply.gz", values).unwrap_err();
         assert!(e.contains("gzip output is not supported"), "{e}");
+    }
+
+    #[test]
+    fn meshes_are_ply_or_obj() {
+        let f = |name: &str, ascii| mesh_format(Path::new(name), ascii).map_err(|e| e.to_string());
+        assert_eq!(f("m.ply", false), Ok(MeshFormat::PlyBinary));
+        assert_eq!(f("m.PLY", true), Ok(MeshFormat::PlyAscii));
+        assert_eq!(f("m.obj", true), Ok(MeshFormat::Obj));
+        for name in ["m.stl", "m", "m.ply.gz", ".ply.x"] {
+            let e = f(name, false).unwrap_err();
+            assert!(e.contains("unknown mesh format (use .ply or .obj)"), "{e}");
+        }
     }
 
     #[test]

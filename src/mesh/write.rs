@@ -28,16 +28,7 @@ use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
 
-/// The mesh file formats [`MeshWriter`] writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MeshFormat {
-    /// Binary little-endian PLY.
-    PlyBinary,
-    /// ASCII PLY.
-    PlyAscii,
-    /// Wavefront OBJ (vertices and faces only).
-    Obj,
-}
+pub use crate::io::MeshFormat;
 
 /// Options of a mesh output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
