@@ -129,7 +129,9 @@ pub struct CommonArgs {
     scratch_dir: Option<PathBuf>,
     /// Most scratch disk the run may use, e.g. 50GiB (a quota below the
     /// volume's free space): refused before it starts when its disk plan
-    /// (`info --plan`) needs more. Default: the free space.
+    /// (`info --plan`) needs more. Default: the free space, less a
+    /// twentieth of it (64 MiB to 4 GiB) kept free for the rest of the
+    /// machine.
     #[arg(long, value_name = "SIZE")]
     scratch: Option<String>,
     /// Write a JSON report of the run here: per stage wall and CPU time,

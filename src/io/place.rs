@@ -60,8 +60,16 @@ fn device(dir: &Path) -> Option<u64> {
     std::fs::metadata(dir).ok().map(|m| m.dev())
 }
 
+/// The free space a run leaves to the rest of the machine: a twentieth of
+/// what is free, at least 64 MiB and at most 4 GiB (a volume filled to its
+/// last byte stops the logs, the shell and the other jobs on it too).
+pub fn kept_free(free: u64) -> u64 {
+    (free / 20).clamp(64 << 20, 4 << 30).min(free)
+}
+
 /// Checks the free space for `scratch` bytes in `scratch_dir` and `output`
-/// bytes in `output_dir` (summed when both share a file system).
+/// bytes in `output_dir` (summed when both share a file system), less what
+/// is kept free ([`kept_free`]).
 pub fn check_space(
     scratch_dir: &Path,
     scratch: u64,
@@ -79,13 +87,15 @@ pub fn check_space(
     };
     for (dir, bytes, what) in needs {
         if let Some(free) = available_bytes(dir) {
-            if free < bytes {
+            let kept = kept_free(free);
+            if free - kept < bytes {
                 return Err(IoError::Unwritable {
                     path: dir.to_path_buf(),
                     reason: format!(
-                        "the {what} need about {} here but only {} is free",
+                        "the {what} need about {} here but only {} is free ({} of it kept free)",
                         crate::units::human_bytes(bytes),
-                        crate::units::human_bytes(free)
+                        crate::units::human_bytes(free),
+                        crate::units::human_bytes(kept)
                     ),
                 });
             }
@@ -97,6 +107,15 @@ pub fn check_space(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_twentieth_of_the_free_space_is_kept_within_64mib_and_4gib() {
+        let (mib, gib) = (1u64 << 20, 1u64 << 30);
+        assert_eq!(kept_free(10 * mib), 10 * mib);
+        assert_eq!(kept_free(100 * mib), 64 * mib);
+        assert_eq!(kept_free(20 * gib), gib);
+        assert_eq!(kept_free(1000 * gib), 4 * gib);
+    }
 
     #[test]
     fn missing_read_only_and_directory_outputs_are_refused() {
