@@ -1,23 +1,23 @@
-//! A triangle mesh from a point file, through the library, in ten lines:
+//! A triangle mesh from a point file, through the library, in ten lines,
+//! within a memory promise (256 MiB on 2 threads, as `--mem 256MiB`):
 //! `cargo run --release --example reconstruct -- scan.ply mesh.ply`.
 //! Without arguments it reconstructs 20,000 points of the embedded dragon.
 
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::implicit::reconstruct::ImplicitReport;
-use scanmesh::{build_store, reconstruct_implicit, BuildOptions, ImplicitParams, PointReader};
-use scanmesh::{open_reader, open_stream_reader, NoProgress, ReadOptions, RunOptions};
+use scanmesh::{build_store, reconstruct_implicit, ImplicitParams, MemoryBudget, PointReader};
+use scanmesh::{open_stream_reader, NoProgress, ReadOptions, RunSettings, Workspace};
 use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
 
 fn main() -> Result<(), Error> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let mut reader = match args.first() {
-        Some(input) => open_reader(input.as_ref(), ReadOptions::default())?,
-        None => sample()?,
-    };
     let output = args.get(1).map_or("mesh.ply", String::as_str);
-    let report = reconstruct(&mut *reader, output.as_ref())?;
+    let report = match args.first() {
+        Some(input) => reconstruct_file(input.as_ref(), output.as_ref())?,
+        None => reconstruct(&mut *sample()?, output.as_ref())?,
+    };
     println!(
         "{} vertices, {} triangles -> {output}",
         report.vertices, report.triangles
@@ -25,19 +25,42 @@ fn main() -> Result<(), Error> {
     Ok(())
 }
 
-/// The ten lines: a store in a scratch directory, then the implicit mesh.
-fn reconstruct(reader: &mut dyn PointReader, output: &Path) -> Result<ImplicitReport, Error> {
-    let work = tempfile::tempdir()?;
-    let options = BuildOptions::default();
-    let mut store = build_store(reader, &work.path().join("store"), &options, &NoProgress)?;
-    let (params, threads) = (ImplicitParams::default(), RunOptions::new(2));
+fn settings() -> RunSettings {
+    RunSettings::new(MemoryBudget::new(256 << 20, 2))
+}
+
+/// The ten lines for a file: the output and scratch places and the disk
+/// plan checked, a scratch store beside the output, the implicit mesh.
+fn reconstruct_file(input: &Path, output: &Path) -> Result<ImplicitReport, Error> {
+    let params = ImplicitParams::default();
+    let (mut run, _) = settings().open(input, output, params.cost(), &NoProgress)?;
     let format = MeshFormat::PlyBinary;
+    let store = &mut run.ws.store;
     Ok(reconstruct_implicit(
-        &mut store,
+        store,
         &params,
         output,
         format,
-        threads,
+        run.opts,
+        &NoProgress,
+    )?)
+}
+
+/// The same for a stream: a store in a scratch directory, then the mesh.
+fn reconstruct(reader: &mut dyn PointReader, output: &Path) -> Result<ImplicitReport, Error> {
+    let work = tempfile::tempdir()?;
+    let params = ImplicitParams::default();
+    let build = settings().build_options(params.cost());
+    let store = build_store(reader, &work.path().join("store"), &build, &NoProgress)?;
+    let mut run = settings().prepare(Workspace::kept(store), params.cost())?;
+    let format = MeshFormat::PlyBinary;
+    let store = &mut run.ws.store;
+    Ok(reconstruct_implicit(
+        store,
+        &params,
+        output,
+        format,
+        run.opts,
         &NoProgress,
     )?)
 }
@@ -58,7 +81,8 @@ fn sample() -> Result<Box<dyn PointReader>, Error> {
     )?)
 }
 
-/// `cargo test` runs the example on the embedded sample.
+/// `cargo test` runs the example on the embedded sample, as a stream and
+/// as a file: the same mesh.
 #[test]
 fn reconstructs_the_embedded_sample() {
     let dir = tempfile::tempdir().unwrap();
@@ -68,4 +92,16 @@ fn reconstructs_the_embedded_sample() {
     assert_eq!(vertices.len() as u64, report.vertices);
     assert_eq!(faces.len() as u64, report.triangles);
     assert!(faces.len() > 20_000, "{} triangles", faces.len());
+    let xyz = dir.path().join("dragon.xyz");
+    let (scan, _, _) = scanmesh::demo::dragon_scan(20_000, 0.1, 1).unwrap();
+    let text: String = scan
+        .points
+        .iter()
+        .map(|p| format!("{} {} {}\n", p.x, p.y, p.z))
+        .collect();
+    std::fs::write(&xyz, text).unwrap();
+    let from_file = dir.path().join("file.ply");
+    let again = reconstruct_file(&xyz, &from_file).unwrap();
+    assert_eq!(again.triangles, report.triangles);
+    assert!(std::fs::read(&from_file).unwrap() == std::fs::read(&out).unwrap());
 }

@@ -9,11 +9,14 @@
 //! within a budget ([`memory`]) whatever the input size.
 //!
 //! The types a caller needs are re-exported here. The whole flow, from an
-//! in-memory PLY to oriented normals written in input order:
+//! in-memory PLY to oriented normals written in input order, within a
+//! memory promise ([`RunSettings`]: the store's tiles and the tiles in
+//! flight planned from it, as `--mem` does):
 //!
 //! ```
 //! use scanmesh::{build_store, compute_normals, export_points, open_stream_reader};
-//! use scanmesh::{BuildOptions, Format, NoProgress, NormalParams, ReadOptions, RunOptions, WriterSpec};
+//! use scanmesh::{Format, MemoryBudget, NoProgress, NormalParams, ReadOptions, RunSettings};
+//! use scanmesh::{WriterSpec, Workspace};
 //!
 //! // 400 points of a 20 x 20 grid on the plane z = 0, as an ASCII PLY.
 //! let mut ply = String::from("ply\nformat ascii 1.0\nelement vertex 400\n");
@@ -23,19 +26,28 @@
 //! }
 //! let dir = tempfile::tempdir()?;
 //! let mut reader = open_stream_reader("grid.ply".as_ref(), std::io::Cursor::new(ply), ReadOptions::default())?;
-//! let mut store = build_store(&mut *reader, &dir.path().join("store"), &BuildOptions::default(), &NoProgress)?;
-//! let report = compute_normals(&mut store, &NormalParams::default(), RunOptions::new(2), &NoProgress)?;
+//! // At most 64 MiB on 2 threads: tile sizes and tiles in flight follow.
+//! let settings = RunSettings::new(MemoryBudget::new(64 << 20, 2));
+//! let params = NormalParams::default();
+//! let build = settings.build_options(params.cost());
+//! let store = build_store(&mut *reader, &dir.path().join("store"), &build, &NoProgress)?;
+//! let mut run = settings.prepare(Workspace::kept(store), params.cost())?;
+//! let report = compute_normals(&mut run.ws.store, &params, run.opts, &NoProgress)?;
 //! assert_eq!((report.points, report.degenerate), (400, 0));
 //!
 //! let out = dir.path().join("normals.ply");
 //! let spec = WriterSpec { with_normals: true, ..WriterSpec::new(Format::PlyAscii) };
-//! export_points(&store, &out, &spec, 1 << 16, &NoProgress)?;
+//! export_points(&run.ws.store, &out, &spec, run.plan.window_points, &NoProgress)?;
 //! let text = std::fs::read_to_string(&out)?;
 //! let first = text.lines().skip_while(|l| *l != "end_header").nth(1).unwrap();
 //! let nz: f64 = first.split_whitespace().nth(5).unwrap().parse()?;
 //! assert!((nz.abs() - 1.0).abs() < 1e-6, "a plane's normal is its axis: {first}");
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! A file goes through [`RunSettings::open`] instead, which also checks the
+//! output and scratch directories and the disk plan before reading it, and
+//! builds a scratch store beside the output.
 //!
 //! `examples/reconstruct.rs` reconstructs a mesh from a file in ten lines.
 #![deny(unsafe_code)]
@@ -67,7 +79,7 @@ pub use io::{
 };
 pub use memory::{MemoryBudget, MemoryPlan};
 pub use normals::{compute_normals, NormalParams, NormalsReport};
-pub use pipeline::RunOptions;
+pub use pipeline::{Prepared, RunOptions, RunSettings};
 pub use progress::{NoProgress, Progress};
 pub use recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
-pub use store::{build_store, export_points, BuildOptions, PointStore};
+pub use store::{build_store, export_points, BuildOptions, PointStore, Workspace};

@@ -2,7 +2,7 @@
 //! command-line flag is the fix, the command line names it on top.
 
 use scanmesh::io::IoError;
-use scanmesh::pipeline::BudgetError;
+use scanmesh::pipeline::{BudgetError, WorkspaceError};
 use scanmesh::store::StoreError;
 use scanmesh::units::human_bytes;
 
@@ -11,13 +11,21 @@ use scanmesh::units::human_bytes;
 /// coordinate or a last line without end of line.
 pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
     let hint = err.chain().find_map(|cause| {
-        let budget =
-            cause
-                .downcast_ref::<BudgetError>()
-                .or(match cause.downcast_ref::<StoreError>() {
-                    Some(StoreError::Budget(b)) => Some(b),
-                    _ => None,
-                });
+        // A run's workspace wraps the store's and the budget's errors
+        // (transparently, so they are not links of the chain of their own).
+        let ws = cause.downcast_ref::<WorkspaceError>();
+        let store = match ws {
+            Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }) => Some(e),
+            _ => cause.downcast_ref::<StoreError>(),
+        };
+        let budget = match ws {
+            Some(WorkspaceError::Budget(b)) => Some(b),
+            _ => cause.downcast_ref::<BudgetError>(),
+        }
+        .or(match store {
+            Some(StoreError::Budget(b)) => Some(b),
+            _ => None,
+        });
         if let Some(BudgetError::TooSmall { budget, needed, .. }) = budget {
             return Some(format!(
                 "--mem {} is too small: give at least {}",
@@ -25,12 +33,14 @@ pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
                 human_bytes(*needed)
             ));
         }
-        let io = cause
-            .downcast_ref::<IoError>()
-            .or(match cause.downcast_ref::<StoreError>() {
-                Some(StoreError::Input(e)) => Some(e),
-                _ => None,
-            });
+        let io = match ws {
+            Some(WorkspaceError::Io(e)) => Some(e),
+            _ => cause.downcast_ref::<IoError>(),
+        }
+        .or(match store {
+            Some(StoreError::Input(e)) => Some(e),
+            _ => None,
+        });
         match io {
             Some(IoError::NonFinite { .. }) => {
                 Some("a coordinate is not finite (--skip-invalid drops such points)".to_string())

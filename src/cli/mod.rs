@@ -33,11 +33,11 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
-use scanmesh::pipeline::{KernelCost, MemoryBudget, MemoryPlan, Progress, RunOptions};
-use scanmesh::store::build::scratch_store_dir_in;
+use scanmesh::pipeline::{
+    KernelCost, MemoryBudget, MemoryPlan, Prepared, Progress, RunOptions, RunSettings,
+};
 use scanmesh::store::{
-    ingest_kept, is_store, open_input, BuildOptions, Checkpoints, Job, PointStore, TileTarget,
-    Workspace,
+    ingest_kept, is_store, BuildOptions, Checkpoints, Job, PointStore, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -226,13 +226,6 @@ pub enum HoodKind {
     Knn,
 }
 
-/// An open store with the plan a run keeps to.
-pub struct Prepared {
-    pub ws: Workspace,
-    pub opts: RunOptions,
-    pub plan: MemoryPlan,
-}
-
 /// Validated common options.
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -390,28 +383,32 @@ impl Settings {
         MemoryBudget::new(self.mem, self.threads)
     }
 
+    /// The library's run settings these options make.
+    pub fn lib(&self) -> RunSettings {
+        RunSettings {
+            budget: self.budget(),
+            tile_points: self.tile_points,
+            read: self.read_options(),
+            scratch_dir: self.scratch_dir.clone(),
+            scratch_limit: self.scratch_limit,
+        }
+    }
+
     /// Checks that some plan fits the promise whatever the point count
     /// (the fixed costs and the smallest tiles), before any input is read.
     pub fn check_floor(&self, cost: &KernelCost) -> Result<()> {
-        MemoryPlan::new(self.budget(), 0, cost)?;
-        Ok(())
+        Ok(self.lib().check_floor(cost)?)
     }
 
     /// Tile sizes for a kernel: forced by --tile-points, else from the plan.
     pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
-        let within = BuildOptions::within(self.budget(), cost);
-        match self.tile_points {
-            Some(n) => BuildOptions {
-                tiles: TileTarget::Points(n),
-                ..within
-            },
-            None => within,
-        }
+        self.lib().build_options(cost)
     }
 
     /// The store to work on (`input` itself when it is one, else a scratch
-    /// store beside `output` built from the input file), its memory plan,
-    /// and run options that keep the tiles in flight within it.
+    /// store beside `output` built from the input file, or the run
+    /// directory's), its memory plan, and run options that keep the tiles
+    /// in flight within it.
     pub fn open_input(
         &self,
         input: &Path,
@@ -419,33 +416,16 @@ impl Settings {
         cost: KernelCost,
         progress: &dyn Progress,
     ) -> Result<Prepared> {
-        self.check_floor(&cost)?;
-        if self.scans.is_some() && is_store(input) {
-            bail!(
-                "{}: --scans selects scans of an E57 input; a store holds the scans it was built from",
-                input.display()
-            );
-        }
-        if !self.select.is_all() && is_store(input) {
-            bail!(
-                "{}: --classes and --returns select points of a point file; a store holds the points it was built from (give them to `scanmesh tile`)",
-                input.display()
-            );
-        }
+        let lib = self.lib();
+        lib.check_floor(&cost)?;
+        lib.check_selection(input)?;
         if let Some(run) = &self.run {
             return self.open_run(run, input, output, cost, progress);
         }
-        let scratch_dir = self.check_places(input, output, &cost)?;
-        let scratch = scratch_store_dir_in(&scratch_dir, output);
-        let ws = open_input(
-            input,
-            &scratch,
-            &self.build_options(cost),
-            self.read_options(),
-            progress,
-        )
-        .with_context(|| format!("reading {}", input.display()))?;
-        self.prepare(ws, cost)
+        let (prepared, reclaimed) = lib.open(input, output, cost, progress)?;
+        self.say_reclaimed(&reclaimed);
+        self.say_skipped(&prepared.ws.store);
+        Ok(prepared)
     }
 
     /// The run directory's store (ingested first if the run has none yet),
@@ -504,63 +484,28 @@ impl Settings {
         }
         run_in_dir::watch(&checkpoints);
         store.keep_tiles(checkpoints);
-        self.prepare(Workspace::kept(store), cost)
+        self.say_skipped(&store);
+        Ok(self.lib().prepare(Workspace::kept(store), cost)?)
     }
 
     /// Checks, before any input is read, that the output and scratch
-    /// directories take new files and (when the input says how many points
-    /// it holds) have room for the run; returns the scratch directory.
+    /// directories take new files and have room for the run; returns the
+    /// scratch directory.
     pub fn check_places(&self, input: &Path, output: &Path, cost: &KernelCost) -> Result<PathBuf> {
-        place::check_output(output)?;
-        let scratch_dir = match &self.scratch_dir {
-            Some(d) => d.clone(),
-            None => place::directory_of(output),
-        };
-        place::check_writable_dir(&scratch_dir, "scratch")?;
-        self.reclaim(&[&scratch_dir, &place::directory_of(output)]);
-        // The points, and the bytes a point of the store to build takes.
-        let (count, store) = if is_store(input) {
-            (Some(PointStore::open(input)?.len()), 0)
-        } else {
-            let reader = scanmesh::io::open_reader(input, self.read_options())
-                .with_context(|| format!("reading {}", input.display()))?;
-            let info = reader.info();
-            (
-                info.declared_count,
-                scanmesh::store::store_bytes_per_point(info)?,
-            )
-        };
-        // A count past what a store holds is refused later, as such.
-        if let Some(n) = count.filter(|&n| n <= scanmesh::store::build::MAX_POINTS) {
-            let disk = scanmesh::memory::DiskPlan::new(n, store, cost);
-            self.within_scratch_limit(disk.scratch_dir())?;
-            let output_dir = place::directory_of(output);
-            place::check_space(
-                &scratch_dir,
-                disk.scratch_dir(),
-                &output_dir,
-                disk.output_dir(),
-            )
-            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
-        }
-        Ok(scratch_dir)
+        let (dir, reclaimed) = self.lib().check_places(input, output, cost)?;
+        self.say_reclaimed(&reclaimed);
+        Ok(dir)
     }
 
     /// Checks, once the store is built, that the stages' scratch beside it
-    /// and the output fit: a plan that needed the store's spacing (a
-    /// `--cell` in the input's units) is known only now.
+    /// and the output fit.
     pub fn check_stage_space(
         &self,
         store: &PointStore,
         output: &Path,
         cost: &KernelCost,
     ) -> Result<()> {
-        let disk = scanmesh::memory::DiskPlan::new(store.len(), 0, cost);
-        self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch))?;
-        let output_dir = place::directory_of(output);
-        place::check_space(store.dir(), disk.scratch, &output_dir, disk.output_dir())
-            .context("not enough free space (--scratch-dir puts the scratch files elsewhere)")?;
-        Ok(())
+        Ok(self.lib().check_stage_space(store, output, cost)?)
     }
 
     /// Refuses `--scratch` for a command that keeps no scratch of its own
@@ -568,53 +513,37 @@ impl Settings {
     pub fn no_scratch_limit(&self, command: &str) -> Result<()> {
         match self.scratch_limit {
             Some(_) => anyhow::bail!(
-                "--scratch: `{command}` writes no planned scratch (the limit is for normals, curvature, features, neighbors and reconstruct)"
+                "--scratch: `{command}` writes no planned scratch (the limit is for normals, curvature, outliers, features, neighbors and reconstruct)"
             ),
             None => Ok(()),
-        }
-    }
-
-    /// Refuses a run whose scratch would pass `--scratch`.
-    fn within_scratch_limit(&self, needed: u64) -> Result<()> {
-        match self.scratch_limit {
-            Some(limit) if needed > limit => anyhow::bail!(
-                "--scratch {}: this run needs about {} of scratch disk (its disk plan; `scanmesh info --plan` prints it)",
-                scanmesh::units::human_bytes(limit),
-                scanmesh::units::human_bytes(needed)
-            ),
-            _ => Ok(()),
         }
     }
 
     /// Removes what killed runs left in `dirs` (their scratch stores and
     /// partial outputs), saying so.
     pub fn reclaim(&self, dirs: &[&Path]) {
-        let mut seen: Vec<PathBuf> = Vec::new();
-        for dir in dirs {
-            let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
-            if seen.contains(&dir) {
-                continue;
-            }
-            let removed = scanmesh::io::reclaim::reclaim_scratch(&dir);
-            if !removed.is_empty() && !self.quiet {
-                let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
-                eprintln!(
-                    "removed {} scratch entries that killed runs left: {}",
-                    removed.len(),
-                    names.join(", ")
-                );
-            }
-            seen.push(dir);
+        let removed: Vec<PathBuf> = dirs
+            .iter()
+            .flat_map(|d| scanmesh::io::reclaim::reclaim_scratch(d))
+            .collect();
+        self.say_reclaimed(&removed);
+    }
+
+    fn say_reclaimed(&self, removed: &[PathBuf]) {
+        if !removed.is_empty() && !self.quiet {
+            let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+            eprintln!(
+                "removed {} scratch entries that killed runs left: {}",
+                removed.len(),
+                names.join(", ")
+            );
         }
     }
 
-    /// The plan and run options for an open store.
-    pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared> {
-        // The summary says how many input records the store lacks.
-        let m = ws.store.manifest();
+    /// The summary says how many input records the store lacks.
+    fn say_skipped(&self, store: &PointStore) {
+        let m = store.manifest();
         report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
-        let (plan, opts) = self.plan_for(&ws.store, cost)?;
-        Ok(Prepared { ws, opts, plan })
     }
 
     /// The memory plan for `store` and run options whose tiles in flight
@@ -624,10 +553,7 @@ impl Settings {
         store: &PointStore,
         cost: KernelCost,
     ) -> Result<(MemoryPlan, RunOptions)> {
-        let plan = MemoryPlan::new(self.budget(), store.len(), &cost)?;
-        let largest = store.tiles().iter().map(|t| t.count).max().unwrap_or(0);
-        let opts = RunOptions::planned(&plan, &cost, largest)?;
-        Ok((plan, opts))
+        Ok(self.lib().plan_for(store, cost)?)
     }
 
     /// Sizes rayon's pool once per process.

@@ -7,6 +7,7 @@ mod kernel;
 mod options;
 mod run;
 mod shares;
+mod workspace;
 
 #[cfg(test)]
 mod budget_tests;
@@ -15,8 +16,9 @@ pub use codec::Codec;
 pub use kernel::{KernelError, TileKernel};
 pub use options::RunOptions;
 pub use run::{run_tiles, RunStats};
+pub use workspace::{Prepared, RunSettings, WorkspaceError};
 // What a kernel is handed: a tile's points and declared columns. Public so
-// that a kernel can live outside the crate (`examples/outliers.rs`).
+// that a kernel can live outside the crate.
 pub use crate::tiling::{MissingColumns, TileColumn, TilePoints, Values};
 // The run's memory and progress live below every layer that uses them; a
 // kernel finds them here beside the pipeline that takes them.

@@ -1,0 +1,269 @@
+//! A run's settings and the store it works on, opened within them: the
+//! memory promise and the plan that keeps it, tile sizes, how the input is
+//! read, the scratch directory and its limit, and the checks made before
+//! any input is read (the output and scratch directories take files, the
+//! disk plan fits the free space less what is kept free, a selection is
+//! not given for a store). The CLI maps its flags onto [`RunSettings`];
+//! a library caller gets the same `--mem` promise the same way.
+
+use super::{KernelCost, MemoryBudget, MemoryPlan, PipelineError, Progress, RunOptions};
+use crate::io::{place, IoError, ReadOptions};
+use crate::memory::{BudgetError, DiskPlan};
+use crate::store::build::{scratch_store_dir_in, MAX_POINTS};
+use crate::store::{
+    is_store, open_input, store_bytes_per_point, BuildOptions, PointStore, StoreError, TileTarget,
+    Workspace,
+};
+use std::path::{Path, PathBuf};
+
+/// What a run is promised and where it may work.
+#[derive(Clone, Debug)]
+pub struct RunSettings {
+    /// The memory promise (`--mem`) and the threads (`--threads`).
+    pub budget: MemoryBudget,
+    /// Tiles of at most this many points, forced (`--tile-points`).
+    pub tile_points: Option<u64>,
+    /// How the input file is read: invalid records, E57 scans, selection.
+    pub read: ReadOptions,
+    /// Where the scratch store and spills go (default: beside the output).
+    pub scratch_dir: Option<PathBuf>,
+    /// The most scratch disk the run may use (`--scratch`).
+    pub scratch_limit: Option<u64>,
+}
+
+/// An open store with the plan a run keeps to.
+pub struct Prepared {
+    /// The store, and its scratch directory when it is the run's own.
+    pub ws: Workspace,
+    /// Run options whose tiles in flight fit the plan.
+    pub opts: RunOptions,
+    /// The memory plan.
+    pub plan: MemoryPlan,
+}
+
+/// Why a run cannot start, or its store cannot be opened.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WorkspaceError {
+    /// No plan fits the memory promise.
+    #[error(transparent)]
+    Budget(#[from] BudgetError),
+    /// The store cannot be built or opened.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// A directory or the input cannot be used.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// The run options do not fit the plan.
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    /// The input cannot be read (the source says why).
+    #[error("reading {path}")]
+    Reading {
+        /// The input.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: StoreError,
+    },
+    /// A selection of points or scans was given for a store, which holds
+    /// the points it was built from.
+    #[error("{path}: {what} select {of}; a store holds the points it was built from")]
+    SelectionOfAStore {
+        /// The store.
+        path: PathBuf,
+        /// The options given ("--scans", "--classes and --returns").
+        what: &'static str,
+        /// What they select.
+        of: &'static str,
+    },
+    /// The disk plan needs more scratch than the limit allows.
+    #[error("--scratch {limit}: this run needs about {needed} of scratch disk (its disk plan; `scanmesh info --plan` prints it)", limit = crate::units::human_bytes(*limit), needed = crate::units::human_bytes(*needed))]
+    ScratchLimit {
+        /// The limit, in bytes.
+        limit: u64,
+        /// What the plan needs, in bytes.
+        needed: u64,
+    },
+    /// The disk plan does not fit the free space.
+    #[error("not enough free space (--scratch-dir puts the scratch files elsewhere): {0}")]
+    NoSpace(IoError),
+}
+
+impl RunSettings {
+    /// Settings with `budget` and every other choice the default.
+    pub fn new(budget: MemoryBudget) -> Self {
+        RunSettings {
+            budget,
+            tile_points: None,
+            read: ReadOptions::default(),
+            scratch_dir: None,
+            scratch_limit: None,
+        }
+    }
+
+    /// Checks that some plan fits the promise whatever the point count
+    /// (the fixed costs and the smallest tiles), before any input is read.
+    pub fn check_floor(&self, cost: &KernelCost) -> Result<(), WorkspaceError> {
+        MemoryPlan::new(self.budget, 0, cost)?;
+        Ok(())
+    }
+
+    /// Tile sizes for a kernel: forced by `tile_points`, else from the plan.
+    pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
+        let within = BuildOptions::within(self.budget, cost);
+        match self.tile_points {
+            Some(n) => BuildOptions {
+                tiles: TileTarget::Points(n),
+                ..within
+            },
+            None => within,
+        }
+    }
+
+    /// Refuses a selection of points or scans for a store.
+    pub fn check_selection(&self, input: &Path) -> Result<(), WorkspaceError> {
+        let refuse = |what, of| WorkspaceError::SelectionOfAStore {
+            path: input.to_path_buf(),
+            what,
+            of,
+        };
+        match is_store(input) {
+            true if self.read.scans.is_some() => Err(refuse("--scans", "scans of an E57 input")),
+            true if !self.read.select.is_all() => Err(refuse(
+                "--classes and --returns",
+                "points of a point file (give them to `scanmesh tile`)",
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// The store to work on (`input` itself when it is one, else a scratch
+    /// store beside `output` built from the input file), its memory plan,
+    /// and run options that keep the tiles in flight within it; with the
+    /// scratch entries killed runs left that were removed on the way.
+    pub fn open(
+        &self,
+        input: &Path,
+        output: &Path,
+        cost: KernelCost,
+        progress: &dyn Progress,
+    ) -> Result<(Prepared, Vec<PathBuf>), WorkspaceError> {
+        self.check_floor(&cost)?;
+        self.check_selection(input)?;
+        let (scratch_dir, reclaimed) = self.check_places(input, output, &cost)?;
+        let scratch = scratch_store_dir_in(&scratch_dir, output);
+        let build = self.build_options(cost);
+        let ws = open_input(input, &scratch, &build, self.read.clone(), progress)
+            .map_err(|e| reading(input, e))?;
+        Ok((self.prepare(ws, cost)?, reclaimed))
+    }
+
+    /// Checks, before any input is read, that the output and scratch
+    /// directories take new files and (when the input says how many points
+    /// it holds) have room for the run; returns the scratch directory and
+    /// the scratch entries killed runs left there (removed).
+    pub fn check_places(
+        &self,
+        input: &Path,
+        output: &Path,
+        cost: &KernelCost,
+    ) -> Result<(PathBuf, Vec<PathBuf>), WorkspaceError> {
+        place::check_output(output)?;
+        let scratch_dir = match &self.scratch_dir {
+            Some(d) => d.clone(),
+            None => place::directory_of(output),
+        };
+        place::check_writable_dir(&scratch_dir, "scratch")?;
+        let reclaimed = reclaim(&[&scratch_dir, &place::directory_of(output)]);
+        // The points, and the bytes a point of the store to build takes.
+        let (count, store) = if is_store(input) {
+            (Some(PointStore::open(input)?.len()), 0)
+        } else {
+            let reader = crate::io::open_reader(input, self.read.clone())
+                .map_err(|e| reading(input, e.into()))?;
+            let info = reader.info();
+            (info.declared_count, store_bytes_per_point(info)?)
+        };
+        // A count past what a store holds is refused later, as such.
+        if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {
+            let disk = DiskPlan::new(n, store, cost);
+            self.within_scratch_limit(disk.scratch_dir())?;
+            let output_dir = place::directory_of(output);
+            place::check_space(
+                &scratch_dir,
+                disk.scratch_dir(),
+                &output_dir,
+                disk.output_dir(),
+            )
+            .map_err(WorkspaceError::NoSpace)?;
+        }
+        Ok((scratch_dir, reclaimed))
+    }
+
+    /// Checks, once the store is built, that the stages' scratch beside it
+    /// and the output fit: a plan that needed the store's spacing (a
+    /// `--cell` in the input's units) is known only now.
+    pub fn check_stage_space(
+        &self,
+        store: &PointStore,
+        output: &Path,
+        cost: &KernelCost,
+    ) -> Result<(), WorkspaceError> {
+        let disk = DiskPlan::new(store.len(), 0, cost);
+        self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch))?;
+        let output_dir = place::directory_of(output);
+        place::check_space(store.dir(), disk.scratch, &output_dir, disk.output_dir())
+            .map_err(WorkspaceError::NoSpace)
+    }
+
+    /// Refuses a run whose scratch would pass the limit.
+    fn within_scratch_limit(&self, needed: u64) -> Result<(), WorkspaceError> {
+        match self.scratch_limit {
+            Some(limit) if needed > limit => Err(WorkspaceError::ScratchLimit { limit, needed }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The plan and run options for an open store.
+    pub fn prepare(&self, ws: Workspace, cost: KernelCost) -> Result<Prepared, WorkspaceError> {
+        let (plan, opts) = self.plan_for(&ws.store, cost)?;
+        Ok(Prepared { ws, opts, plan })
+    }
+
+    /// The memory plan for `store` and run options whose tiles in flight
+    /// fit it.
+    pub fn plan_for(
+        &self,
+        store: &PointStore,
+        cost: KernelCost,
+    ) -> Result<(MemoryPlan, RunOptions), WorkspaceError> {
+        let plan = MemoryPlan::new(self.budget, store.len(), &cost)?;
+        let largest = store.tiles().iter().map(|t| t.count).max().unwrap_or(0);
+        let opts = RunOptions::planned(&plan, &cost, largest)?;
+        Ok((plan, opts))
+    }
+}
+
+fn reading(input: &Path, source: StoreError) -> WorkspaceError {
+    WorkspaceError::Reading {
+        path: input.to_path_buf(),
+        source,
+    }
+}
+
+/// Removes what killed runs left in `dirs` (their scratch stores and
+/// partial outputs); returns what was removed.
+fn reclaim(dirs: &[&Path]) -> Vec<PathBuf> {
+    let mut seen: Vec<PathBuf> = Vec::new();
+    let mut removed = Vec::new();
+    for dir in dirs {
+        let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+        if seen.contains(&dir) {
+            continue;
+        }
+        removed.extend(crate::io::reclaim::reclaim_scratch(&dir));
+        seen.push(dir);
+    }
+    removed
+}
