@@ -6,7 +6,7 @@
 use scanmesh::mesh::MeshFormat;
 use scanmesh::recon::implicit::reconstruct::ImplicitReport;
 use scanmesh::{build_store, reconstruct_implicit, ImplicitParams, MemoryBudget, PointReader};
-use scanmesh::{open_stream_reader, NoProgress, ReadOptions, RunSettings, Workspace};
+use scanmesh::{open_stream_reader, NoProgress, Prepared, ReadOptions, RunSettings, Workspace};
 use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
@@ -33,17 +33,8 @@ fn settings() -> RunSettings {
 /// plan checked, a scratch store beside the output, the implicit mesh.
 fn reconstruct_file(input: &Path, output: &Path) -> Result<ImplicitReport, Error> {
     let params = ImplicitParams::default();
-    let (mut run, _) = settings().open(input, output, params.cost(), &NoProgress)?;
-    let format = MeshFormat::PlyBinary;
-    let store = &mut run.ws.store;
-    Ok(reconstruct_implicit(
-        store,
-        &params,
-        output,
-        format,
-        run.opts,
-        &NoProgress,
-    )?)
+    let (run, _) = settings().open(input, output, params.cost(), &NoProgress)?;
+    mesh(run, &params, output)
 }
 
 /// The same for a stream: a store in a scratch directory, then the mesh.
@@ -52,12 +43,20 @@ fn reconstruct(reader: &mut dyn PointReader, output: &Path) -> Result<ImplicitRe
     let params = ImplicitParams::default();
     let build = settings().build_options(params.cost());
     let store = build_store(reader, &work.path().join("store"), &build, &NoProgress)?;
-    let mut run = settings().prepare(Workspace::kept(store), params.cost())?;
-    let format = MeshFormat::PlyBinary;
-    let store = &mut run.ws.store;
+    let run = settings().prepare(Workspace::kept(store), params.cost())?;
+    mesh(run, &params, output)
+}
+
+/// The implicit mesh of a prepared run.
+fn mesh(
+    mut run: Prepared,
+    params: &ImplicitParams,
+    output: &Path,
+) -> Result<ImplicitReport, Error> {
+    let (store, format) = (&mut run.ws.store, MeshFormat::PlyBinary);
     Ok(reconstruct_implicit(
         store,
-        &params,
+        params,
         output,
         format,
         run.opts,

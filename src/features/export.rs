@@ -8,7 +8,7 @@
 use super::{FeaturesError, CURVATURE, CURVATURE_FLAGS};
 use crate::io::{output_spec, Carried, IoError, ValueField, WriterSpec};
 use crate::progress::Progress;
-use crate::store::{export_columns, Computed, PointStore};
+use crate::store::{export_values, PointStore};
 use std::path::Path;
 
 /// The curvature's fields, in the column's order.
@@ -43,12 +43,7 @@ const COMMENT: &str = "scanmesh curvature (paper 5): k1 >= k2 principal, H mean,
 /// The writer spec of a curvature output named `path`: an error names
 /// the file when its format cannot hold the curvature.
 pub fn curvature_output(path: &Path) -> Result<WriterSpec, IoError> {
-    let carried = Carried {
-        values: &CURVATURE_FIELDS,
-        flags: true,
-        comment: Some(COMMENT),
-        ..Carried::default()
-    };
+    let carried = Carried::values_and_flags(&CURVATURE_FIELDS, COMMENT);
     output_spec(path, &carried, false)
 }
 
@@ -66,20 +61,8 @@ pub fn write_curvature(
     keep: Option<(&Path, &crate::io::ReadOptions)>,
     progress: &dyn Progress,
 ) -> Result<u64, FeaturesError> {
-    let unselected = match keep {
-        Some(_) => store.manifest().left_out.unselected,
-        None => 0,
-    };
-    let spec = WriterSpec {
-        count: Some(store.len() + unselected),
-        ..spec.clone()
-    };
-    let computed = Computed {
-        values: Some(CURVATURE),
-        flags: Some(CURVATURE_FLAGS),
-        normals: None,
-    };
-    Ok(export_columns(
-        store, path, &spec, &computed, window, keep, progress,
+    let columns = [CURVATURE, CURVATURE_FLAGS];
+    Ok(export_values(
+        store, path, spec, columns, window, keep, progress,
     )?)
 }

@@ -60,6 +60,19 @@ pub struct Carried {
     pub comment: Option<&'static str>,
 }
 
+impl Carried {
+    /// Named values and a flags byte per point, and what the file holds:
+    /// a per-point measure such as the curvature or the outlier score.
+    pub fn values_and_flags(values: &'static [ValueField], comment: &'static str) -> Self {
+        Carried {
+            normals: false,
+            values,
+            flags: true,
+            comment: Some(comment),
+        }
+    }
+}
+
 /// The formats an output may be written in, by the extensions that ask
 /// for them, in the order an error lists them.
 const WRITERS: [(&str, Format); 7] = [

@@ -30,9 +30,7 @@ use crate::memory::KernelCost;
 use crate::pipeline::{run_tiles, PipelineError, RunOptions, RunStats};
 use crate::progress::Progress;
 use crate::store::spacing::ensure_spacing;
-use crate::store::{
-    export_columns, ColumnSpec, Computed, Item, PointStore, Provenance, StoreError,
-};
+use crate::store::{export_values, ColumnSpec, Item, PointStore, Provenance, StoreError};
 use kernel::{ScoreKernel, Sums};
 use std::path::Path;
 
@@ -235,13 +233,11 @@ fn sum_scale(store: &PointStore) -> f64 {
 /// The writer spec of an outliers output named `path`: an error names the
 /// file when its format cannot hold the score.
 pub fn outliers_output(path: &Path) -> Result<WriterSpec, IoError> {
-    let carried = Carried {
-        values: &OUTLIER_FIELDS,
-        flags: true,
-        comment: Some(COMMENT),
-        ..Carried::default()
-    };
-    output_spec(path, &carried, false)
+    output_spec(
+        path,
+        &Carried::values_and_flags(&OUTLIER_FIELDS, COMMENT),
+        false,
+    )
 }
 
 /// Writes the store's points with their scores and flags to `path` as
@@ -256,12 +252,8 @@ pub fn write_outliers(
     keep: Option<(&Path, &crate::io::ReadOptions)>,
     progress: &dyn Progress,
 ) -> Result<u64, OutliersError> {
-    let computed = Computed {
-        values: Some(OUTLIER_SCORE),
-        flags: Some(OUTLIER_FLAGS),
-        normals: None,
-    };
-    Ok(export_columns(
-        store, path, spec, &computed, window, keep, progress,
+    let columns = [OUTLIER_SCORE, OUTLIER_FLAGS];
+    Ok(export_values(
+        store, path, spec, columns, window, keep, progress,
     )?)
 }

@@ -115,6 +115,37 @@ impl Computed {
     }
 }
 
+/// Writes `store` to `path` in input order with a column of values (as
+/// many per point as `spec.values` names) and one of flags, the rows
+/// declared before the first (`keep`'s unselected ones too), so a short
+/// output fails before it is renamed into place: the curvature's and the
+/// outliers' output. Returns the rows written.
+pub fn export_values(
+    store: &PointStore,
+    path: &Path,
+    spec: &WriterSpec,
+    columns: [ColumnSpec; 2],
+    window_points: u64,
+    keep: Option<(&Path, &crate::io::ReadOptions)>,
+    progress: &dyn Progress,
+) -> Result<u64, StoreError> {
+    let unselected = match keep {
+        Some(_) => store.manifest().left_out.unselected,
+        None => 0,
+    };
+    let spec = WriterSpec {
+        count: Some(store.len() + unselected),
+        ..spec.clone()
+    };
+    let [values, flags] = columns;
+    let computed = Computed {
+        normals: None,
+        values: Some(values),
+        flags: Some(flags),
+    };
+    export_columns(store, path, &spec, &computed, window_points, keep, progress)
+}
+
 /// Writes `store` to `path` in input order with the `computed` columns
 /// `spec` names, and the rows `keep` asks for as
 /// [`export_points_keeping`] does; returns the rows written.
