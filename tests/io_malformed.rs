@@ -966,3 +966,34 @@ fn xyz_first_line_is_a_header_only_if_it_looks_like_one() {
         );
     }
 }
+
+/// Rows left out by their flags: only when the flags are written, and a
+/// chunk without its flags is an error, not a silent copy.
+#[test]
+fn rows_are_left_out_by_flags_only_when_flags_are_written() {
+    let d = tmp();
+    let path = d.path().join("d.ply");
+    let no_flags = WriterSpec {
+        drop_flagged: 1,
+        ..spec(Format::PlyBinaryLe)
+    };
+    let e = create_writer(&path, &no_flags).err().expect("refused");
+    assert!(
+        e.to_string().contains("only where the flags are written"),
+        "{e}"
+    );
+    let with_flags = WriterSpec {
+        with_flags: true,
+        ..no_flags
+    };
+    let mut w = create_writer(&path, &with_flags).expect("writer");
+    let e = w.write_chunk(&point_chunk(4), None).expect_err("no flags");
+    assert!(e.to_string().contains("needs 4 flags"), "{e}");
+    w.write_chunk(&point_chunk(4), Some(&[0, 1, 2, 3]))
+        .expect("flags");
+    assert_eq!(
+        w.finish().expect("finish"),
+        2,
+        "rows with flag bit 1 left out"
+    );
+}

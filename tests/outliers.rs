@@ -224,3 +224,63 @@ fn real_scans_through_every_format() {
         }
     }
 }
+
+/// `--drop` writes the rows the rule keeps: every row of the full output
+/// whose flag is not [`OUTLIER`], in the same order, in every format; with
+/// `--classes` and `--unselected keep`, the unselected rows stay (flag 128).
+#[test]
+fn drop_writes_the_kept_rows_in_order() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let dir = tempfile::tempdir().expect("tmp");
+    let run = |input: &Path, name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let args = [
+            &[
+                "outliers",
+                input.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "-q",
+            ][..],
+            extra,
+        ]
+        .concat();
+        let o = scanmesh(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    for (input, select) in [
+        ("las/autzen_trim_cut.laz", &[][..]),
+        ("e57/kinect_two_scans.e57", &[]),
+        (
+            "las/32-1-472-150-76.laz",
+            &["--classes", "2", "--unselected", "keep"],
+        ),
+    ] {
+        let input = fixtures.join(input);
+        let all = run(&input, "all.ply", select);
+        let flags = ply_flags(&all, 24 + 4 + 1);
+        let xyz = read_all(&all).xyz;
+        let kept: Vec<DVec3> = (0..xyz.len())
+            .filter(|&i| flags[i] != OUTLIER)
+            .map(|i| xyz[i])
+            .collect();
+        assert!(kept.len() < xyz.len(), "{input:?}: nothing to drop");
+        let dropped = run(&input, "kept.ply", &[select, &["--drop"]].concat());
+        assert!(read_all(&dropped).xyz == kept, "{input:?}");
+        let left = ply_flags(&dropped, 24 + 4 + 1);
+        assert!(left.iter().all(|&f| f != OUTLIER), "{input:?}");
+        if !select.is_empty() {
+            assert!(left.contains(&128), "{input:?}: unselected rows dropped");
+        }
+        for ext in ["las", "pcd"] {
+            let other = run(
+                &input,
+                &format!("kept.{ext}"),
+                &[select, &["--drop"]].concat(),
+            );
+            let back = read_all(&other).xyz;
+            assert_eq!(back.len(), kept.len(), "{input:?} {ext}");
+        }
+    }
+}

@@ -4,7 +4,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::outliers::{
-    compute_outliers, outliers_output, write_outliers, OutlierParams, OutlierReport,
+    compute_outliers, outliers_output, write_outliers, OutlierParams, OutlierReport, OUTLIER,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -26,6 +26,11 @@ pub struct OutliersArgs {
     /// standard deviations (Open3D's std_ratio, PCL's stddev_mul_thresh).
     #[arg(long, default_value_t = 2.0)]
     ratio: f64,
+    /// Write only the points the rule keeps (the cleaned cloud, as PCL's
+    /// and Open3D's filters return it), still in input order with their
+    /// scores; a LAS input's records as they came.
+    #[arg(long)]
+    drop: bool,
     #[command(flatten)]
     pub common: super::CommonArgs,
     #[command(flatten)]
@@ -41,7 +46,10 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     params.validate()?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
-    let spec = outliers_output(&a.output)?;
+    let mut spec = outliers_output(&a.output)?;
+    if a.drop {
+        spec.drop_flagged = OUTLIER;
+    }
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
@@ -50,19 +58,24 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     let read = s.read_options();
     let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
     let window = run.plan.window_points;
-    write_outliers(store, &a.output, &spec, window, keep, progress.as_ref())
+    let rows = write_outliers(store, &a.output, &spec, window, keep, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
     super::report::unselected_kept(s.keep_unselected);
-    print_summary(&report, &params, t0.elapsed().as_secs_f64(), &a.output);
+    let secs = t0.elapsed().as_secs_f64();
+    print_summary(&report, &params, secs, (rows, a.drop), &a.output);
     Ok(())
 }
 
-fn print_summary(r: &OutlierReport, p: &OutlierParams, secs: f64, out: &Path) {
+fn print_summary(r: &OutlierReport, p: &OutlierParams, secs: f64, rows: (u64, bool), out: &Path) {
     let share = 100.0 * r.outliers as f64 / r.points.max(1) as f64;
+    let written = match rows {
+        (n, true) => format!("{n} rows written, the outliers left out"),
+        (n, false) => format!("{n} rows written"),
+    };
     super::report::summary(format!(
         "outliers: {} of {} points ({share:.2} %) with a mean distance to their {} nearest above \
          {:.4e} (mean {:.4e} + {} x std {:.4e}), {} not judged (fewer than {} neighbours), \
-         {} tiles ({} reloaded), {secs:.2} s, peak {} -> {}",
+         {} tiles ({} reloaded), {written}, {secs:.2} s, peak {} -> {}",
         r.outliers,
         r.points,
         p.k,

@@ -302,6 +302,10 @@ pub struct WriterSpec {
     /// Says what the file holds, where the format has a place for it (a
     /// PLY comment, a PCD comment line); `None`: "written by scanmesh".
     pub comment: Option<&'static str>,
+    /// Rows whose flags share a bit with this mask are not written (0:
+    /// every row is): `outliers --drop` writes the points the rule keeps.
+    /// The spec must carry the flags.
+    pub drop_flagged: u8,
     /// The number of points to be written, when known before the first:
     /// a PLY header then states it plainly (else a fixed-width count is
     /// patched at the end), and `finish` fails unless exactly that many
@@ -327,6 +331,7 @@ impl WriterSpec {
             with_flags: false,
             values: &[],
             comment: None,
+            drop_flagged: 0,
             count: None,
             attributes: AttributeSet::EMPTY,
             bounds: None,

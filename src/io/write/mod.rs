@@ -3,6 +3,7 @@
 //! output appears under its final name only in `finish`; a writer dropped
 //! before that leaves nothing behind.
 
+mod dropping;
 mod las;
 mod ply;
 mod xyz;
@@ -55,6 +56,23 @@ pub fn create_writer_with(
             path: path.to_path_buf(),
             reason: format!("this format cannot hold {}", unheld.describe()),
         });
+    }
+    if spec.drop_flagged != 0 {
+        if !spec.with_flags {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: "rows can be left out by their flags only where the flags are written"
+                    .into(),
+            });
+        }
+        // How many rows are left is known only at the end.
+        let inner = WriterSpec {
+            drop_flagged: 0,
+            count: None,
+            ..spec.clone()
+        };
+        let writer = create_writer_with(path, &inner, las)?;
+        return Ok(Box::new(dropping::DropFlagged::new(writer, path, spec)));
     }
     Ok(match spec.format {
         Format::PlyAscii | Format::PlyBinaryLe | Format::PlyBinaryBe | Format::Pcd => {
