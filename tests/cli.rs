@@ -567,3 +567,31 @@ fn only_commands_that_keep_a_run_list_its_options() {
         }
     }
 }
+
+/// `convert --unselected keep` to a format without a named flags field
+/// (XYZ text, E57) is refused: the unselected rows could not be told
+/// from the selected ones (an XYZ file got a nameless fourth column).
+#[test]
+fn keeping_unselected_points_needs_a_flags_field() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las/autzen.las");
+    let select = ["--classes", "2", "--unselected", "keep", "-q"];
+    for name in ["o.xyz", "o.e57"] {
+        let out = dir.path().join(name);
+        let args = [
+            &["convert", input.to_str().unwrap(), out.to_str().unwrap()][..],
+            &select,
+        ]
+        .concat();
+        let o = scanmesh(&args);
+        assert_fails_naming(&o, "no named flags field");
+        no_output_left(dir.path(), name);
+    }
+    let out = dir.path().join("o.ply");
+    let args = [
+        &["convert", input.to_str().unwrap(), out.to_str().unwrap()][..],
+        &select,
+    ]
+    .concat();
+    assert!(scanmesh(&args).status.success());
+}

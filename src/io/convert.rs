@@ -8,8 +8,8 @@
 //! point is written.
 
 use super::{
-    create_writer_with, format_from_name, open_reader, Attribute, AttributeMaxima, AttributeSet,
-    Format, IoError, LasOutput, LasSource, PointChunk, ReadOptions, WriterSpec, DEFAULT_CHUNK,
+    create_writer_with, open_reader, Attribute, AttributeMaxima, AttributeSet, Format, IoError,
+    LasOutput, LasSource, PointChunk, ReadOptions, WriterSpec, DEFAULT_CHUNK,
 };
 use crate::geom::Aabb;
 use crate::progress::Progress;
@@ -54,9 +54,22 @@ pub fn convert_keeping(
 ) -> Result<ConvertStats, IoError> {
     let read: ReadOptions = read.into();
     let keep = keep && !read.select.is_all();
-    let (format, _) = format_from_name(output).ok_or_else(|| IoError::UnknownFormat {
-        path: output.to_path_buf(),
-    })?;
+    // The output table decides the format; the input's normals are
+    // carried where it holds them, not required.
+    let carried = super::Carried {
+        flags: keep,
+        ..super::Carried::default()
+    };
+    let format = super::output_spec(output, &carried, false)?.format;
+    if keep && !format.holds_flags() {
+        return Err(IoError::Unsupported {
+            path: output.to_path_buf(),
+            reason: format!(
+                "{format} has no named flags field to mark the unselected points \
+                 (--unselected keep); write .ply, .pcd, .las or .laz"
+            ),
+        });
+    }
     let mut reader = open_reader(input, &read)?;
     let info = reader.info().clone();
     let is_las = matches!(format, Format::Las | Format::Laz);
@@ -72,7 +85,7 @@ pub fn convert_keeping(
     };
     let spec = WriterSpec {
         format,
-        with_normals: info.has_normals,
+        with_normals: info.has_normals && format.holds_normals(),
         with_flags: keep,
         attributes: info.attributes.intersect(format.attributes()),
         bounds,
