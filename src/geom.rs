@@ -85,3 +85,13 @@ pub fn pseudo_angle(d: DVec2) -> f64 {
         p
     }
 }
+
+/// Which side a feature line bends to (paper 5's ridges and valleys; the
+/// kind of a line `features` finds and of a true line `synth` knows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum LineKind {
+    /// Convex (PLY `kind` 1).
+    Ridge = 1,
+    /// Concave (PLY `kind` 2).
+    Valley = 2,
+}

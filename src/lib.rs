@@ -67,6 +67,7 @@ pub mod pipeline;
 pub(crate) mod progress;
 pub mod recon;
 pub mod render;
+pub mod rng;
 pub mod spatial;
 pub mod stats;
 pub mod store;

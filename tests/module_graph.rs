@@ -109,7 +109,7 @@ fn the_checker_finds_a_cycle() {
 #[test]
 fn the_memory_and_progress_layers_use_nothing_above_them() {
     let g = graph(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"));
-    for bottom in ["memory", "progress", "geom", "units", "stats"] {
+    for bottom in ["memory", "progress", "geom", "units", "stats", "rng"] {
         let uses = &g[bottom];
         assert!(uses.iter().all(|u| u == "units"), "{bottom} uses {uses:?}");
     }

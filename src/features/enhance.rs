@@ -337,7 +337,7 @@ pub(crate) fn curve_sets(q: &[DVec2], w: &[f64], p: &EnhanceParams) -> Vec<Vec<u
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     fn params() -> EnhanceParams {
         EnhanceParams {

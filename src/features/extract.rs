@@ -11,10 +11,10 @@ use super::params::{FeatureParams, Resolved};
 use super::repair::{repair, Cone};
 use super::seams::{drop_copies, CellPolyline};
 use super::{CurvatureHood, FeaturesError, CURVATURE, CURVATURE_FLAGS};
+use crate::geom::LineKind;
 use crate::normals::has_normals_of;
 use crate::pipeline::{run_tiles, Progress, RunOptions, RunStats};
 use crate::store::{spacing::ensure_spacing, PointStore};
-use crate::synth::LineKind;
 use glam::DVec3;
 use std::time::Instant;
 

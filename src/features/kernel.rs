@@ -44,10 +44,10 @@ use super::stages::{
 };
 use super::{CURVATURE, CURVATURE_FLAGS};
 use crate::geom::Aabb;
+use crate::geom::LineKind;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::spatial::BallGrid;
 use crate::store::{ColumnSpec, FLAGS, NORMALS};
-use crate::synth::LineKind;
 use crate::tiling::{TilePoints, Values};
 use glam::DVec3;
 use rayon::prelude::*;

@@ -127,7 +127,7 @@ fn crease_offset(a: &Quadric, b: &Quadric, at: DVec2, across: DVec2, reach: f64)
 mod tests {
     use super::*;
     use crate::features::quadric::pca_frame;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     /// A right-angled ridge along y: the face z = 0 over x < 0 and the
     /// face x = 0 below z = 0, noise 0.1 sp (sp = 0.01).

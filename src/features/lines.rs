@@ -3,8 +3,8 @@
 //! PLY with `element vertex` (x, y, z double) and `element edge` (vertex1,
 //! vertex2 int, kind uchar: 1 ridge, 2 valley), or OBJ with `l` records.
 
+use crate::geom::LineKind;
 use crate::io::{AtomicFile, IoError, MeshFormat};
-use crate::synth::LineKind;
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 use std::io::{BufWriter, Write};

@@ -146,7 +146,7 @@ impl Growth<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     #[test]
     fn points_along_a_curve_give_one_polyline_spanning_it() {

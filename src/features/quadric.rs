@@ -249,7 +249,7 @@ pub(crate) fn solve_spd6(mut a: [[f64; 6]; 6], b: [f64; 6]) -> Option<[f64; 6]> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     fn disc(rng: &mut Rng, n: usize, r: f64) -> Vec<(f64, f64)> {
         (0..n)

@@ -81,7 +81,7 @@ pub fn refine_lines(lines: &mut [Vec<DVec3>], grid: &BallGrid, radius: f64, widt
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     fn off_line(line: &[DVec3]) -> f64 {
         line.iter().map(|v| v.y.hypot(v.z)).fold(0.0, f64::max)

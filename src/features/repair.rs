@@ -22,8 +22,8 @@
 //! the tiling.
 
 use super::lines::LineGraph;
+use crate::geom::LineKind;
 use crate::spatial::BallGrid;
-use crate::synth::LineKind;
 use glam::DVec3;
 
 /// The connection cone.

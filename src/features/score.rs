@@ -6,7 +6,8 @@
 
 use super::lines::LineGraph;
 use super::seams::segment_distance;
-use crate::synth::{LineKind, TrueSegment};
+use crate::geom::LineKind;
+use crate::synth::TrueSegment;
 use glam::DVec3;
 use std::collections::HashMap;
 

@@ -11,8 +11,8 @@
 //! never runs a line twice, so only lines from different cells are
 //! compared. The result does not depend on the tiling (cells do not).
 
+use crate::geom::LineKind;
 use crate::spatial::BallGrid;
-use crate::synth::LineKind;
 use glam::DVec3;
 
 /// A polyline with its growth cell.

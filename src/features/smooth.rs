@@ -128,7 +128,7 @@ pub fn smooth_point(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     fn params() -> SmoothParams {
         SmoothParams {

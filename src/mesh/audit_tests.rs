@@ -10,7 +10,7 @@ use crate::mesh::union_find::DisjointSets;
 use crate::mesh::write::MeshWriter;
 use crate::mesh::MeshFormat;
 use crate::mesh::{Mesh, MeshError};
-use crate::synth::Rng;
+use crate::rng::Rng;
 use glam::DVec2;
 
 /// Buffers small enough that every mesh below spills hundreds of runs

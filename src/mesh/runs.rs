@@ -335,7 +335,7 @@ fn merge<R: Element + Ord>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     /// Random records, and what `O`'s sort gives back of them at a tiny
     /// and at the default size.

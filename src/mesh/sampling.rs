@@ -1,11 +1,11 @@
 //! Area-uniform random points on a mesh, reproducible for a seed and
 //! independent of the thread count: sample `i` draws from its own stream
-//! (the project's [`crate::synth::Rng`] seeded by `seed` and `i`), picks a triangle in the cumulative
+//! (the project's [`crate::rng::Rng`] seeded by `seed` and `i`), picks a triangle in the cumulative
 //! areas (stratified, see [`area_samples`]) and a point in it by the
 //! square-root warp (Osada et al., "Shape distributions", 2002, section 4.2).
 
 use super::Mesh;
-use crate::synth::Rng;
+use crate::rng::Rng;
 use glam::DVec3;
 use rayon::prelude::*;
 

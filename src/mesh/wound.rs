@@ -116,7 +116,7 @@ mod tests {
     use crate::mesh::audit_mesh::audit_mesh;
     use crate::mesh::shapes::icosphere;
     use crate::mesh::Mesh;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     fn left_out(tris: &[[u32; 3]], sizes: RunSizes) -> Vec<u64> {
         let dir = tempfile::tempdir().unwrap();

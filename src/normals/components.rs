@@ -82,7 +82,7 @@ mod tests {
     #[test]
     fn components_agree_with_find() {
         for seed in 0..20u64 {
-            let mut rng = crate::synth::Rng::new(seed);
+            let mut rng = crate::rng::Rng::new(seed);
             let n = 1 + rng.below(400) as usize;
             let mut uf = ParityUnionFind::new(n);
             for _ in 0..rng.below(500) {

@@ -254,7 +254,7 @@ mod tests {
     /// `repeat`-th edge given twice (reversed, as from its other end), and
     /// only the first `n - gap` vertices used (the rest isolated).
     fn random_edges(seed: u64, n: usize, m: usize, levels: u64, repeat: usize) -> Vec<Edge> {
-        let mut rng = crate::synth::Rng::new(seed);
+        let mut rng = crate::rng::Rng::new(seed);
         let ids: Vec<u32> = (0..n as u32).map(|i| i * 3 + (i % 2) * 7).collect();
         let used = (n - n / 10).max(1) as u64;
         let mut edges = Vec::new();

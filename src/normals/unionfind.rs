@@ -214,7 +214,7 @@ mod tests {
     #[test]
     fn parities_match_brute_force_relabelling() {
         for seed in 0..20u64 {
-            let mut rng = crate::synth::Rng::new(seed);
+            let mut rng = crate::rng::Rng::new(seed);
             let n = 1 + rng.below(300) as usize;
             // Brute force: every element's component label and parity to it.
             let mut label: Vec<usize> = (0..n).collect();
@@ -252,7 +252,7 @@ mod tests {
     #[test]
     fn plain_union_find_matches_brute_force_components() {
         for seed in 0..20u64 {
-            let mut rng = crate::synth::Rng::new(seed);
+            let mut rng = crate::rng::Rng::new(seed);
             let n = 1 + rng.below(200) as usize;
             let pairs: Vec<(u32, u32)> = (0..rng.below(300))
                 .map(|_| (rng.below(n as u64) as u32, rng.below(n as u64) as u32))

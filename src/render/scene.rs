@@ -4,7 +4,7 @@
 
 use super::{Camera, Canvas};
 use crate::features::lines::LineGraph;
-use crate::synth::LineKind;
+use crate::geom::LineKind;
 use glam::DVec3;
 
 /// What to draw.

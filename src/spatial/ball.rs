@@ -221,7 +221,7 @@ impl Hasher for CellHasher {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     #[test]
     fn indexed_answers_as_ids_equal_to_the_indices() {

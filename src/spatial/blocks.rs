@@ -112,7 +112,7 @@ pub(crate) mod tests {
     /// Points on a wavy sheet with clusters of exact duplicates and a few
     /// far outliers, shuffled by a seeded generator.
     pub(crate) fn cloud(seed: u64, n: usize) -> Vec<DVec3> {
-        let mut rng = crate::synth::Rng::new(seed);
+        let mut rng = crate::rng::Rng::new(seed);
         let mut pts = Vec::with_capacity(n);
         while pts.len() < n {
             let (u, v) = (rng.below(1 << 20) as f64, rng.below(1 << 20) as f64);

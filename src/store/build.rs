@@ -424,7 +424,7 @@ mod tests {
 
     #[test]
     fn scatter_in_passes_gives_the_same_store() {
-        let mut rng = crate::synth::Rng::new(17);
+        let mut rng = crate::rng::Rng::new(17);
         let pts: Vec<DVec3> = (0..20_000)
             .map(|_| DVec3::new(0.0, 0.0, 0.0).map(|_| rng.below(1 << 20) as f64 / 1e4))
             .collect();

@@ -210,7 +210,7 @@ mod tests {
     #[test]
     fn counts_match_a_btree_map() {
         for seed in 0..5u64 {
-            let mut rng = crate::synth::Rng::new(seed);
+            let mut rng = crate::rng::Rng::new(seed);
             let dims = [0u32; 3].map(|_| 1 + rng.below(1025) as u32);
             let mut table = CellCounts::new(dims, usize::MAX);
             let mut want: BTreeMap<[u32; 3], u64> = BTreeMap::new();
@@ -241,7 +241,7 @@ mod tests {
 
     #[test]
     fn a_capped_list_coarsens_to_the_finest_grid_that_fits() {
-        let mut rng = crate::synth::Rng::new(7);
+        let mut rng = crate::rng::Rng::new(7);
         let dims = [1000u32, 700, 300];
         let cells: Vec<[u32; 3]> = (0..200_000)
             .map(|_| [0, 1, 2].map(|a| rng.below(dims[a] as u64) as u32))
@@ -271,7 +271,7 @@ mod tests {
 
     #[test]
     fn radix_sort_sorts() {
-        let mut rng = crate::synth::Rng::new(5);
+        let mut rng = crate::rng::Rng::new(5);
         for bits in [1u32, 11, 12, 23, 31, 40] {
             let mut keys: Vec<u64> = (0..5000).map(|_| rng.below(1 << bits)).collect();
             let mut want = keys.clone();

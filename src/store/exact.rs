@@ -275,7 +275,7 @@ mod tests {
 
     #[test]
     fn both_encodings_give_back_the_same_f64() {
-        let mut rng = crate::synth::Rng::new(3);
+        let mut rng = crate::rng::Rng::new(3);
         let grid = Coordinates::LasGrid {
             scale: [0.001, 0.001, 0.01],
             offset: [431_000.0, 5_218_000.0, 0.0],

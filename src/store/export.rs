@@ -406,7 +406,7 @@ mod tests {
 
     #[test]
     fn every_window_and_thread_count_writes_input_order() {
-        let mut rng = crate::synth::Rng::new(17);
+        let mut rng = crate::rng::Rng::new(17);
         let pts: Vec<DVec3> = (0..5003)
             .map(|_| DVec3::from_array([0; 3].map(|_| rng.below(1 << 20) as f64 * 1e-3 + 4e5)))
             .collect();

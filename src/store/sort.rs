@@ -153,9 +153,9 @@ mod tests {
 
     #[test]
     fn order_is_key_then_coordinates_then_id() {
-        let mut rng = crate::synth::Rng::new(9);
+        let mut rng = crate::rng::Rng::new(9);
         // Few distinct positions, so many points share a Morton cell.
-        let pick = |rng: &mut crate::synth::Rng| [0; 3].map(|_| rng.below(5) as f32 * 0.25);
+        let pick = |rng: &mut crate::rng::Rng| [0; 3].map(|_| rng.below(5) as f32 * 0.25);
         let pts: Vec<[f32; 3]> = (0..3000).map(|_| pick(&mut rng)).collect();
         let raw: Vec<f32> = pts.iter().flatten().copied().collect();
         let ids: Vec<u64> = (0..pts.len() as u64).map(|i| (i * 7919) % 3001).collect();

@@ -182,7 +182,7 @@ mod tests {
     #[test]
     fn plan_does_not_depend_on_cell_order() {
         for seed in 0..6u64 {
-            let mut rng = crate::synth::Rng::new(seed);
+            let mut rng = crate::rng::Rng::new(seed);
             let mut cells: Vec<CellCount> = (0..2000)
                 .map(|_| ([0u32; 3].map(|_| rng.below(40) as u32), 1 + rng.below(9)))
                 .collect();

@@ -9,8 +9,8 @@
 //! so no trigonometric function (and no platform `libm`) is involved.
 
 use super::error::{positive, require, SynthError};
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::rng::Rng;
 use glam::DVec3;
 use std::f64::consts::PI;
 

@@ -7,19 +7,11 @@
 //! as in the paper's text.
 
 use super::error::{positive, require, SynthError};
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::geom::LineKind;
+use crate::rng::Rng;
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, TAU};
-
-/// Which side a feature line bends to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum LineKind {
-    /// Convex (PLY `kind` 1).
-    Ridge = 1,
-    /// Concave (PLY `kind` 2).
-    Valley = 2,
-}
 
 /// A straight piece of a true feature line.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,8 +5,8 @@
 //! Zero-area faces are skipped.
 
 use super::error::SynthError;
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::rng::Rng;
 use glam::DVec3;
 
 /// An indexed triangle mesh (the caller's; only the sampler's tables are

@@ -8,10 +8,11 @@
 //! The centre is a cone point (`z'(0) = amplitude 2 pi / wavelength`), not a
 //! feature line.
 
-use super::creased::{LineKind, TrueSegment};
+use super::creased::TrueSegment;
 use super::error::{positive, SynthError};
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::geom::LineKind;
+use crate::rng::Rng;
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
 

@@ -6,8 +6,8 @@
 //! All squares are centred at the origin with sides along x and y.
 
 use super::error::{finite, positive, require, SynthError};
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::rng::Rng;
 use glam::DVec3;
 use std::f64::consts::PI;
 

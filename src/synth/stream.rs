@@ -6,11 +6,11 @@ use super::creased::{StepSampler, WavySampler};
 use super::error::SynthError;
 use super::mesh::MeshSampler;
 use super::ripples::RipplesSampler;
-use super::rng::Rng;
 use super::sheets::{DensityStepSampler, HolePlaneSampler, TwoSheetsSampler};
 use super::terrain::TerrainSampler;
 use super::{Sample, Sampler, Shape};
 use crate::io::PointChunk;
+use crate::rng::Rng;
 use glam::DVec3;
 
 /// Salt that separates the noise generator's seed from the surface one.

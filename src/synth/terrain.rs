@@ -14,8 +14,8 @@
 //! (C^2-smooth), chosen over sines so that sampling needs no platform `libm`.
 
 use super::error::{finite, positive, SynthError};
-use super::rng::Rng;
 use super::{Sample, Sampler};
+use crate::rng::Rng;
 use glam::{DVec2, DVec3};
 
 /// An axis-aligned box building: footprint `[min, max]` in x, y; walls rise

@@ -149,7 +149,7 @@ fn box_dist2(b: &Aabb, p: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     /// A wavy sheet in a store of several tiles, and the points as stored
     /// (f32 relative to the origin, as `Beyond` reads them).

@@ -424,7 +424,7 @@ fn meeting_runs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     #[test]
     fn the_count_before_a_load_is_the_load() {

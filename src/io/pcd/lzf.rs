@@ -142,7 +142,7 @@ mod tests {
 
     #[test]
     fn round_trips_across_the_flush_window() {
-        let mut rng = crate::synth::Rng::new(3);
+        let mut rng = crate::rng::Rng::new(3);
         // Repetitive enough to make long and overlapping references, long
         // enough to be flushed several times.
         let data: Vec<u8> = (0..3_000_000)

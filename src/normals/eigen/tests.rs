@@ -9,7 +9,7 @@ use proptest::prelude::*;
 
 use super::*;
 use crate::normals::pca::COLINEAR_TOLERANCE;
-use crate::synth::Rng;
+use crate::rng::Rng;
 
 type Eigen = ([f64; 3], [DVec3; 3]);
 

@@ -270,7 +270,7 @@ mod tests {
 
     #[test]
     fn voters_keep_the_highest_per_column_in_any_grouping() {
-        let mut rng = crate::synth::Rng::new(3);
+        let mut rng = crate::rng::Rng::new(3);
         let all: Vec<Voter> = (0..2000)
             .map(|i| {
                 let z = rng.range(-1.0, 1.0) as f32;

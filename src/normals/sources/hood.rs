@@ -156,7 +156,7 @@ fn cell_of(p: DVec3, inv: f64) -> [i64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::rng::Rng;
+    use crate::rng::Rng;
 
     #[test]
     fn radius_grid_matches_brute_force() {

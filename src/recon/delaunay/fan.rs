@@ -450,7 +450,7 @@ pub fn circumradius(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     /// Every point that sees a segment under at least an angle lies within
     /// the spindle's reach of its midpoint, and the reach is attained:

@@ -213,7 +213,7 @@ fn seam_edges(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
     use glam::DVec3;
     use std::collections::HashMap;
 

@@ -5,7 +5,7 @@
 
 use super::predicates::{in_sphere_perturbed, orient};
 use super::{sanity_check, Delaunay, DelaunayError, INFINITE};
-use crate::synth::Rng;
+use crate::rng::Rng;
 use glam::DVec3;
 
 fn ids(n: usize) -> Vec<u64> {

@@ -79,7 +79,7 @@ impl<'a> Probe<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Rng;
+    use crate::rng::Rng;
 
     /// A dense patch beside a sparse one (20:1 in spacing), so that some
     /// balls lie within the grid's reach and some far beyond it.

@@ -1,5 +1,7 @@
-//! Seeded pseudo-random numbers for the synthetic scans: xoshiro256** seeded
-//! by SplitMix64, plus the few continuous distributions the generators need.
+//! Seeded pseudo-random numbers (bottom layer): xoshiro256** seeded by
+//! SplitMix64, plus the few continuous distributions the synthetic scans
+//! (`synth`) and the mesh samplers (`mesh::sampling`) need; below them both,
+//! so no production module imports the test-data generators for it.
 //!
 //! Algorithms: xoshiro256** and SplitMix64 from Blackman & Vigna, "Scrambled
 //! linear pseudorandom number generators" (ACM TOMS 2021); Gaussian by
