@@ -49,6 +49,7 @@ fn field_size(data_type: u8, options: u8) -> Option<usize> {
 /// One described field: its name, type and offset within the extra bytes.
 struct Field {
     name: String,
+    description: String,
     data_type: u8,
     at: usize,
     size: usize,
@@ -61,10 +62,13 @@ fn fields(data: &[u8]) -> Result<Vec<Field>, u8> {
     let mut out = Vec::new();
     for d in data.chunks_exact(DESCRIPTOR) {
         let size = field_size(d[2], d[3]).ok_or(d[2])?;
-        let raw = &d[NAME_AT..NAME_AT + NAME_LEN];
-        let name = raw.split(|&b| b == 0).next().unwrap_or(raw);
+        let text = |raw: &[u8]| {
+            let cut = raw.split(|&b| b == 0).next().unwrap_or(raw);
+            String::from_utf8_lossy(cut).into_owned()
+        };
         out.push(Field {
-            name: String::from_utf8_lossy(name).into_owned(),
+            name: text(&d[NAME_AT..NAME_AT + NAME_LEN]),
+            description: text(&d[DESCRIPTION_AT..DESCRIPTION_AT + 32]),
             data_type: d[2],
             at,
             size,
@@ -99,6 +103,31 @@ pub(crate) fn find_normals(header: &Header) -> Option<[usize; 3]> {
         .all_vlrs()
         .find(|v| v.user_id == EXTRA_BYTES.0 && v.record_id == EXTRA_BYTES.1)?;
     find_normal_fields(&fields(&vlr.data).ok()?, extra)
+}
+
+/// Where the input already holds `value`: a float field of its name that
+/// scanmesh described (a file it wrote, processed again). A field of that
+/// name the input made itself is its data: `Err`, never overwritten.
+fn value_in_place(
+    described: &[Field],
+    value: &ValueField,
+    extra: usize,
+) -> Result<Option<usize>, String> {
+    let Some(f) = described
+        .iter()
+        .find(|f| f.name.eq_ignore_ascii_case(value.name))
+    else {
+        return Ok(None);
+    };
+    let ours = f.data_type == FLOAT && f.description == value.description;
+    match ours {
+        true => Ok(find(described, value.name, FLOAT, extra)),
+        false => Err(format!(
+            "its extra bytes hold a field named {} of its own ({:?}); writing {} there would \
+             overwrite it",
+            f.name, f.description, value.name
+        )),
+    }
 }
 
 /// A 192-byte field descriptor.
@@ -174,10 +203,10 @@ pub(crate) fn plan(
         None => Vec::new(),
     };
     let in_place = find_normal_fields(&described, extra).filter(|_| normals);
-    let values_in_place: Vec<Option<usize>> = values
+    let values_in_place = values
         .iter()
-        .map(|v| find(&described, v.name, FLOAT, extra))
-        .collect();
+        .map(|v| value_in_place(&described, v, extra))
+        .collect::<Result<Vec<_>, _>>()?;
     let flags_in_place = find(&described, FLAGS_NAME, U8, extra).filter(|_| flags);
     let add_normals = normals && in_place.is_none();
     let add_values = values_in_place.iter().any(Option::is_none);
@@ -274,6 +303,34 @@ mod tests {
             normals: true,
             ..Wanted::default()
         }
+    }
+
+    const K: ValueField = ValueField {
+        name: "k1",
+        description: "larger principal curvature",
+    };
+
+    /// A value field scanmesh wrote is written in place again; a field of
+    /// the same name the input made itself is refused, never overwritten.
+    #[test]
+    fn a_value_field_of_the_inputs_own_is_not_overwritten() {
+        let wanted = Wanted {
+            values: std::slice::from_ref(&K),
+            ..Wanted::default()
+        };
+        let mut ours = Vec::new();
+        ours.extend(descriptor(FLOAT, 0, "k1", "larger principal curvature"));
+        let vlr = |data: Vec<u8>| Vlr {
+            header: RecordHeader::new(EXTRA_BYTES, "Extra Bytes Record"),
+            data,
+        };
+        let p = plan(20, 4, Some(&vlr(ours)), wanted).unwrap();
+        assert_eq!((p.values_at, p.record_len), (vec![20], 24));
+        let theirs = descriptor(FLOAT, 0, "K1", "their own k1").to_vec();
+        let e = plan(20, 4, Some(&vlr(theirs)), wanted).unwrap_err();
+        assert!(e.contains("field named K1 of its own"), "{e}");
+        let other_type = descriptor(U8, 0, "k1", "larger principal curvature").to_vec();
+        assert!(plan(20, 1, Some(&vlr(other_type)), wanted).is_err());
     }
 
     fn described(names: &[(&str, u8)]) -> Vlr {
