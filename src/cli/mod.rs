@@ -116,7 +116,7 @@ pub struct CommonArgs {
     scans: Option<Vec<usize>>,
     #[command(flatten)]
     select: SelectArgs,
-    /// What a per-point output (normals, curvature, convert) holds of
+    /// What a per-point output (normals, curvature, outliers, convert) holds of
     /// the points --classes/--returns leave out: drop (default: the
     /// selected points only, as with --skip-invalid; the summary line
     /// counts the others) or keep (every input point in input order, the
