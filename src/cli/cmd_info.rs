@@ -123,7 +123,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
             "attributes": r.info.attributes.describe(),
             "bounds_min": r.bounds.min.to_array(),
             "bounds_max": r.bounds.max.to_array(),
-            "spacing_estimate": r.spacing,
+            "spacing_estimate": scanmesh::spatial::mean_nearest_distance(&r.first_points),
             "las_scale": r.info.las_transform.map(|t| t.scale.to_array()),
             "las_offset": r.info.las_transform.map(|t| t.offset.to_array()),
             "scans": scans.as_deref().map(scans_json),

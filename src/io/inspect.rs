@@ -1,16 +1,17 @@
 //! `scanmesh info` for files: what the header says, plus the facts one
-//! streaming pass gives (count, bounds) and a spacing estimate from the
-//! first points, which for scanner data are spatially coherent.
+//! streaming pass gives (count, bounds) and the first points, whose
+//! spacing a caller estimates (`spatial::mean_nearest_distance`): for
+//! scanner data they are spatially coherent. Reading, not geometry: no
+//! index is built here.
 
 use super::{open_reader, IoError, LeftOut, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
 use crate::geom::Aabb;
 use crate::progress::Progress;
-use crate::spatial::{build_index, KnnBackend};
 use glam::DVec3;
 use std::path::Path;
 
-/// Points used for the spacing estimate.
-const SPACING_SAMPLE: usize = 1 << 16;
+/// The first points kept, for a spacing estimate.
+const FIRST_POINTS: usize = 1 << 16;
 
 /// What a pass over a whole input found (`scanmesh info`).
 #[derive(Clone, Debug)]
@@ -28,9 +29,8 @@ pub struct Inspection {
     pub left_out: LeftOut,
     /// Bounding box of the points read.
     pub bounds: Aabb,
-    /// Mean nearest-neighbour distance among the first points (duplicates
-    /// left out); `None` with fewer than two distinct points.
-    pub spacing: Option<f64>,
+    /// The first points read (at most 65,536), for a spacing estimate.
+    pub first_points: Vec<DVec3>,
 }
 
 /// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
@@ -48,7 +48,7 @@ pub fn inspect(
     progress.begin("inspect", info.declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
         chunk.xyz.iter().for_each(|p| bounds.add(*p));
-        let room = SPACING_SAMPLE.saturating_sub(sample.len());
+        let room = FIRST_POINTS.saturating_sub(sample.len());
         sample.extend(chunk.xyz.iter().take(room));
         count += chunk.len() as u64;
         progress.advance(chunk.len() as u64);
@@ -60,26 +60,8 @@ pub fn inspect(
         skipped: reader.skipped(),
         left_out: reader.left_out(),
         bounds,
-        spacing: prefix_spacing(&sample),
+        first_points: sample,
     })
-}
-
-fn prefix_spacing(sample: &[DVec3]) -> Option<f64> {
-    let origin = sample.first().copied()?;
-    let pts: Vec<DVec3> = sample.iter().map(|p| *p - origin).collect();
-    let ids: Vec<u64> = (0..pts.len() as u64).collect();
-    // Cannot fail: ids match points and the sample is far below u32::MAX.
-    let index = build_index(KnnBackend::KdTree, &pts, &ids).ok()?;
-    let mut nbrs = Vec::new();
-    let (mut sum, mut n) = (0.0, 0u64);
-    for (i, p) in pts.iter().enumerate() {
-        index.knn(*p, 1, Some(i as u32), &mut nbrs);
-        if let Some(nb) = nbrs.first().filter(|nb| nb.dist2 > 0.0) {
-            sum += nb.dist2.sqrt();
-            n += 1;
-        }
-    }
-    (n > 0).then(|| sum / n as f64)
 }
 
 /// One scan of an E57, as `info` lists it: what the file declares and what
@@ -99,7 +81,7 @@ pub struct ScanInspection {
 
 /// An E57 inspected scan by scan, in one pass over the file (each scan's
 /// section is read once); the whole file's figures are their sums, its
-/// spacing that of the first scan with points.
+/// first points those of the first scan with points.
 pub fn inspect_scans(
     path: &Path,
     policy: super::InvalidPolicy,
@@ -128,7 +110,9 @@ pub fn inspect_scans(
                 w.skipped += one.skipped;
                 w.left_out = w.left_out.plus(one.left_out);
                 w.bounds = w.bounds.union(&one.bounds);
-                w.spacing = w.spacing.or(one.spacing);
+                if w.first_points.is_empty() {
+                    w.first_points = one.first_points;
+                }
                 w
             }
         });

@@ -10,6 +10,28 @@
 
 use glam::DVec3;
 
+/// Mean nearest-neighbour distance among `points` (exact duplicates left
+/// out: a zero distance says nothing of the sampling); `None` with fewer
+/// than two distinct points. `scanmesh info`'s estimate over a file's
+/// first points.
+pub fn mean_nearest_distance(points: &[DVec3]) -> Option<f64> {
+    let origin = points.first().copied()?;
+    let pts: Vec<DVec3> = points.iter().map(|p| *p - origin).collect();
+    let ids: Vec<u64> = (0..pts.len() as u64).collect();
+    // Fails only past u32::MAX points: no estimate then.
+    let index = build_index(KnnBackend::KdTree, &pts, &ids).ok()?;
+    let mut nbrs = Vec::new();
+    let (mut sum, mut n) = (0.0, 0u64);
+    for (i, p) in pts.iter().enumerate() {
+        index.knn(*p, 1, Some(i as u32), &mut nbrs);
+        if let Some(nb) = nbrs.first().filter(|nb| nb.dist2 > 0.0) {
+            sum += nb.dist2.sqrt();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
 pub(crate) mod ball;
 pub(crate) mod blocks;
 pub(crate) mod brute;
