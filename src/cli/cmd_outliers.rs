@@ -68,23 +68,23 @@ pub fn run(a: OutliersArgs) -> Result<()> {
 
 fn print_summary(r: &OutlierReport, p: &OutlierParams, secs: f64, rows: (u64, bool), out: &Path) {
     let share = 100.0 * r.outliers as f64 / r.points.max(1) as f64;
+    let rule = match r.not_judged == r.points {
+        true => format!(": none judged, every point has fewer than {} neighbours", p.k),
+        false => format!(
+            " with a mean distance to their {} nearest above {:.4e} (mean {:.4e} + {} x std {:.4e}), \
+             {} not judged (fewer than {} neighbours)",
+            p.k, r.threshold, r.mean, p.ratio, r.std_dev, r.not_judged, p.k
+        ),
+    };
     let written = match rows {
         (n, true) => format!("{n} rows written, the outliers left out"),
         (n, false) => format!("{n} rows written"),
     };
     super::report::summary(format!(
-        "outliers: {} of {} points ({share:.2} %) with a mean distance to their {} nearest above \
-         {:.4e} (mean {:.4e} + {} x std {:.4e}), {} not judged (fewer than {} neighbours), \
-         {} tiles ({} reloaded), {written}, {secs:.2} s, peak {} -> {}",
+        "outliers: {} of {} points ({share:.2} %){rule}, {} tiles ({} reloaded), {written}, \
+         {secs:.2} s, peak {} -> {}",
         r.outliers,
         r.points,
-        p.k,
-        r.threshold,
-        r.mean,
-        p.ratio,
-        r.std_dev,
-        r.not_judged,
-        p.k,
         r.run.tiles,
         r.run.retries,
         super::peak(),
