@@ -10,6 +10,9 @@ for LAS files scanmesh writes.
     las_laspy.py pcd PCD REF.ply    check a binary PCD against a PLY, both
                                     read here with numpy, field by field,
                                     bit for bit
+    las_laspy.py drop IN ALL CLEAN  check that CLEAN (outliers --drop) holds
+                                    IN's records where ALL (outliers) has no
+                                    outlier flag, in order, every dimension
 
 `gen` writes LAS 1.2 (point formats 0-3), 1.3 (0-5) and 1.4 (0-10) with
 every field over its legal range as laspy reads it: return numbers 0-7 in
@@ -264,9 +267,27 @@ def check(inp, out, gained):
     print(f"ok {out}: {hb.point_count} points, format {hb.point_format.id}, LAS {hb.version}")
 
 
+def check_drop(inp, full, clean):
+    CURRENT[0] = clean
+    a, f, c = laspy.read(inp), laspy.read(full), laspy.read(clean)
+    kept = np.asarray(f.scanmesh_flags) & 1 == 0
+    if kept.all() or not kept.any():
+        fail(f"{kept.sum()} of {len(kept)} kept: nothing tells the drop apart")
+    if c.header.point_count != kept.sum():
+        fail(f"{c.header.point_count} records, {kept.sum()} kept")
+    for d in a.point_format.dimension_names:
+        if not np.array_equal(np.asarray(a[d])[kept], np.asarray(c[d])):
+            fail(f"{d} differs from the input's kept records")
+    if not same_bits(np.asarray(f.outlier_score)[kept], np.asarray(c.outlier_score)):
+        fail("outlier_score differs from the full output's")
+    print(f"ok {clean}: {c.header.point_count} of {len(kept)} records kept")
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "gen":
         gen(sys.argv[2])
+    elif sys.argv[1] == "drop":
+        check_drop(sys.argv[2], sys.argv[3], sys.argv[4])
     elif sys.argv[1] == "pcd":
         check_pcd(sys.argv[2], sys.argv[3])
     else:

@@ -199,3 +199,33 @@ fn laspy_reads_curvature_written_to_las_and_pcd() {
         .collect();
     check(&made);
 }
+
+/// `outliers --drop` to LAS and LAZ: laspy finds the input's own records
+/// where the full output has no outlier flag, in order, every dimension,
+/// and the full output's scores.
+#[test]
+fn laspy_reads_the_records_outliers_drop_keeps() {
+    if let Some(why) = laspy_missing() {
+        eprintln!("skipping: {why}");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    for name in [
+        "autzen_trim_cut.laz",
+        "32-1-472-150-76.laz",
+        "warsaw_small.las",
+    ] {
+        let input = fixtures.join(name);
+        let full = dir.path().join("all.las");
+        scanmesh(&["outliers", s(&input), "-o", s(&full)]);
+        for ext in ["las", "laz"] {
+            let clean = dir.path().join(format!("clean.{ext}"));
+            scanmesh(&["outliers", s(&input), "-o", s(&clean), "--drop"]);
+            let mut cmd = Command::new("python3");
+            cmd.arg(script())
+                .args(["drop", s(&input), s(&full), s(&clean)]);
+            run(&mut cmd, &format!("--drop of {name} to {ext}"));
+        }
+    }
+}
