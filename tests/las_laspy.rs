@@ -31,6 +31,20 @@ fn laspy_missing() -> Option<String> {
     }
 }
 
+/// A scratch folder when laspy is there; else `None`, saying why the test
+/// is skipped.
+fn laspy_or_skip() -> Option<tempfile::TempDir> {
+    if let Some(why) = laspy_missing() {
+        eprintln!("skipping: {why}");
+        return None;
+    }
+    Some(tempfile::tempdir().unwrap())
+}
+
+fn las_fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las")
+}
+
 fn run(cmd: &mut Command, what: &str) -> String {
     let out = cmd.output().unwrap();
     let text = format!(
@@ -108,11 +122,9 @@ fn through_both_commands(input: &Path, dir: &Path) -> Vec<(PathBuf, PathBuf, Gai
 
 #[test]
 fn laspy_reads_every_field_back_for_every_version_and_format() {
-    if let Some(why) = laspy_missing() {
-        eprintln!("skipping: {why}");
+    let Some(dir) = laspy_or_skip() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
+    };
     let mut cmd = Command::new("python3");
     run(cmd.arg(script()).arg("gen").arg(dir.path()), "laspy gen");
     let mut inputs: Vec<PathBuf> = std::fs::read_dir(dir.path())
@@ -132,12 +144,10 @@ fn laspy_reads_every_field_back_for_every_version_and_format() {
 
 #[test]
 fn laspy_reads_every_field_of_the_real_files_back() {
-    if let Some(why) = laspy_missing() {
-        eprintln!("skipping: {why}");
+    let Some(dir) = laspy_or_skip() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    };
+    let fixtures = las_fixtures();
     let made = [
         "autzen.las",
         "32-1-472-150-76.laz",
@@ -176,16 +186,14 @@ fn curvature_everywhere(input: &Path, dir: &Path) -> Vec<(PathBuf, PathBuf, Gain
 /// the curvature consistent (H the mean, K the product of k1 >= k2).
 #[test]
 fn laspy_reads_curvature_written_to_las_and_pcd() {
-    if let Some(why) = laspy_missing() {
-        eprintln!("skipping: {why}");
+    let Some(dir) = laspy_or_skip() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
+    };
     let mut cmd = Command::new("python3");
     let generated = dir.path().join("gen");
     std::fs::create_dir(&generated).unwrap();
     run(cmd.arg(script()).arg("gen").arg(&generated), "laspy gen");
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    let fixtures = las_fixtures();
     let inputs = [
         fixtures.join("autzen.las"),
         fixtures.join("32-1-472-150-76.laz"),
@@ -205,12 +213,10 @@ fn laspy_reads_curvature_written_to_las_and_pcd() {
 /// and the full output's scores.
 #[test]
 fn laspy_reads_the_records_outliers_drop_keeps() {
-    if let Some(why) = laspy_missing() {
-        eprintln!("skipping: {why}");
+    let Some(dir) = laspy_or_skip() else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    };
+    let fixtures = las_fixtures();
     for name in [
         "autzen_trim_cut.laz",
         "32-1-472-150-76.laz",

@@ -522,11 +522,7 @@ impl Settings {
     /// Removes what killed runs left in `dirs` (their scratch stores and
     /// partial outputs), saying so.
     pub fn reclaim(&self, dirs: &[&Path]) {
-        let removed: Vec<PathBuf> = dirs
-            .iter()
-            .flat_map(|d| scanmesh::io::reclaim::reclaim_scratch(d))
-            .collect();
-        self.say_reclaimed(&removed);
+        self.say_reclaimed(&scanmesh::pipeline::reclaim(dirs));
     }
 
     fn say_reclaimed(&self, removed: &[PathBuf]) {

@@ -253,8 +253,9 @@ fn reading(input: &Path, source: StoreError) -> WorkspaceError {
 }
 
 /// Removes what killed runs left in `dirs` (their scratch stores and
-/// partial outputs); returns what was removed.
-fn reclaim(dirs: &[&Path]) -> Vec<PathBuf> {
+/// partial outputs), each directory once however it is named; returns
+/// what was removed.
+pub fn reclaim(dirs: &[&Path]) -> Vec<PathBuf> {
     let mut seen: Vec<PathBuf> = Vec::new();
     let mut removed = Vec::new();
     for dir in dirs {
