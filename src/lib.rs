@@ -68,6 +68,7 @@ pub(crate) mod progress;
 pub mod recon;
 pub mod render;
 pub mod rng;
+pub mod rundir;
 pub mod spatial;
 pub mod stats;
 pub mod store;

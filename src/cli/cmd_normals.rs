@@ -9,7 +9,7 @@ use scanmesh::normals::{
     compute_normals, EdgeCost, NormalHood, NormalParams, NormalsReport, Orientation, Sensor,
 };
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::{export_points_keeping, NORMALS};
+use scanmesh::store::{export_points_keeping, StageId, NORMALS};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -212,7 +212,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let store = &mut run.ws.store;
     // A resumed run keeps normals it finished (its store outlives it).
     let kept = match &s.run {
-        Some(r) => r.stage::<NormalsReport>("normals")?,
+        Some(r) => r.run().stage::<NormalsReport>(StageId::Normals)?,
         None => None,
     };
     let report = match kept {
@@ -220,7 +220,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
         _ => {
             let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
             if let Some(r) = &s.run {
-                r.keep_stage("normals", &report)?;
+                r.run().keep_stage(StageId::Normals, &report)?;
             }
             report
         }

@@ -10,6 +10,7 @@ use scanmesh::recon::implicit::reconstruct::{
     reconstruct_implicit, ImplicitParams, ImplicitReport, ReconError,
 };
 use scanmesh::recon::projection::ProjectionParams;
+use scanmesh::store::StageId;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -105,9 +106,9 @@ pub fn mesh_format(path: &Path, ascii: bool) -> Result<MeshFormat> {
 
 impl ReconstructArgs {
     /// The tile stages that can run as separate jobs (`--emit`).
-    pub fn tile_stages(&self) -> Result<Vec<&'static str>> {
+    pub fn tile_stages(&self) -> Result<Vec<StageId>> {
         match self.method {
-            Method::Implicit => Ok(vec!["normals", "marching cubes"]),
+            Method::Implicit => Ok(vec![StageId::Normals, StageId::MarchingCubes]),
             _ => bail!("--emit: only --method implicit runs its tiles as separate jobs yet"),
         }
     }

@@ -5,10 +5,10 @@
 //! from the directory it was given in, on the input it was given (checked
 //! unchanged).
 
-use super::rundir::{fingerprint, RunDir};
 use super::Cli;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
+use scanmesh::rundir::{fingerprint, RunDir};
 use scanmesh::store::{Job, TileSet};
 use std::path::PathBuf;
 
@@ -78,7 +78,7 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     }
     let mut args = vec!["scanmesh".to_string()];
     args.extend(id.args.iter().cloned());
-    args.extend(["--run-dir".into(), run.dir.to_string_lossy().into_owned()]);
+    args.extend(["--run-dir".into(), run.dir().to_string_lossy().into_owned()]);
     if a.quiet {
         args.push("--quiet".into());
     }

@@ -10,10 +10,9 @@
 //! quoted for sh wherever it appears (Slurm's `--wrap` text is parsed by
 //! sh once more, on the node); a failed submission stops the Slurm script.
 
-use super::rundir::RunDir;
 use super::Settings;
 use clap::ValueEnum;
-use scanmesh::store::Checkpoints;
+use scanmesh::rundir::{RunDir, StageId};
 use std::fmt::Write;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -26,7 +25,13 @@ pub enum Scheduler {
 }
 
 /// The job script for `stages` of the run in `run`.
-pub fn script(kind: Scheduler, run: &RunDir, stages: &[&str], tasks: u32, s: &Settings) -> String {
+pub fn script(
+    kind: Scheduler,
+    run: &RunDir,
+    stages: &[StageId],
+    tasks: u32,
+    s: &Settings,
+) -> String {
     let steps = steps(stages, tasks);
     match kind {
         Scheduler::Parallel => parallel(run, &steps),
@@ -41,10 +46,10 @@ enum Step {
     Array { args: String, tasks: u32 },
 }
 
-fn steps(stages: &[&str], tasks: u32) -> Vec<Step> {
+fn steps(stages: &[StageId], tasks: u32) -> Vec<Step> {
     let mut steps = Vec::new();
     for stage in stages {
-        let stage = Checkpoints::slug(stage);
+        let stage = stage.slug();
         steps.push(Step::Single(format!("--until {stage}")));
         steps.push(Step::Array {
             args: format!("--stage {stage} --share {{i}}/{tasks}"),
@@ -60,7 +65,7 @@ fn header(run: &RunDir, shell: &str, strict: &str) -> String {
     let _ = writeln!(
         out,
         "# scanmesh jobs for the run in {} (`scanmesh status` follows it).",
-        comment(&run.dir.to_string_lossy())
+        comment(&run.dir().to_string_lossy())
     );
     if let Ok(Some(id)) = run.identity() {
         let args: Vec<String> = id.args.iter().map(|a| word(a)).collect();
@@ -71,7 +76,7 @@ fn header(run: &RunDir, shell: &str, strict: &str) -> String {
     out += "# wrote the script (a compute node's PATH rarely has scanmesh).\n";
     let _ = writeln!(out, "{strict}");
     let _ = writeln!(out, "SCANMESH=${{SCANMESH:-{}}}", quote(&this_binary()));
-    let _ = writeln!(out, "DIR={}", quote(&run.dir.to_string_lossy()));
+    let _ = writeln!(out, "DIR={}", quote(&run.dir().to_string_lossy()));
     out
 }
 

@@ -3,6 +3,7 @@
 
 use scanmesh::io::IoError;
 use scanmesh::pipeline::{BudgetError, WorkspaceError};
+use scanmesh::rundir::RunDirError;
 use scanmesh::store::StoreError;
 use scanmesh::units::human_bytes;
 
@@ -11,11 +12,19 @@ use scanmesh::units::human_bytes;
 /// coordinate or a last line without end of line.
 pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
     let hint = err.chain().find_map(|cause| {
-        // A run's workspace wraps the store's and the budget's errors
-        // (transparently, so they are not links of the chain of their own).
-        let ws = cause.downcast_ref::<WorkspaceError>();
-        let store = match ws {
-            Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }) => Some(e),
+        // A run's workspace wraps the store's and the budget's errors, and
+        // a run directory's the workspace's and the store's (transparently,
+        // so they are not links of the chain of their own).
+        let run = cause.downcast_ref::<RunDirError>();
+        let ws = match run {
+            Some(RunDirError::Workspace(w)) => Some(w),
+            _ => cause.downcast_ref::<WorkspaceError>(),
+        };
+        let store = match (ws, run) {
+            (Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }), _) => {
+                Some(e)
+            }
+            (_, Some(RunDirError::Store(e))) => Some(e),
             _ => cause.downcast_ref::<StoreError>(),
         };
         let budget = match ws {

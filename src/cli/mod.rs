@@ -20,11 +20,9 @@ mod cmd_status;
 mod cmd_tile;
 mod emit;
 mod hints;
-mod liveness;
 mod progress;
 mod report;
 mod run_in_dir;
-mod rundir;
 mod stdout;
 
 pub use stdout::closed as stdout_closed;
@@ -36,9 +34,8 @@ use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::pipeline::{
     KernelCost, MemoryBudget, MemoryPlan, Prepared, Progress, RunOptions, RunSettings,
 };
-use scanmesh::store::{
-    ingest_kept, is_store, BuildOptions, Checkpoints, Job, PointStore, Workspace,
-};
+use scanmesh::rundir::{Session, StageId};
+use scanmesh::store::{BuildOptions, Job, PointStore};
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -162,6 +159,9 @@ pub struct RunDirArgs {
     /// The part of the run this process does (set by `run-job`).
     #[arg(skip)]
     job: Job,
+    /// The job in its run directory, once the run is begun there.
+    #[arg(skip)]
+    session: Option<Session>,
 }
 
 /// Which points of the input to process (`--classes`, `--returns`),
@@ -244,9 +244,8 @@ pub struct Settings {
     pub scratch_dir: Option<PathBuf>,
     /// `--scratch`: the most scratch disk the run may use.
     pub scratch_limit: Option<u64>,
-    /// The run directory (`--run-dir`) and this process's part of it.
-    pub run: Option<rundir::RunDir>,
-    pub job: Job,
+    /// This process's part of the run in its directory (`--run-dir`).
+    pub run: Option<Session>,
 }
 
 /// Threads beyond this many per core only take turns: a slip of the
@@ -349,8 +348,7 @@ impl CommonArgs {
             select: self.select.selection(),
             keep_unselected: self.unselected == Unselected::Keep
                 && !self.select.selection().is_all(),
-            run: run.run_dir.as_deref().map(rundir::RunDir::at).transpose()?,
-            job: run.job.clone(),
+            run: run.session.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -417,84 +415,13 @@ impl Settings {
         progress: &dyn Progress,
     ) -> Result<Prepared> {
         let lib = self.lib();
-        lib.check_floor(&cost)?;
-        lib.check_selection(input)?;
-        if let Some(run) = &self.run {
-            return self.open_run(run, input, output, cost, progress);
-        }
-        let (prepared, reclaimed) = lib.open(input, output, cost, progress)?;
+        let (prepared, reclaimed) = match &self.run {
+            Some(session) => session.open(&lib, input, output, cost, progress)?,
+            None => lib.open(input, output, cost, progress)?,
+        };
         self.say_reclaimed(&reclaimed);
         self.say_skipped(&prepared.ws.store);
         Ok(prepared)
-    }
-
-    /// The run directory's store (ingested first if the run has none yet),
-    /// keeping finished tiles for this process's job.
-    fn open_run(
-        &self,
-        run: &rundir::RunDir,
-        input: &Path,
-        output: &Path,
-        cost: KernelCost,
-        progress: &dyn Progress,
-    ) -> Result<Prepared> {
-        // Before the ingest, which may take hours: `status` tells this
-        // process apart from a dead one by its record.
-        liveness::record(&run.dir);
-        let tile_job = matches!(self.job, Job::Tiles { .. });
-        let store_dir = if is_store(input) {
-            input.to_path_buf()
-        } else {
-            run.store_dir()
-        };
-        // The run's store appears whole (renamed into place) or not at all:
-        // one there without its manifest was damaged, not left half-built.
-        if store_dir.exists() && !is_store(&store_dir) {
-            run.check_store()?;
-        }
-        if !is_store(&store_dir) {
-            if tile_job {
-                bail!(
-                    "{}: the run has no store yet: its first job (ingest) must finish before tile jobs",
-                    run.dir.display()
-                );
-            }
-            let with_scratch = Settings {
-                scratch_dir: Some(run.dir.clone()),
-                ..self.clone()
-            };
-            with_scratch.check_places(input, output, &cost)?;
-            ingest_kept(
-                input,
-                &store_dir,
-                &self.build_options(cost),
-                self.read_options(),
-                progress,
-            )
-            .with_context(|| format!("reading {}", input.display()))?;
-        }
-        // Tile jobs of one stage run side by side and only read the store.
-        let mut store = match tile_job {
-            true => PointStore::open_shared(&store_dir)?,
-            false => PointStore::open(&store_dir)?,
-        };
-        let checkpoints = Checkpoints::new(run.tiles_dir(), self.job.clone());
-        if self.job == Job::Whole {
-            checkpoints.remove_leftovers()?;
-        }
-        run_in_dir::watch(&checkpoints);
-        store.keep_tiles(checkpoints);
-        self.say_skipped(&store);
-        Ok(self.lib().prepare(Workspace::kept(store), cost)?)
-    }
-
-    /// Checks, before any input is read, that the output and scratch
-    /// directories take new files and have room for the run; returns the
-    /// scratch directory.
-    pub fn check_places(&self, input: &Path, output: &Path, cost: &KernelCost) -> Result<PathBuf> {
-        let (dir, reclaimed) = self.lib().check_places(input, output, cost)?;
-        self.say_reclaimed(&reclaimed);
-        Ok(dir)
     }
 
     /// Checks, once the store is built, that the stages' scratch beside it
@@ -588,7 +515,6 @@ pub fn run() -> Result<()> {
         })
         .map_err(hints::with_flag_hints)
         .and_then(|()| within_the_promise(promised));
-    liveness::forget();
     if let Some(path) = &report {
         report::write(path, &start, &outcome)?;
     }
@@ -694,10 +620,10 @@ impl Command {
     }
 
     /// The tile stages whose tiles can run as separate jobs, in order.
-    fn tile_stages(&self) -> Result<Vec<&'static str>> {
+    fn tile_stages(&self) -> Result<Vec<StageId>> {
         match self {
-            Command::Normals(_) => Ok(vec!["normals"]),
-            Command::Neighbors(_) => Ok(vec!["neighbours"]),
+            Command::Normals(_) => Ok(vec![StageId::Normals]),
+            Command::Neighbors(_) => Ok(vec![StageId::Neighbours]),
             Command::Reconstruct(a) => a.tile_stages(),
             _ => bail!("--emit: this command has no tile stages that run as separate jobs yet (normals, neighbors and reconstruct have)"),
         }

@@ -1,42 +1,51 @@
 //! Running a command in its run directory (`--run-dir`): start or resume
 //! the run there, print its job script (`--emit`), or say nothing is left
-//! to do; the log says what each process did. This driver stands above
-//! the directory (`rundir.rs`: its files, identity and sealing) and the job
-//! scripts (`emit.rs`), so neither of those needs the other.
+//! to do; the log says what each process did. The directory itself (its
+//! files, identity, sealing, the job's store and checkpoints) is the
+//! library's (`scanmesh::rundir`); what identifies a run's command line
+//! (the options that do not change its result) is this file's.
 
-use super::rundir::{fingerprint, stable_args, RunDir, RunIdentity};
 use super::Command;
 use anyhow::{anyhow, Context, Result};
-use scanmesh::store::{Checkpoints, Job};
-use std::path::PathBuf;
+use scanmesh::rundir::{ProcessRecord, RunDir, RunIdentity, Session};
+use scanmesh::store::Job;
 
-/// The checkpoints of this process's store: where the job says it stopped.
-static WATCHED: std::sync::Mutex<Option<Checkpoints>> = std::sync::Mutex::new(None);
+/// Options that vary between the processes of one run without changing
+/// its result, with whether each takes a value: left out of the
+/// comparison of command lines.
+const VOLATILE: [(&str, bool); 9] = [
+    ("--quiet", false),
+    ("-q", false),
+    ("--threads", true),
+    ("--report", true),
+    ("--restart", false),
+    ("--emit", true),
+    ("--tasks", true),
+    ("--run-dir", true),
+    ("--scratch", true),
+];
 
-/// Remembers `c` so [`run_in_dir`] learns whether the job stopped as asked.
-pub fn watch(c: &Checkpoints) {
-    if let Ok(mut w) = WATCHED.lock() {
-        *w = Some(c.clone());
+/// The parts of `args` that decide a run's result.
+pub fn stable_args(args: &[String]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut skip_value = false;
+    for a in args {
+        if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        let name = a.split('=').next().unwrap_or(a);
+        match VOLATILE.iter().find(|(v, _)| *v == name) {
+            Some((_, takes)) => skip_value = *takes && !a.contains('='),
+            None => out.push(a.clone()),
+        }
     }
-}
-
-fn stopped_at() -> Option<String> {
-    let w = WATCHED.lock().ok()?;
-    w.as_ref()?.stopped_at().map(str::to_string)
-}
-
-/// The tile files the job found damaged (and recomputed).
-fn damaged_tiles() -> Vec<PathBuf> {
-    let Ok(w) = WATCHED.lock() else {
-        return Vec::new();
-    };
-    w.as_ref().map(|c| c.damaged()).unwrap_or_default()
+    out
 }
 
 /// Runs `command` (given as `args`), in its run directory when it has one:
 /// starts or resumes the run there, or prints its job script (`--emit`),
 /// or says there is nothing left to do.
-pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
+pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     let (Some(common), Some(run_args)) = (command.common(), command.run_args()) else {
         return super::dispatch(command);
     };
@@ -54,12 +63,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
     let run = RunDir::create(&dir)?;
     let job = run_args.job.clone();
     if job == Job::Whole {
-        let id = RunIdentity {
-            scanmesh_version: env!("CARGO_PKG_VERSION").to_string(),
-            args: stable_args(&args),
-            cwd: std::env::current_dir()?,
-            input: fingerprint(&input)?,
-        };
+        let id = RunIdentity::new(stable_args(&args), std::env::current_dir()?, &input)?;
         run.begin(&id, run_args.restart)?;
         if let Some(kind) = run_args.emit {
             let stages = command.tile_stages()?;
@@ -71,7 +75,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
             super::report::summary(format!(
                 "nothing to do: {} is complete ({})",
                 output.display(),
-                run.dir.display()
+                run.dir().display()
             ));
             if !summary.is_empty() && !common.quiet {
                 super::stdout::outln!("  {summary}")?;
@@ -79,10 +83,25 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
             return Ok(());
         }
     }
+    // `status` tells this process apart from a dead one by its record,
+    // removed when this function returns.
+    let _record = ProcessRecord::record(run.dir());
+    let session = Session::new(run.clone(), job.clone());
+    if let Some(r) = command.run_args_mut() {
+        r.session = Some(session.clone());
+    }
     let what = job_text(&job);
     run.log(&format!("start {what}"));
     let outcome = super::dispatch(command);
-    for tile in damaged_tiles() {
+    log_outcome(&session, &output, outcome)
+}
+
+/// Says what the job did, in the log (and the damaged tiles on stderr):
+/// a job that stopped as asked succeeded.
+fn log_outcome(session: &Session, output: &std::path::Path, outcome: Result<()>) -> Result<()> {
+    let (run, job) = (session.run(), session.job());
+    let what = job_text(job);
+    for tile in session.damaged_tiles() {
         let line = format!(
             "damaged tile file {} removed, its tile recomputed",
             tile.display()
@@ -90,14 +109,14 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
         eprintln!("{line}");
         run.log(&line);
     }
-    let outcome = match (outcome, stopped_at(), &job) {
+    let outcome = match (outcome, session.stopped_at(), job) {
         (Err(_), Some(stage), _) => {
             run.log(&format!("done {what} (stopped at {stage}), peak {}", super::peak()));
             return Ok(());
         }
         (Ok(()), None, Job::Tiles { stage, .. }) => Err(anyhow!(
             "run-job --stage {stage}: the run has no tile stage of that name (see `scanmesh status {}`)",
-            run.dir.display()
+            run.dir().display()
         )),
         (outcome, ..) => outcome,
     };
@@ -105,7 +124,7 @@ pub fn run_in_dir(command: Command, args: Vec<String>) -> Result<()> {
         Ok(()) => {
             // An `--until` job that found no stage to stop at ran it all.
             if !matches!(job, Job::Tiles { .. }) {
-                run.finish(&output, super::report::last_summary())?;
+                run.finish(output, super::report::last_summary())?;
             }
             run.log(&format!("done {what}, peak {}", super::peak()));
         }
@@ -120,5 +139,23 @@ pub fn job_text(job: &Job) -> String {
         Job::Whole => "run".to_string(),
         Job::Until(s) => format!("job --until {s}"),
         Job::Tiles { stage, tiles } => format!("job --stage {stage} {tiles}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volatile_options_do_not_change_a_run() {
+        let args = |s: &str| s.split(' ').map(String::from).collect::<Vec<_>>();
+        let a = stable_args(&args(
+            "normals in.ply -o out.ply --threads 2 -q --run-dir d --k 9",
+        ));
+        let b = stable_args(&args(
+            "normals in.ply -o out.ply --run-dir=d --report r.json --k 9",
+        ));
+        assert_eq!(a, b);
+        assert_eq!(a, args("normals in.ply -o out.ply --k 9"));
     }
 }

@@ -74,7 +74,7 @@ impl TileKernel for NeighboursKernel {
     type Output = NeighboursTile;
 
     fn name(&self) -> &str {
-        "neighbours"
+        crate::store::StageId::Neighbours.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

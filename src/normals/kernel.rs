@@ -113,7 +113,7 @@ impl TileKernel for NormalsKernel {
     type Output = NormalsTile;
 
     fn name(&self) -> &str {
-        "normals"
+        crate::store::StageId::Normals.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

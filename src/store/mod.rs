@@ -32,6 +32,7 @@ mod slots;
 mod sort;
 mod source;
 pub mod spacing;
+mod stage;
 mod tile_plan;
 
 #[cfg(test)]
@@ -48,6 +49,7 @@ pub use footprint::store_bytes_per_point;
 pub use las_kept::LasKept;
 pub use manifest::{GridSpec, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
+pub use stage::StageId;
 pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
 
 use crate::geom::Aabb;

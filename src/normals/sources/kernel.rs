@@ -28,7 +28,7 @@ impl TileKernel for SourcesKernel {
     type Output = Vec<Edge>;
 
     fn name(&self) -> &str {
-        "orient: six sources"
+        crate::store::StageId::OrientSources.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

@@ -144,7 +144,7 @@ impl TileKernel for ImplicitKernel {
     type Output = ImplicitTile;
 
     fn name(&self) -> &str {
-        "marching cubes"
+        crate::store::StageId::MarchingCubes.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

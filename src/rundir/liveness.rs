@@ -3,16 +3,17 @@
 //! run on another node, and a pid is reused once its process has ended. So
 //! each process working in a run directory records where it runs
 //! (`procs/PID-MACHINE.json`: host name, machine, start time in clock
-//! ticks since boot) and removes the record when it ends normally; a
-//! record left behind is a process that was killed. `status` asks `/proc`
-//! only about processes of its own machine, and takes a pid for the
-//! process it names only when the start times agree.
+//! ticks since boot) and removes the record when it ends normally (its
+//! [`ProcessRecord`] is dropped); a record left behind is a process that was
+//! killed. `status` asks `/proc` only about processes of its own machine,
+//! and takes a pid for the process it names only when the start times
+//! agree.
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
-pub const PROCS_DIR: &str = "procs";
+/// The directory of the process records in a run directory.
+pub(super) const PROCS_DIR: &str = "procs";
 
 /// Where one process works.
 #[derive(Debug, PartialEq, Serialize, Deserialize)]
@@ -25,45 +26,58 @@ struct Record {
     start_ticks: u64,
 }
 
-/// This process's record, to be removed when it ends.
-static RECORDED: Mutex<Option<PathBuf>> = Mutex::new(None);
+/// This process's record in a run directory while it works there: the
+/// record is removed when this is dropped (the process ends normally, and
+/// its log line says how), and stays when the process is killed.
+#[derive(Debug)]
+#[must_use = "the record is removed when this is dropped"]
+pub struct ProcessRecord {
+    path: Option<PathBuf>,
+}
 
-/// Records in `run_dir` that this process works there (best effort:
-/// without a record, `status` falls back to the pid alone).
-pub fn record(run_dir: &Path) {
-    let pid = std::process::id();
-    let (Some(machine), Some(start_ticks)) = (this_machine(), start_ticks(pid)) else {
-        return;
-    };
-    let record = Record {
-        pid,
-        host: host(),
-        machine,
-        start_ticks,
-    };
-    let dir = run_dir.join(PROCS_DIR);
-    let path = dir.join(file_name(pid, &record.machine));
-    let tmp = path.with_extension("tmp");
-    let written = std::fs::create_dir_all(&dir)
-        .and_then(|()| std::fs::write(&tmp, serde_json::to_vec(&record).unwrap_or_default()))
-        .and_then(|()| std::fs::rename(&tmp, &path));
-    match written {
-        Ok(()) => {
-            if let Ok(mut r) = RECORDED.lock() {
-                *r = Some(path);
-            }
-        }
-        Err(_) => {
-            let _ = std::fs::remove_file(&tmp);
+impl ProcessRecord {
+    /// Records in `run_dir` that this process works there (best effort:
+    /// without a record, `status` falls back to the pid alone).
+    pub fn record(run_dir: &Path) -> ProcessRecord {
+        ProcessRecord {
+            path: write_record(run_dir),
         }
     }
 }
 
-/// Removes this process's record: it ends normally, and its log line says
-/// how.
-pub fn forget() {
-    if let Some(path) = RECORDED.lock().ok().and_then(|mut r| r.take()) {
-        let _ = std::fs::remove_file(path);
+impl Drop for ProcessRecord {
+    fn drop(&mut self) {
+        if let Some(path) = self.path.take() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// Writes this process's record; its path, when it was written.
+fn write_record(run_dir: &Path) -> Option<PathBuf> {
+    let pid = std::process::id();
+    let record = Record {
+        pid,
+        host: host(),
+        machine: this_machine()?,
+        start_ticks: start_ticks(pid)?,
+    };
+    let dir = run_dir.join(PROCS_DIR);
+    let path = dir.join(file_name(pid, &record.machine));
+    let tmp = path.with_extension("tmp");
+    let written = serde_json::to_vec(&record)
+        .map_err(std::io::Error::from)
+        .and_then(|json| {
+            std::fs::create_dir_all(&dir)?;
+            std::fs::write(&tmp, json)?;
+            std::fs::rename(&tmp, &path)
+        });
+    match written {
+        Ok(()) => Some(path),
+        Err(_) => {
+            let _ = std::fs::remove_file(&tmp);
+            None
+        }
     }
 }
 
@@ -79,7 +93,7 @@ pub enum Liveness {
 }
 
 /// Whether process `pid`, which worked in `run_dir`, still runs.
-pub fn check(run_dir: &Path, pid: u32) -> Liveness {
+pub(super) fn check(run_dir: &Path, pid: u32) -> Liveness {
     let records = records(run_dir, pid);
     let here = this_machine();
     if let Some(r) = records.iter().find(|r| Some(&r.machine) == here.as_ref()) {
@@ -172,11 +186,11 @@ mod tests {
     #[test]
     fn a_recorded_process_is_alive_until_it_ends() {
         let dir = tempfile::tempdir().expect("tmp");
-        record(dir.path());
+        let record = ProcessRecord::record(dir.path());
         let me = std::process::id();
         assert_eq!(check(dir.path(), me), Liveness::Alive);
         // The same pid started at another time: a reused pid.
-        let path = RECORDED.lock().expect("lock").clone().expect("recorded");
+        let path = record.path.clone().expect("recorded");
         let mut r: Record =
             serde_json::from_slice(&std::fs::read(&path).expect("read")).expect("json");
         r.start_ticks += 1;
@@ -189,6 +203,15 @@ mod tests {
         let other = dir.path().join(PROCS_DIR).join(file_name(me, &r.machine));
         std::fs::write(&other, serde_json::to_vec(&r).expect("json")).expect("write");
         assert_eq!(check(dir.path(), me), Liveness::Elsewhere("node7".into()));
-        forget();
+        drop(record);
+    }
+
+    #[test]
+    fn the_record_goes_when_the_process_ends_normally() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let record = ProcessRecord::record(dir.path());
+        let path = record.path.clone();
+        drop(record);
+        assert!(path.is_none_or(|p| !p.exists()));
     }
 }

@@ -1,0 +1,120 @@
+//! This process's part of a run kept in a run directory: its job (all of
+//! the run, up to a stage, or some tiles of one), the store it works on
+//! (ingested into the run directory first when the run has none yet), and
+//! the checkpoints its tile stages keep their tiles in, which say after
+//! the run where the job stopped and which tile files were found damaged.
+
+use super::{RunDir, RunDirError};
+use crate::pipeline::{KernelCost, Prepared, Progress, RunSettings, WorkspaceError};
+use crate::store::{ingest_kept, is_store, Checkpoints, Job, PointStore, Workspace};
+use std::path::{Path, PathBuf};
+
+/// A process's job in a run directory.
+#[derive(Clone, Debug)]
+pub struct Session {
+    run: RunDir,
+    /// Shared by the clones, and by the store that keeps tiles in them:
+    /// the job learns where it stopped from them, not from an error chain.
+    checkpoints: Checkpoints,
+}
+
+impl Session {
+    /// The job `job` in `run`.
+    pub fn new(run: RunDir, job: Job) -> Self {
+        let checkpoints = Checkpoints::new(run.tiles_dir(), job);
+        Session { run, checkpoints }
+    }
+
+    /// The run directory.
+    pub fn run(&self) -> &RunDir {
+        &self.run
+    }
+
+    /// What this process does of the run.
+    pub fn job(&self) -> &Job {
+        &self.checkpoints.job
+    }
+
+    /// The stage where the job stopped as asked (`--until`, a tile job),
+    /// if it did.
+    pub fn stopped_at(&self) -> Option<&str> {
+        self.checkpoints.stopped_at()
+    }
+
+    /// The tile files the job found damaged (removed, their tiles
+    /// recomputed).
+    pub fn damaged_tiles(&self) -> Vec<PathBuf> {
+        self.checkpoints.damaged()
+    }
+
+    /// The run's store (`input` itself when it is one, else the run
+    /// directory's, ingested first when the run has none yet), keeping
+    /// finished tiles for this job, with its plan and run options; and the
+    /// scratch entries killed runs left that were removed on the way.
+    pub fn open(
+        &self,
+        settings: &RunSettings,
+        input: &Path,
+        output: &Path,
+        cost: KernelCost,
+        progress: &dyn Progress,
+    ) -> Result<(Prepared, Vec<PathBuf>), RunDirError> {
+        settings.check_floor(&cost)?;
+        settings.check_selection(input)?;
+        let tile_job = matches!(self.job(), Job::Tiles { .. });
+        let store_dir = match is_store(input) {
+            true => input.to_path_buf(),
+            false => self.run.store_dir(),
+        };
+        // The run's store appears whole (renamed into place) or not at all:
+        // one there without its manifest was damaged, not left half-built.
+        if store_dir.exists() && !is_store(&store_dir) {
+            self.run.check_store()?;
+        }
+        let mut reclaimed = Vec::new();
+        if !is_store(&store_dir) {
+            if tile_job {
+                return Err(RunDirError::NoStoreYet {
+                    dir: self.run.dir().to_path_buf(),
+                });
+            }
+            reclaimed = self.ingest(settings, input, &store_dir, output, cost, progress)?;
+        }
+        // Tile jobs of one stage run side by side and only read the store.
+        let mut store = match tile_job {
+            true => PointStore::open_shared(&store_dir)?,
+            false => PointStore::open(&store_dir)?,
+        };
+        if *self.job() == Job::Whole {
+            self.checkpoints.remove_leftovers()?;
+        }
+        store.keep_tiles(self.checkpoints.clone());
+        Ok((settings.prepare(Workspace::kept(store), cost)?, reclaimed))
+    }
+
+    /// Builds the run's store from `input` at `store_dir`, the run
+    /// directory its scratch place; returns what killed runs left there.
+    fn ingest(
+        &self,
+        settings: &RunSettings,
+        input: &Path,
+        store_dir: &Path,
+        output: &Path,
+        cost: KernelCost,
+        progress: &dyn Progress,
+    ) -> Result<Vec<PathBuf>, RunDirError> {
+        let in_run = RunSettings {
+            scratch_dir: Some(self.run.dir().to_path_buf()),
+            ..settings.clone()
+        };
+        let (_, reclaimed) = in_run.check_places(input, output, &cost)?;
+        let build = settings.build_options(cost);
+        ingest_kept(input, store_dir, &build, settings.read.clone(), progress).map_err(
+            |source| WorkspaceError::Reading {
+                path: input.to_path_buf(),
+                source,
+            },
+        )?;
+        Ok(reclaimed)
+    }
+}
