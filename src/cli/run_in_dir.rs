@@ -1,7 +1,7 @@
 //! Running a command in its run directory (`--run-dir`): start or resume
 //! the run there, print its job script (`--emit`), or say nothing is left
-//! to do; the log says what each process did. The directory itself (its
-//! files, identity, sealing, the job's store and checkpoints) is the
+//! to do. The directory itself (its files, identity, sealing, the job's
+//! store and checkpoints, the log of what each process did) is the
 //! library's (`scanmesh::rundir`); what identifies a run's command line
 //! (the options that do not change its result) is this file's.
 
@@ -86,59 +86,22 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     // `status` tells this process apart from a dead one by its record,
     // removed when this function returns.
     let _record = ProcessRecord::record(run.dir());
-    let session = Session::new(run.clone(), job.clone());
+    let session = Session::new(run, job);
     if let Some(r) = command.run_args_mut() {
         r.session = Some(session.clone());
     }
-    let what = job_text(&job);
-    run.log(&format!("start {what}"));
+    session.log_start();
     let outcome = super::dispatch(command);
-    log_outcome(&session, &output, outcome)
-}
-
-/// Says what the job did, in the log (and the damaged tiles on stderr):
-/// a job that stopped as asked succeeded.
-fn log_outcome(session: &Session, output: &std::path::Path, outcome: Result<()>) -> Result<()> {
-    let (run, job) = (session.run(), session.job());
-    let what = job_text(job);
-    for tile in session.damaged_tiles() {
-        let line = format!(
-            "damaged tile file {} removed, its tile recomputed",
-            tile.display()
-        );
+    for line in session.log_damaged_tiles() {
         eprintln!("{line}");
-        run.log(&line);
     }
-    let outcome = match (outcome, session.stopped_at(), job) {
-        (Err(_), Some(stage), _) => {
-            run.log(&format!("done {what} (stopped at {stage}), peak {}", super::peak()));
-            return Ok(());
+    match outcome {
+        Err(_) if session.log_stopped() => Ok(()),
+        Ok(()) => Ok(session.log_done(&output, super::report::last_summary())?),
+        Err(e) => {
+            session.log_failed(&e);
+            Err(e)
         }
-        (Ok(()), None, Job::Tiles { stage, .. }) => Err(anyhow!(
-            "run-job --stage {stage}: the run has no tile stage of that name (see `scanmesh status {}`)",
-            run.dir().display()
-        )),
-        (outcome, ..) => outcome,
-    };
-    match &outcome {
-        Ok(()) => {
-            // An `--until` job that found no stage to stop at ran it all.
-            if !matches!(job, Job::Tiles { .. }) {
-                run.finish(output, super::report::last_summary())?;
-            }
-            run.log(&format!("done {what}, peak {}", super::peak()));
-        }
-        Err(e) => run.log(&format!("failed {what}: {e:#}")),
-    }
-    outcome
-}
-
-/// A job in words, for the log.
-pub fn job_text(job: &Job) -> String {
-    match job {
-        Job::Whole => "run".to_string(),
-        Job::Until(s) => format!("job --until {s}"),
-        Job::Tiles { stage, tiles } => format!("job --stage {stage} {tiles}"),
     }
 }
 

@@ -134,6 +134,14 @@ pub enum RunDirError {
         /// The run directory.
         dir: PathBuf,
     },
+    /// A tile job named a stage the run never came to.
+    #[error("run-job --stage {stage}: the run has no tile stage of that name (see `scanmesh status {}`)", dir.display())]
+    NoSuchTileStage {
+        /// The stage as the job named it.
+        stage: String,
+        /// The run directory.
+        dir: PathBuf,
+    },
     /// The store cannot be opened, or its tile files read.
     #[error(transparent)]
     Store(#[from] StoreError),

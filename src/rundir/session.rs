@@ -1,12 +1,15 @@
 //! This process's part of a run kept in a run directory: its job (all of
 //! the run, up to a stage, or some tiles of one), the store it works on
-//! (ingested into the run directory first when the run has none yet), and
-//! the checkpoints its tile stages keep their tiles in, which say after
-//! the run where the job stopped and which tile files were found damaged.
+//! (ingested into the run directory first when the run has none yet), the
+//! checkpoints its tile stages keep their tiles in, which say after the
+//! run where the job stopped and which tile files were found damaged, and
+//! the log lines that say what the job did (`status` reads them back:
+//! `processes`).
 
 use super::{RunDir, RunDirError};
 use crate::pipeline::{KernelCost, Prepared, Progress, RunSettings, WorkspaceError};
 use crate::store::{ingest_kept, is_store, Checkpoints, Job, PointStore, Workspace};
+use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
 /// A process's job in a run directory.
@@ -117,4 +120,83 @@ impl Session {
         )?;
         Ok(reclaimed)
     }
+
+    /// Logs that the job starts.
+    pub fn log_start(&self) {
+        self.run.log(&format!("start {}", job_text(self.job())));
+    }
+
+    /// Logs each tile file the job found damaged (removed, its tile
+    /// recomputed); returns the lines, for the caller to show too.
+    pub fn log_damaged_tiles(&self) -> Vec<String> {
+        let lines: Vec<String> = self
+            .damaged_tiles()
+            .iter()
+            .map(|tile| {
+                format!(
+                    "damaged tile file {} removed, its tile recomputed",
+                    tile.display()
+                )
+            })
+            .collect();
+        lines.iter().for_each(|line| self.run.log(line));
+        lines
+    }
+
+    /// Whether the job stopped as asked (its run ended in an error
+    /// because it did): then logged as done.
+    pub fn log_stopped(&self) -> bool {
+        let Some(stage) = self.stopped_at() else {
+            return false;
+        };
+        let what = job_text(self.job());
+        self.run.log(&format!(
+            "done {what} (stopped at {stage}), peak {}",
+            peak()
+        ));
+        true
+    }
+
+    /// Records that the job ran to its end: a whole run (or an `--until`
+    /// job that found no stage to stop at, so ran it all) wrote `output`,
+    /// with its `summary`. A tile job that did not stop never met its stage:
+    /// an error, logged as its failure; one that did wrote no output.
+    pub fn log_done(&self, output: &Path, summary: Option<String>) -> Result<(), RunDirError> {
+        if let (Job::Tiles { stage, .. }, None) = (self.job(), self.stopped_at()) {
+            let err = RunDirError::NoSuchTileStage {
+                stage: stage.clone(),
+                dir: self.run.dir().to_path_buf(),
+            };
+            self.log_failed(&err);
+            return Err(err);
+        }
+        if !matches!(self.job(), Job::Tiles { .. }) {
+            self.run.finish(output, summary)?;
+        }
+        let what = job_text(self.job());
+        self.run.log(&format!("done {what}, peak {}", peak()));
+        Ok(())
+    }
+
+    /// Logs that the job failed, and why (the error's `{:#}`: an error
+    /// chain's causes on one line).
+    pub fn log_failed(&self, err: &dyn Display) {
+        let what = job_text(self.job());
+        self.run.log(&format!("failed {what}: {err:#}"));
+    }
+}
+
+/// A job in words, for the log: `run`, `job --until STAGE`, `job --stage
+/// STAGE --share I/N`.
+fn job_text(job: &Job) -> String {
+    match job {
+        Job::Whole => "run".to_string(),
+        Job::Until(s) => format!("job --until {s}"),
+        Job::Tiles { stage, tiles } => format!("job --stage {stage} {tiles}"),
+    }
+}
+
+/// This process's peak memory so far, for the log.
+fn peak() -> String {
+    crate::memory::peak_rss_bytes().map_or("?".into(), crate::units::human_bytes)
 }
