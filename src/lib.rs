@@ -71,6 +71,7 @@ pub mod rng;
 pub mod spatial;
 pub mod stats;
 pub mod store;
+pub mod summary;
 pub mod synth;
 pub(crate) mod tiling;
 pub mod units;

@@ -1,6 +1,7 @@
 //! Library errors say what is wrong in the library's terms; where a
 //! command-line flag is the fix, the command line names it on top.
 
+use scanmesh::demo::DemoError;
 use scanmesh::io::IoError;
 use scanmesh::pipeline::{BudgetError, WorkspaceError};
 use scanmesh::store::StoreError;
@@ -13,9 +14,17 @@ pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
     let hint = err.chain().find_map(|cause| {
         // A run's workspace wraps the store's and the budget's errors
         // (transparently, so they are not links of the chain of their own).
-        let ws = cause.downcast_ref::<WorkspaceError>();
-        let store = match ws {
-            Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }) => Some(e),
+        // So does the demo's error, round the workspace's and the store's.
+        let demo = cause.downcast_ref::<DemoError>();
+        let ws = match demo {
+            Some(DemoError::Workspace(w)) => Some(w),
+            _ => cause.downcast_ref::<WorkspaceError>(),
+        };
+        let store = match (ws, demo) {
+            (Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }), _) => {
+                Some(e)
+            }
+            (_, Some(DemoError::Store(e))) => Some(e),
             _ => cause.downcast_ref::<StoreError>(),
         };
         let budget = match ws {
