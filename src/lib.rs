@@ -72,6 +72,7 @@ pub mod rundir;
 pub mod spatial;
 pub mod stats;
 pub mod store;
+pub mod summary;
 pub mod synth;
 pub(crate) mod tiling;
 pub mod units;

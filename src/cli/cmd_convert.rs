@@ -3,6 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use scanmesh::io::convert::convert_keeping;
+use scanmesh::io::not_held;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -33,27 +34,9 @@ pub fn run(a: ConvertArgs) -> Result<()> {
         s.keep_unselected,
         progress.as_ref(),
     )?;
-    super::report::unselected_kept(s.keep_unselected);
-    if !stats.dropped.is_empty() && !s.quiet {
-        eprintln!(
-            "note: {} cannot hold the input's {}: not written",
-            a.output.display(),
-            stats.dropped.describe()
-        );
-    }
-    super::report::input_skipped(
-        &a.input.display().to_string(),
-        stats.skipped,
-        stats.left_out,
-    );
-    super::report::summary(format!(
-        "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
-        stats.points,
-        stats.skipped,
-        stats.carried.describe(),
-        t0.elapsed().as_secs_f64(),
-        super::peak(),
-        a.output.display()
-    ));
+    s.note(not_held(&a.output, stats.dropped));
+    let source = a.input.display().to_string();
+    super::report::input_skipped(&source, stats.skipped, stats.left_out);
+    s.summary(super::closing(&stats, t0, &a.output));
     Ok(())
 }

@@ -8,6 +8,7 @@ use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
     compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions,
 };
+use scanmesh::summary::Summary;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -99,53 +100,20 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     .with_context(|| format!("writing {}", a.output.display()))?;
     let secs = t0.elapsed().as_secs_f64();
     if let Some(path) = &a.summary {
-        write_summary(path, &report, &params, secs)
+        write_summary(path, &report, secs)
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    print_summary(&report, &params, secs, &a.output);
+    let peak = scanmesh::memory::peak_rss_bytes();
+    s.summary(Summary::new(&report, secs, peak, &a.output));
     Ok(())
 }
 
-fn write_summary(
-    path: &Path,
-    report: &NeighboursReport,
-    params: &NeighbourParams,
-    secs: f64,
-) -> Result<()> {
+/// Writes the `--summary` document, whole or not at all.
+fn write_summary(path: &Path, report: &NeighboursReport, secs: f64) -> Result<()> {
     let mut file = AtomicFile::create(path)?;
-    let text = serde_json::to_string_pretty(&report.summary(params, secs))?;
+    let text = serde_json::to_string_pretty(&report.summary(&report.params, secs))?;
     file.file().write_all(text.as_bytes())?;
     file.file().write_all(b"\n")?;
     file.commit()?;
     Ok(())
-}
-
-fn print_summary(r: &NeighboursReport, params: &NeighbourParams, secs: f64, out: &Path) {
-    let st = &r.stats;
-    let sizes = match (
-        st.min_size(),
-        st.median_size(),
-        st.mean_size(),
-        st.max_size(),
-    ) {
-        (Some(lo), Some(med), Some(mean), Some(hi)) => format!("{lo}/{med}/{mean:.1}/{hi}"),
-        _ => "-".into(),
-    };
-    let iterations = match st.median_iterations() {
-        Some(m) => format!(", iterations median {m} ({} hit the cap)", st.hit_cap()),
-        None => String::new(),
-    };
-    super::report::summary(format!(
-        "neighbors: {} points, {} tiles ({} reloaded with a wider margin), {} k {}, size min/median/mean/max {}{}, {:.2} s, peak {} -> {}",
-        r.points,
-        r.tiles,
-        r.run.retries,
-        params.mode_name(),
-        params.k(),
-        sizes,
-        iterations,
-        secs,
-        super::peak(),
-        out.display()
-    ));
 }

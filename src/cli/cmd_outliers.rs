@@ -4,9 +4,9 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::outliers::{
-    compute_outliers, outliers_output, write_outliers, OutlierParams, OutlierReport, OUTLIER,
+    compute_outliers, outliers_output, write_outliers, OutlierParams, OutliersWritten, OUTLIER,
 };
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -60,34 +60,11 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     let window = run.plan.window_points;
     let rows = write_outliers(store, &a.output, &spec, window, keep, progress.as_ref())
         .with_context(|| format!("writing {}", a.output.display()))?;
-    super::report::unselected_kept(s.keep_unselected);
-    let secs = t0.elapsed().as_secs_f64();
-    print_summary(&report, &params, secs, (rows, a.drop), &a.output);
+    let written = OutliersWritten {
+        report: &report,
+        rows,
+        dropped: a.drop,
+    };
+    s.summary(super::closing(&written, t0, &a.output));
     Ok(())
-}
-
-fn print_summary(r: &OutlierReport, p: &OutlierParams, secs: f64, rows: (u64, bool), out: &Path) {
-    let share = 100.0 * r.outliers as f64 / r.points.max(1) as f64;
-    let rule = match r.not_judged == r.points {
-        true => format!(": none judged, every point has fewer than {} neighbours", p.k),
-        false => format!(
-            " with a mean distance to their {} nearest above {:.4e} (mean {:.4e} + {} x std {:.4e}), \
-             {} not judged (fewer than {} neighbours)",
-            p.k, r.threshold, r.mean, p.ratio, r.std_dev, r.not_judged, p.k
-        ),
-    };
-    let written = match rows {
-        (n, true) => format!("{n} rows written, the outliers left out"),
-        (n, false) => format!("{n} rows written"),
-    };
-    super::report::summary(format!(
-        "outliers: {} of {} points ({share:.2} %){rule}, {} tiles ({} reloaded), {written}, \
-         {secs:.2} s, peak {} -> {}",
-        r.outliers,
-        r.points,
-        r.run.tiles,
-        r.run.retries,
-        super::peak(),
-        out.display()
-    ));
 }

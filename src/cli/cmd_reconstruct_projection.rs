@@ -4,7 +4,7 @@
 
 use anyhow::Result;
 use scanmesh::mesh::MeshFormat;
-use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams, ProjectionReport};
+use scanmesh::recon::projection::{reconstruct_projection, ProjectionParams};
 use std::path::Path;
 use std::time::Instant;
 
@@ -15,10 +15,6 @@ pub fn run(
     format: MeshFormat,
     params: &ProjectionParams,
 ) -> Result<()> {
-    // Checked again by the library; here before any input is read.
-    params
-        .validate()
-        .map_err(|e| anyhow::anyhow!("--{} {}: {}", e.name.replace('_', "-"), e.value, e.why))?;
     let progress = super::progress::progress(s.quiet);
     let t0 = Instant::now();
     let mut prepared = s.open_input(input, output, params.cost(), progress.as_ref())?;
@@ -31,42 +27,6 @@ pub fn run(
         progress.as_ref(),
     )
     .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
-    print_summary(
-        &r,
-        prepared.ws.store.tiles().len(),
-        t0.elapsed().as_secs_f64(),
-        output,
-    );
+    super::mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
-}
-
-pub fn print_summary(r: &ProjectionReport, tiles: usize, secs: f64, out: &Path) {
-    let st = &r.stitch;
-    super::report::mesh_audit(&r.audit);
-    super::report::summary(format!(
-        "reconstruct: {} points, {} tiles ({} reloaded), projection (paper 2), spacing {:.4e}, {} lattice jobs of cell {:.3e} ({:.2} runs each) -> {} triangles, {} pieces{}, {:.2} s, peak {} -> {}; checked: {}",
-        st.vertices,
-        tiles,
-        r.run.retries,
-        r.spacing,
-        r.jobs,
-        r.lattice.cell,
-        r.jobs_run as f64 / r.jobs.max(1) as f64,
-        st.triangles,
-        st.pieces,
-        left_out(st.left_out, st.contradictions),
-        secs,
-        super::peak(),
-        out.display(),
-        r.audit
-    ));
-}
-
-/// " (N triangles left out where M contradicting joins ran edges twice the
-/// same way)", when any were.
-fn left_out(triangles: u64, contradictions: u64) -> String {
-    if triangles == 0 {
-        return String::new();
-    }
-    format!(" ({triangles} triangles left out: {contradictions} contradicting joins of pieces ran their edges twice the same way)")
 }

@@ -45,20 +45,10 @@ pub fn run(a: TileArgs) -> Result<()> {
             return Err(e.into());
         }
     };
-    let spacing = ensure_spacing(&mut store)?;
+    ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
     super::report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
-    super::report::summary(format!(
-        "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {:.4e}, {:.2} s, peak {} -> {}",
-        m.count,
-        m.skipped_invalid,
-        m.duplicates,
-        m.tiles.len(),
-        spacing,
-        t0.elapsed().as_secs_f64(),
-        super::peak(),
-        a.output.display()
-    ));
+    s.summary(super::closing(store.manifest(), t0, &a.output));
     Ok(())
 }

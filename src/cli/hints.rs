@@ -1,6 +1,7 @@
 //! Library errors say what is wrong in the library's terms; where a
 //! command-line flag is the fix, the command line names it on top.
 
+use scanmesh::demo::DemoError;
 use scanmesh::io::IoError;
 use scanmesh::pipeline::{BudgetError, WorkspaceError};
 use scanmesh::rundir::RunDirError;
@@ -13,18 +14,20 @@ use scanmesh::units::human_bytes;
 pub fn with_flag_hints(err: anyhow::Error) -> anyhow::Error {
     let hint = err.chain().find_map(|cause| {
         // A run's workspace wraps the store's and the budget's errors, and
-        // a run directory's the workspace's and the store's (transparently,
-        // so they are not links of the chain of their own).
+        // a run directory's and the demo's wrap the workspace's and the
+        // store's (transparently, so they are not links of the chain of
+        // their own).
         let run = cause.downcast_ref::<RunDirError>();
-        let ws = match run {
-            Some(RunDirError::Workspace(w)) => Some(w),
+        let demo = cause.downcast_ref::<DemoError>();
+        let ws = match (run, demo) {
+            (Some(RunDirError::Workspace(w)), _) | (_, Some(DemoError::Workspace(w))) => Some(w),
             _ => cause.downcast_ref::<WorkspaceError>(),
         };
-        let store = match (ws, run) {
-            (Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }), _) => {
+        let store = match (ws, run, demo) {
+            (Some(WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. }), _, _) => {
                 Some(e)
             }
-            (_, Some(RunDirError::Store(e))) => Some(e),
+            (_, Some(RunDirError::Store(e)), _) | (_, _, Some(DemoError::Store(e))) => Some(e),
             _ => cause.downcast_ref::<StoreError>(),
         };
         let budget = match ws {

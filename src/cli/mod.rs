@@ -1,6 +1,7 @@
 //! Command-line arguments (raw, as clap parses them) and their validation
 //! into [`Settings`], then dispatch to one module per command.
 
+mod args;
 mod clock;
 mod cmd_convert;
 mod cmd_curvature;
@@ -31,12 +32,14 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
-use scanmesh::pipeline::{
-    KernelCost, MemoryBudget, MemoryPlan, Prepared, Progress, RunOptions, RunSettings,
-};
+use scanmesh::mesh::MeshAudit;
+use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
 use scanmesh::rundir::{Session, StageId};
 use scanmesh::store::{BuildOptions, Job, PointStore};
+use scanmesh::summary::Summary;
+use std::fmt::Display;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 #[derive(Parser)]
 #[command(
@@ -469,14 +472,18 @@ impl Settings {
         report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
     }
 
-    /// The memory plan for `store` and run options whose tiles in flight
-    /// fit it.
-    pub fn plan_for(
-        &self,
-        store: &PointStore,
-        cost: KernelCost,
-    ) -> Result<(MemoryPlan, RunOptions)> {
-        Ok(self.lib().plan_for(store, cost)?)
+    /// Prints the closing `line` (kept for `--report`), saying whether the
+    /// output holds the unselected points.
+    pub fn summary(&self, line: impl Display) {
+        report::unselected_kept(self.keep_unselected);
+        report::summary(line.to_string());
+    }
+
+    /// Prints `note` on stderr, if any, unless `--quiet`.
+    pub fn note(&self, note: Option<String>) {
+        if let Some(note) = note.filter(|_| !self.quiet) {
+            eprintln!("note: {note}");
+        }
     }
 
     /// Sizes rayon's pool once per process.
@@ -640,8 +647,17 @@ pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Resu
     Ok(())
 }
 
-pub fn peak() -> String {
-    scanmesh::memory::peak_rss_bytes().map_or("?".into(), scanmesh::units::human_bytes)
+/// The closing line of `report`, for a run that began at `t0`, peaked at
+/// this process's peak so far and wrote `output`.
+pub fn closing<'a, R>(report: &'a R, t0: Instant, output: &'a Path) -> Summary<'a, R> {
+    let peak = scanmesh::memory::peak_rss_bytes();
+    Summary::new(report, t0.elapsed().as_secs_f64(), peak, output)
+}
+
+/// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
+pub fn mesh_summary(audit: &MeshAudit, line: impl Display) {
+    report::mesh_audit(audit);
+    report::summary(line.to_string());
 }
 
 #[cfg(test)]

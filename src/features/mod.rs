@@ -34,6 +34,7 @@ pub(crate) mod smooth;
 pub(crate) mod spacing;
 pub(crate) mod stages;
 pub(crate) mod stats;
+mod summary;
 
 pub use curvature::{compute_curvature, CurvatureReport};
 

@@ -32,6 +32,22 @@ pub struct ConvertStats {
     pub dropped: AttributeSet,
 }
 
+impl std::fmt::Display for crate::summary::Summary<'_, ConvertStats> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = self.report;
+        write!(
+            f,
+            "convert: {} points ({} skipped), attributes: {}, in {:.2} s, peak {} -> {}",
+            r.points,
+            r.skipped,
+            r.carried.describe(),
+            self.secs,
+            self.peak_text(),
+            self.output.display()
+        )
+    }
+}
+
 /// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
 pub fn convert(
     input: &Path,

@@ -41,7 +41,7 @@ pub use error::IoError;
 pub use las_file::LasSource;
 pub use obj::read_obj_mesh;
 pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
-pub use output::{mesh_format, output_spec, Carried, MeshFormat};
+pub use output::{mesh_format, not_held, output_spec, Carried, MeshFormat};
 pub use ply::read_mesh;
 pub use select::{LeftOut, Returns, Selection};
 pub use write::{create_writer, create_writer_with, LasOutput};

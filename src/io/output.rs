@@ -7,7 +7,7 @@
 //! this table and its writer, not the commands (PDAL's
 //! `StageFactory::inferWriterDriver` is the model).
 
-use super::{format_from_name, Format, IoError, ValueField, WriterSpec};
+use super::{format_from_name, AttributeSet, Format, IoError, ValueField, WriterSpec};
 use std::path::Path;
 
 /// The mesh (and polyline) file formats.
@@ -138,6 +138,27 @@ pub fn output_spec(path: &Path, carried: &Carried, ascii: bool) -> Result<Writer
         with_flags: carried.flags && format.holds_flags(),
         comment: carried.comment,
         ..WriterSpec::new(format)
+    })
+}
+
+impl WriterSpec {
+    /// Carries those of the input's attributes this format holds; returns
+    /// the others, which the output will not have ([`not_held`] says so).
+    pub fn carry(&mut self, input: AttributeSet) -> AttributeSet {
+        self.attributes = input.intersect(self.format.attributes());
+        input.without(self.attributes)
+    }
+}
+
+/// The note that `output` cannot hold the input's `dropped` attributes,
+/// when there are any: a user who asked for a format learns what it lost.
+pub fn not_held(output: &Path, dropped: AttributeSet) -> Option<String> {
+    (!dropped.is_empty()).then(|| {
+        format!(
+            "{} cannot hold the input's {}: not written",
+            output.display(),
+            dropped.describe()
+        )
     })
 }
 

@@ -6,7 +6,9 @@
 mod budget;
 mod disk;
 pub mod plan;
+mod plan_table;
 
 pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget, BASE_BYTES};
 pub use disk::DiskPlan;
 pub use plan::{BudgetError, KernelCost, MemoryPlan};
+pub use plan_table::PlanTable;

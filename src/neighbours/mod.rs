@@ -28,6 +28,7 @@ pub(crate) mod csr;
 mod kernel;
 pub(crate) mod spill;
 mod stats;
+mod summary;
 
 pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
 pub use kernel::{NeighboursKernel, NeighboursTile};
@@ -224,6 +225,8 @@ pub struct NeighboursReport {
     pub stats: HoodStats,
     /// Tiles, retries and margins of the run.
     pub run: RunStats,
+    /// What the pass computed.
+    pub params: NeighbourParams,
 }
 
 impl NeighboursReport {
@@ -273,6 +276,7 @@ pub fn compute_neighbours(
     let mut report = NeighboursReport {
         points: store.len(),
         tiles: store.tiles().len(),
+        params: *params,
         ..NeighboursReport::default()
     };
     report.run = run_tiles(store, &kernel, opts, progress, |_, tile: NeighboursTile| {

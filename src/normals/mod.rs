@@ -17,9 +17,11 @@ pub(crate) mod hood;
 pub(crate) mod kernel;
 pub(crate) mod labels;
 pub(crate) mod orient;
+mod output;
 pub mod pca;
 pub(crate) mod runs;
 pub mod sources;
+mod summary;
 pub(crate) mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
@@ -98,6 +100,7 @@ impl Orientation {
 }
 
 pub use evidence::{Evidence, EvidenceCheck, Sensor};
+pub use output::normals_output;
 
 /// Cost of a Riemannian-graph edge for the spanning tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -24,6 +24,9 @@
 //! average over what the search returns and judge it like the others).
 
 mod kernel;
+mod summary;
+
+pub use summary::OutliersWritten;
 
 use crate::io::{output_spec, Carried, IoError, ValueField, WriterSpec};
 use crate::memory::KernelCost;
@@ -151,6 +154,8 @@ pub struct OutlierReport {
     pub not_judged: u64,
     /// How the tiles ran.
     pub run: RunStats,
+    /// The rule the points were judged by.
+    pub params: OutlierParams,
 }
 
 /// Scores every point of `store` and flags the outliers, in the columns
@@ -210,6 +215,7 @@ pub fn compute_outliers(
         outliers,
         not_judged,
         run,
+        params: *params,
     })
 }
 

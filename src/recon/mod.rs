@@ -7,3 +7,4 @@
 pub mod delaunay;
 pub mod implicit;
 pub mod projection;
+mod summary;

@@ -123,3 +123,26 @@ pub struct TileEntry {
     /// First block (of `super::BLOCK` points) of this tile in the block table.
     pub first_block: u64,
 }
+
+/// The line `tile` closes with: what the store holds, and its spacing once
+/// estimated.
+impl std::fmt::Display for crate::summary::Summary<'_, Manifest> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = self.report;
+        let spacing = match m.spacing {
+            Some(s) => format!("{s:.4e}"),
+            None => "not estimated".into(),
+        };
+        write!(
+            f,
+            "tile: {} points ({} skipped, {} duplicates), {} tiles, spacing {spacing}, {:.2} s, peak {} -> {}",
+            m.count,
+            m.skipped_invalid,
+            m.duplicates,
+            m.tiles.len(),
+            self.secs,
+            self.peak_text(),
+            self.output.display()
+        )
+    }
+}

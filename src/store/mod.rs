@@ -18,6 +18,7 @@ mod cells;
 pub mod checkpoint;
 mod column;
 pub(crate) mod columns;
+pub mod describe;
 mod exact;
 pub(crate) mod export;
 mod footprint;

@@ -97,6 +97,8 @@ impl DelaunayParams {
 /// What the Delaunay-based reconstruction did.
 #[derive(Clone, Debug, Default)]
 pub struct DelaunayReport {
+    /// Points of the store.
+    pub points: u64,
     /// Vertices of the mesh written.
     pub vertices: u64,
     /// Triangles of the mesh written.
@@ -211,6 +213,7 @@ pub fn reconstruct_delaunay(
     })?;
     let mut report = seam.finish(store)?;
     report.run = run;
+    report.points = store.len();
     report.hole = match hole {
         Hole::Absolute(h) => format!("{h:.4e}"),
         Hole::Local { multiple, ceiling } => format!(

@@ -181,6 +181,8 @@ pub(crate) const CLOSED_MIN_PIECE: f64 = 0.01;
 pub struct ImplicitReport {
     /// Present when this run computed the normals.
     pub normals: Option<NormalsReport>,
+    /// Points of the store.
+    pub points: u64,
     /// Paper 1's sampling density `rho` (section 2.6).
     pub rho: f64,
     /// Points whose nearest neighbour lies beyond what `rho` admits.
@@ -272,6 +274,7 @@ pub fn reconstruct_implicit(
         normals: ensure_normals(store, &params.normals, opts, progress)?,
         ..ImplicitReport::default()
     };
+    report.points = store.len();
     let stats = store.manifest().sampling.unwrap_or_default();
     report.rho = if stats.rho > 0.0 {
         stats.rho

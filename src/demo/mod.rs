@@ -10,11 +10,23 @@
 //! opposite normals; 2.7 % of the sample's normals came out mis-oriented
 //! (0.26 % here), and `--closed` left 10 holes where they drew the zero
 //! set out of the band (1 here).
+//!
+//! The demo's run (`run`): the sample reconstructed in a scratch store,
+//! then the mesh checked against the dragon's own triangles; the caller
+//! prints what each step returns.
+
+mod run;
 
 use crate::io::{read_mesh_from, IoError};
+use crate::pipeline::WorkspaceError;
+use crate::recon::implicit::reconstruct::ReconError;
+use crate::recon::projection::ProjectionError;
+use crate::store::StoreError;
 use crate::synth::{generate, mean_spacing_hint, Scan, Shape, SynthError, TriMesh};
 
-const DRAGON_PLY_GZ: &[u8] = include_bytes!("../assets/dragon_q20k.ply.gz");
+pub use run::{normals_line, picture, DemoCheck, DemoMesh, DemoMethod, DemoSample, NEXT_STEPS};
+
+const DRAGON_PLY_GZ: &[u8] = include_bytes!("../../assets/dragon_q20k.ply.gz");
 
 /// Why the demo could not run.
 #[derive(Debug, thiserror::Error)]
@@ -25,6 +37,21 @@ pub enum DemoError {
     /// A synthetic shape could not be sampled.
     #[error(transparent)]
     Synth(#[from] SynthError),
+    /// Building or reading the scratch store failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// No plan fits the memory promise.
+    #[error(transparent)]
+    Workspace(#[from] WorkspaceError),
+    /// The implicit reconstruction failed.
+    #[error(transparent)]
+    Implicit(#[from] ReconError),
+    /// The local-projection reconstruction failed.
+    #[error(transparent)]
+    Projection(#[from] ProjectionError),
+    /// The mesh written has nothing finite to draw.
+    #[error("the demo mesh has nothing to draw")]
+    NothingToDraw,
 }
 
 /// The embedded dragon mesh, read straight from the binary.

@@ -1,0 +1,180 @@
+//! The normals' argument groups: the tangent planes' neighbourhood
+//! (`normals`, `reconstruct`), the kNN structure, and how normals get
+//! their sign (`normals`).
+
+use crate::cli::HoodKind;
+use anyhow::{bail, Result};
+use clap::{Args, ValueEnum};
+use glam::DVec3;
+use scanmesh::normals::{EdgeCost, NormalHood, Orientation, Sensor};
+use scanmesh::spatial::KnnBackend;
+
+/// The tangent planes' neighbourhood (shared with `reconstruct`).
+#[derive(Args)]
+pub struct HoodArgs {
+    /// Neighbourhood of the tangent planes and the spanning tree: the k
+    /// nearest (paper 1), or the topological neighbours of paper 3 (mean
+    /// reverse shift, k per query), which add the sparse side of a density
+    /// change that the k nearest miss.
+    #[arg(long, visible_alias = "neighbors", value_enum, default_value_t = HoodKind::Knn)]
+    neighbours: HoodKind,
+    /// Cap on reverse-shift iterations (--neighbours topological).
+    #[arg(long, default_value_t = 10)]
+    max_iterations: usize,
+}
+
+impl HoodArgs {
+    pub fn hood(&self) -> NormalHood {
+        match self.neighbours {
+            HoodKind::Knn => NormalHood::Knn,
+            HoodKind::Topological => NormalHood::Topological {
+                max_iterations: self.max_iterations,
+            },
+        }
+    }
+}
+
+/// `--knn`.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum Knn {
+    Grid,
+    Kdtree,
+}
+
+impl From<Knn> for KnnBackend {
+    fn from(k: Knn) -> Self {
+        match k {
+            Knn::Grid => KnnBackend::Grid,
+            Knn::Kdtree => KnnBackend::KdTree,
+        }
+    }
+}
+
+/// How normals get their sign, and the spanning tree's edge cost.
+#[derive(Args)]
+pub struct OrientArgs {
+    /// How normals get their sign. `auto` (default): toward each scan's
+    /// station when the input names them (E57 poses), up for aerial data
+    /// (a LAS/LAZ wider than tall, or --sensor aerial) with the spanning
+    /// tree past vertical, else the spanning tree.
+    #[arg(long, value_enum, default_value_t = Orient::Auto)]
+    orient: Orient,
+    /// What took the scan, a hint to --orient auto: `aerial` (normals face
+    /// up), `terrestrial` (never taken for aerial), `auto` (judge from the
+    /// data).
+    #[arg(long, value_enum, default_value_t = SensorArg::Auto)]
+    sensor: SensorArg,
+    /// Spanning-tree edge cost: `offset` (default) adds the tangent-plane
+    /// offset to the paper's `1 - |ni.nj|` so the tree does not cross thin parts
+    /// (for --orient sources|single-source: subtracts it from `w`).
+    #[arg(long, value_enum, default_value_t = Cost::Offset)]
+    cost: Cost,
+    /// Scanner position x,y,z (implies --orient viewpoint).
+    #[arg(long, value_parser = parse_point)]
+    viewpoint: Option<DVec3>,
+    /// Source propagation threshold on |ni.nj| (--orient sources|single-source).
+    #[arg(long, default_value_t = scanmesh::normals::sources::DEFAULT_TAU)]
+    tau: f64,
+    /// Direction x,y,z of the single source (--orient single-source).
+    #[arg(long, value_parser = parse_point, default_value = "0,0,1")]
+    source_direction: DVec3,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Cost {
+    /// The paper's 1 - |ni.nj|.
+    Paper,
+    /// Paper cost plus the edge's tangent-plane offset.
+    Offset,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum SensorArg {
+    /// Judge from the data.
+    Auto,
+    /// Airborne lidar.
+    Aerial,
+    /// Ground-based scanner, or an object.
+    Terrestrial,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum Orient {
+    /// From what the scan knows: stations, up (aerial), else the spanning tree.
+    Auto,
+    /// Minimum spanning tree over the Riemannian graph (paper 1).
+    Mst,
+    /// Up (+z), the spanning tree where a surface turns past vertical (aerial).
+    Aerial,
+    /// Toward each point's own scan station (E57 scan poses).
+    Stations,
+    /// Toward --viewpoint.
+    Viewpoint,
+    /// Six sources at the extreme points along +-X, +-Y, +-Z (paper 5).
+    Sources,
+    /// One source, the point farthest along --source-direction (terrain).
+    SingleSource,
+    /// Unoriented (canonical PCA sign).
+    None,
+}
+
+fn parse_point(s: &str) -> Result<DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("expected x,y,z: {e}"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => Err("expected three finite numbers x,y,z".into()),
+    }
+}
+
+impl OrientArgs {
+    /// The orientation and the edge cost the flags ask for; an error names
+    /// the flags that do not go together.
+    pub fn orientation(&self) -> Result<(Orientation, EdgeCost)> {
+        if self.sensor != SensorArg::Auto && self.orient != Orient::Auto {
+            bail!("--sensor goes with --orient auto only");
+        }
+        let orientation = match (self.orient, self.viewpoint) {
+            (Orient::Viewpoint, None) => bail!("--orient viewpoint needs --viewpoint x,y,z"),
+            (Orient::Auto | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
+            (Orient::Auto, None) => Orientation::Auto(match self.sensor {
+                SensorArg::Auto => Sensor::Auto,
+                SensorArg::Aerial => Sensor::Aerial,
+                SensorArg::Terrestrial => Sensor::Terrestrial,
+            }),
+            (Orient::Mst, None) => Orientation::SpanningTree,
+            (Orient::Aerial, None) => Orientation::Aerial,
+            (Orient::Stations, None) => Orientation::Stations,
+            (Orient::None, _) => Orientation::None,
+            (
+                Orient::Mst
+                | Orient::Aerial
+                | Orient::Stations
+                | Orient::Sources
+                | Orient::SingleSource,
+                Some(_),
+            ) => {
+                bail!("--viewpoint goes with --orient viewpoint only")
+            }
+            (Orient::Sources, None) => Orientation::SixSources { tau: self.tau },
+            (Orient::SingleSource, None) => Orientation::SingleSource {
+                direction: self.source_direction,
+                tau: self.tau,
+            },
+        };
+        if !(0.0..=1.0).contains(&self.tau) {
+            bail!("--tau must lie in [0, 1]");
+        }
+        if self.source_direction.try_normalize().is_none() {
+            bail!("--source-direction must be non-zero");
+        }
+        let cost = match self.cost {
+            Cost::Paper => EdgeCost::Paper,
+            Cost::Offset => EdgeCost::TangentOffset,
+        };
+        Ok((orientation, cost))
+    }
+}

@@ -1,0 +1,45 @@
+//! A run's closing line: a capability's report with what only the caller
+//! knows (the seconds the run took, its peak memory, the output written).
+//! Each capability renders its own report's line as `impl Display for
+//! Summary<'_, ItsReport>`, so a caller of the library prints the same
+//! line the command-line tool prints. The library measures none of the
+//! three: the caller passes them in.
+
+use std::path::Path;
+
+/// A report and the run it closes, displayed as the run's summary line.
+#[derive(Clone, Copy, Debug)]
+pub struct Summary<'a, R> {
+    /// What the run computed.
+    pub report: &'a R,
+    /// Wall seconds the run took.
+    pub secs: f64,
+    /// The process's peak RSS in bytes, when the platform tells it.
+    pub peak: Option<u64>,
+    /// The output the run wrote.
+    pub output: &'a Path,
+}
+
+impl<'a, R> Summary<'a, R> {
+    /// The line of `report`, for a run of `secs` seconds peaking at
+    /// `peak` bytes that wrote `output`.
+    pub fn new(report: &'a R, secs: f64, peak: Option<u64>, output: &'a Path) -> Self {
+        Summary {
+            report,
+            secs,
+            peak,
+            output,
+        }
+    }
+
+    /// The peak as the line prints it: `"?"` where the platform does not
+    /// say.
+    pub fn peak_text(&self) -> String {
+        peak_text(self.peak)
+    }
+}
+
+/// A peak RSS as summaries and logs print it (`"?"` when unknown).
+pub fn peak_text(peak: Option<u64>) -> String {
+    peak.map_or("?".into(), crate::units::human_bytes)
+}
