@@ -5,6 +5,7 @@
 //! from the directory it was given in, on the input it was given (checked
 //! unchanged).
 
+use super::args::{parse_range, parse_share};
 use super::Cli;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
@@ -98,26 +99,4 @@ pub fn run(a: RunJobArgs) -> Result<()> {
         common.mem_and_threads(false)?;
     }
     super::run_in_dir::run_in_dir(command, args[1..].to_vec())
-}
-
-fn parse_range(s: &str) -> Result<TileSet, String> {
-    let (a, b) = s.split_once('-').unwrap_or((s, s));
-    let first = a.trim().parse().map_err(|e| format!("{s}: {e}"))?;
-    let last = b.trim().parse().map_err(|e| format!("{s}: {e}"))?;
-    if last < first {
-        return Err(format!("{s}: the last tile comes before the first"));
-    }
-    Ok(TileSet::Range { first, last })
-}
-
-fn parse_share(s: &str) -> Result<TileSet, String> {
-    let (a, b) = s
-        .split_once('/')
-        .ok_or(format!("{s}: expected INDEX/COUNT"))?;
-    let index: usize = a.trim().parse().map_err(|e| format!("{s}: {e}"))?;
-    let count: usize = b.trim().parse().map_err(|e| format!("{s}: {e}"))?;
-    if count == 0 || index >= count {
-        return Err(format!("{s}: INDEX must be below COUNT"));
-    }
-    Ok(TileSet::Share { index, count })
 }
