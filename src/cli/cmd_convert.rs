@@ -7,6 +7,7 @@ use scanmesh::io::not_held;
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(ConvertArgs => run, common);
 #[derive(Args)]
 pub struct ConvertArgs {
     /// Input point file.

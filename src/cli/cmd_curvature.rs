@@ -8,6 +8,7 @@ use scanmesh::features::export::{curvature_output, write_curvature};
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(CurvatureArgs => run, run_dir);
 #[derive(Args)]
 pub struct CurvatureArgs {
     /// Input point file or store directory.

@@ -12,6 +12,7 @@ use scanmesh::demo::{
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(DemoArgs => run, common);
 #[derive(Args)]
 pub struct DemoArgs {
     /// Where to write the mesh.

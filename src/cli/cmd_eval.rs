@@ -9,6 +9,7 @@ use scanmesh::mesh::{angle_report, quality, self_intersections, Mesh};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
+super::command::command_args!(EvalArgs => run);
 #[derive(Args)]
 pub struct EvalArgs {
     /// Mesh to evaluate (PLY or OBJ).

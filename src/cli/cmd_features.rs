@@ -8,6 +8,7 @@ use scanmesh::features::extract::extract_lines;
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(FeaturesArgs => run, run_dir);
 #[derive(Args)]
 pub struct FeaturesArgs {
     /// Input point file or store directory.

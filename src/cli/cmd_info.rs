@@ -11,6 +11,7 @@ use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
 use scanmesh::store::is_store;
 use std::path::PathBuf;
 
+super::command::command_args!(InfoArgs => run);
 #[derive(Args)]
 pub struct InfoArgs {
     /// A point file (PLY, XYZ/CSV, LAS/LAZ, PCD, optionally .gz; E57, whose

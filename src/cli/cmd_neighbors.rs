@@ -13,6 +13,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::Neighbours]));
 #[derive(Args)]
 pub struct NeighborsArgs {
     /// Input point file or store directory.

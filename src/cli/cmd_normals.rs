@@ -9,6 +9,7 @@ use scanmesh::store::{export_points_keeping, StageId, NORMALS};
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::Normals]));
 #[derive(Args)]
 pub struct NormalsArgs {
     /// Input point file or store directory.

@@ -9,6 +9,7 @@ use scanmesh::outliers::{
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(OutliersArgs => run, run_dir);
 #[derive(Args)]
 pub struct OutliersArgs {
     /// Input point file or store directory.

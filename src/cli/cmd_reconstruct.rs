@@ -11,6 +11,7 @@ use scanmesh::store::StageId;
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(ReconstructArgs => run, run_dir |a| a.tile_stages());
 #[derive(Args)]
 pub struct ReconstructArgs {
     /// Input point file or store directory.

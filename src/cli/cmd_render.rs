@@ -10,6 +10,7 @@ use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk, ReadOp
 use scanmesh::render::scene::{Scene, Style};
 use std::path::PathBuf;
 
+super::command::command_args!(RenderArgs => run);
 #[derive(Args)]
 pub struct RenderArgs {
     /// Output PNG.

@@ -13,6 +13,7 @@ use scanmesh::rundir::{fingerprint, RunDir};
 use scanmesh::store::{Job, TileSet};
 use std::path::PathBuf;
 
+super::command::command_args!(RunJobArgs => run);
 #[derive(Args)]
 pub struct RunJobArgs {
     /// Run directory (made by a command given --run-dir, or its --emit).

@@ -9,6 +9,7 @@ use clap::Args;
 use scanmesh::rundir::{RunDir, RunStatus};
 use std::path::PathBuf;
 
+super::command::command_args!(StatusArgs => run);
 #[derive(Args)]
 pub struct StatusArgs {
     /// Run directory.

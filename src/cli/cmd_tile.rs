@@ -9,6 +9,7 @@ use scanmesh::store::{build_store, spacing::ensure_spacing};
 use std::path::PathBuf;
 use std::time::Instant;
 
+super::command::command_args!(TileArgs => run, common);
 #[derive(Args)]
 pub struct TileArgs {
     /// Input point file.

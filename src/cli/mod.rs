@@ -19,6 +19,7 @@ mod cmd_render;
 mod cmd_run_job;
 mod cmd_status;
 mod cmd_tile;
+mod command;
 mod emit;
 mod hints;
 mod progress;
@@ -30,6 +31,7 @@ pub use stdout::closed as stdout_closed;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use command::CommandArgs;
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::mesh::MeshAudit;
@@ -55,8 +57,38 @@ struct Cli {
     command: Command,
 }
 
-#[derive(Subcommand)]
-enum Command {
+/// The command table: one row per command, its help and its arguments'
+/// type, which answers the rest ([`command::CommandArgs`]).
+macro_rules! commands {
+    ($($(#[$meta:meta])* $variant:ident($args:ty),)*) => {
+        #[derive(Subcommand)]
+        enum Command {
+            $($(#[$meta])* $variant($args),)*
+        }
+
+        impl Command {
+            fn args(&self) -> &dyn CommandArgs {
+                match self {
+                    $(Command::$variant(a) => a,)*
+                }
+            }
+
+            fn args_mut(&mut self) -> &mut dyn CommandArgs {
+                match self {
+                    $(Command::$variant(a) => a,)*
+                }
+            }
+
+            fn dispatch(self) -> Result<()> {
+                match self {
+                    $(Command::$variant(a) => a.run(),)*
+                }
+            }
+        }
+    };
+}
+
+commands! {
     /// Format, point count, bounding box and spacing of a file or store.
     Info(cmd_info::InfoArgs),
     /// Convert between point formats, streaming (PLY, XYZ/CSV, LAS/LAZ, PCD, E57).
@@ -547,93 +579,32 @@ fn within_the_promise(mem: Option<u64>) -> Result<()> {
 
 /// Runs one command in this process.
 fn dispatch(command: Command) -> Result<()> {
-    match command {
-        Command::RunJob(a) => cmd_run_job::run(a),
-        Command::Status(a) => cmd_status::run(a),
-        Command::Info(a) => cmd_info::run(a),
-        Command::Convert(a) => cmd_convert::run(a),
-        Command::Tile(a) => cmd_tile::run(a),
-        Command::Normals(a) => cmd_normals::run(a),
-        Command::Curvature(a) => cmd_curvature::run(a),
-        Command::Outliers(a) => cmd_outliers::run(a),
-        Command::Features(a) => cmd_features::run(a),
-        Command::Neighbors(a) => cmd_neighbors::run(a),
-        Command::Reconstruct(a) => cmd_reconstruct::run(a),
-        Command::Render(a) => cmd_render::run(a),
-        Command::Eval(a) => cmd_eval::run(a),
-        Command::Demo(a) => cmd_demo::run(a),
-    }
+    command.dispatch()
 }
 
 impl Command {
     /// The options every processing command takes, if this is one.
     fn common(&self) -> Option<&CommonArgs> {
-        match self {
-            Command::Info(_)
-            | Command::Eval(_)
-            | Command::Render(_)
-            | Command::RunJob(_)
-            | Command::Status(_) => None,
-            Command::Convert(a) => Some(&a.common),
-            Command::Tile(a) => Some(&a.common),
-            Command::Normals(a) => Some(&a.common),
-            Command::Curvature(a) => Some(&a.common),
-            Command::Outliers(a) => Some(&a.common),
-            Command::Features(a) => Some(&a.common),
-            Command::Neighbors(a) => Some(&a.common),
-            Command::Reconstruct(a) => Some(&a.common),
-            Command::Demo(a) => Some(&a.common),
-        }
+        self.args().common()
     }
-}
 
-impl Command {
     /// The run directory's options of a command that can keep one.
     fn run_args(&self) -> Option<&RunDirArgs> {
-        match self {
-            Command::Normals(a) => Some(&a.run),
-            Command::Neighbors(a) => Some(&a.run),
-            Command::Reconstruct(a) => Some(&a.run),
-            Command::Curvature(a) => Some(&a.run),
-            Command::Outliers(a) => Some(&a.run),
-            Command::Features(a) => Some(&a.run),
-            _ => None,
-        }
+        self.args().run_dir()
     }
 
     fn run_args_mut(&mut self) -> Option<&mut RunDirArgs> {
-        match self {
-            Command::Normals(a) => Some(&mut a.run),
-            Command::Neighbors(a) => Some(&mut a.run),
-            Command::Reconstruct(a) => Some(&mut a.run),
-            Command::Curvature(a) => Some(&mut a.run),
-            Command::Outliers(a) => Some(&mut a.run),
-            Command::Features(a) => Some(&mut a.run),
-            _ => None,
-        }
+        self.args_mut().run_dir_mut()
     }
 
     /// Input and output of a command that can keep a run directory.
     fn paths(&self) -> Option<(&Path, &Path)> {
-        match self {
-            Command::Normals(a) => Some((&a.input, &a.output)),
-            Command::Neighbors(a) => Some((&a.input, &a.output)),
-            Command::Reconstruct(a) => Some((&a.input, &a.output)),
-            Command::Curvature(a) => Some((&a.input, &a.output)),
-            Command::Outliers(a) => Some((&a.input, &a.output)),
-            Command::Features(a) => Some((&a.input, &a.output)),
-            _ => None,
-        }
+        self.args().paths()
     }
 
     /// The tile stages whose tiles can run as separate jobs, in order.
     fn tile_stages(&self) -> Result<Vec<StageId>> {
-        match self {
-            Command::Normals(_) => Ok(vec![StageId::Normals]),
-            Command::Neighbors(_) => Ok(vec![StageId::Neighbours]),
-            Command::Reconstruct(a) => a.tile_stages(),
-            _ => bail!("--emit: this command has no tile stages that run as separate jobs yet (normals, neighbors and reconstruct have)"),
-        }
+        self.args().tile_stages()
     }
 }
 
