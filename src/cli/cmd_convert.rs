@@ -36,7 +36,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     )?;
     s.note(not_held(&a.output, stats.dropped));
     let source = a.input.display().to_string();
-    super::report::input_skipped(&source, stats.skipped, stats.left_out);
+    super::report::log().with(|l| l.input_skipped(&source, stats.skipped, stats.left_out));
     s.summary(super::closing(&stats, t0, &a.output));
     Ok(())
 }

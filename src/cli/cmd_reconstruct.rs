@@ -92,7 +92,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         run.opts,
         progress.as_ref(),
     )
-    .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
+    .inspect_err(|e| super::report::log().with(|l| l.broken_promise(e.mesh())))?;
     super::mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
 }

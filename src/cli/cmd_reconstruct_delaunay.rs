@@ -25,7 +25,7 @@ pub fn run(
         prepared.opts,
         progress.as_ref(),
     )
-    .inspect_err(|e| super::report::broken_promise(e.mesh()))
+    .inspect_err(|e| super::report::log().with(|l| l.broken_promise(e.mesh())))
     .with_context(|| format!("reconstructing {}", input.display()))?;
     super::mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())

@@ -48,7 +48,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
-    super::report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
+    super::report::log().with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     s.summary(super::closing(store.manifest(), t0, &a.output));
     Ok(())
 }

@@ -2,7 +2,6 @@
 //! into [`Settings`], then dispatch to one module per command.
 
 mod args;
-mod clock;
 mod cmd_convert;
 mod cmd_curvature;
 mod cmd_demo;
@@ -469,14 +468,14 @@ impl Settings {
     /// The summary says how many input records the store lacks.
     fn say_skipped(&self, store: &PointStore) {
         let m = store.manifest();
-        report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
+        report::log().with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     }
 
     /// Prints the closing `line` (kept for `--report`), saying whether the
     /// output holds the unselected points.
     pub fn summary(&self, line: impl Display) {
-        report::unselected_kept(self.keep_unselected);
-        report::summary(line.to_string());
+        report::log().with(|l| l.unselected_kept(self.keep_unselected));
+        report::summary(line);
     }
 
     /// Prints `note` on stderr, if any, unless `--quiet`.
@@ -497,7 +496,8 @@ impl Settings {
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    let start = clock::Mark::now();
+    // The run's cost is counted from here.
+    report::log();
     let report = cli.command.common().and_then(|c| c.report.clone());
     if let Some(path) = &report {
         place::check_output(path)?;
@@ -523,7 +523,7 @@ pub fn run() -> Result<()> {
         .map_err(hints::with_flag_hints)
         .and_then(|()| within_the_promise(promised));
     if let Some(path) = &report {
-        report::write(path, &start, &outcome)?;
+        report::write(path, &outcome)?;
     }
     outcome
 }
@@ -656,8 +656,8 @@ pub fn closing<'a, R>(report: &'a R, t0: Instant, output: &'a Path) -> Summary<'
 
 /// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
 pub fn mesh_summary(audit: &MeshAudit, line: impl Display) {
-    report::mesh_audit(audit);
-    report::summary(line.to_string());
+    report::log().with(|l| l.mesh_audit(audit));
+    report::summary(line);
 }
 
 #[cfg(test)]

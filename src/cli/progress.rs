@@ -1,9 +1,9 @@
 //! The terminal side of [`scanmesh::pipeline::Progress`]: one indicatif bar
 //! per stage with rate and ETA, on stderr, only when stderr is a terminal.
 
-use super::clock::Mark;
 use indicatif::{ProgressBar, ProgressStyle};
 use scanmesh::pipeline::{NoProgress, Progress};
+use scanmesh::telemetry::Mark;
 use std::io::IsTerminal;
 use std::sync::Mutex;
 
@@ -144,7 +144,7 @@ pub fn progress(quiet: bool) -> Box<dyn Progress> {
             bar: Mutex::new(None),
         })
     };
-    Box::new(super::report::Recorder::new(shown))
+    Box::new(super::report::log().timed(shown))
 }
 
 #[cfg(test)]

@@ -97,7 +97,10 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     }
     match outcome {
         Err(_) if session.log_stopped() => Ok(()),
-        Ok(()) => Ok(session.log_done(&output, super::report::last_summary())?),
+        Ok(()) => Ok(session.log_done(
+            &output,
+            super::report::log().with(|l| l.last_summary().map(String::from)),
+        )?),
         Err(e) => {
             session.log_failed(&e);
             Err(e)
