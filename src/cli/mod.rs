@@ -34,6 +34,7 @@ use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::mesh::MeshAudit;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
 use scanmesh::rundir::{Session, StageId};
+use scanmesh::runlog::SharedRunLog;
 use scanmesh::store::{BuildOptions, Job, PointStore};
 use scanmesh::summary::Summary;
 use std::fmt::Display;
@@ -137,6 +138,10 @@ pub struct CommonArgs {
     /// peak RSS and disk traffic, the summary, the outcome, the version.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+    /// What the run does and costs, for `--report` (begun when the
+    /// command line is parsed).
+    #[arg(skip)]
+    log: SharedRunLog,
 }
 
 /// The run directory's options, taken by the commands that can keep one
@@ -248,6 +253,8 @@ pub struct Settings {
     pub scratch_limit: Option<u64>,
     /// This process's part of the run in its directory (`--run-dir`).
     pub run: Option<Session>,
+    /// The run's log, for `--report`: its stages, summary line, what it left out.
+    pub log: SharedRunLog,
 }
 
 /// Threads beyond this many per core only take turns: a slip of the
@@ -351,6 +358,7 @@ impl CommonArgs {
             keep_unselected: self.unselected == Unselected::Keep
                 && !self.select.selection().is_all(),
             run: run.session.clone(),
+            log: self.log.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -468,14 +476,27 @@ impl Settings {
     /// The summary says how many input records the store lacks.
     fn say_skipped(&self, store: &PointStore) {
         let m = store.manifest();
-        report::log().with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
+        self.log
+            .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     }
 
     /// Prints the closing `line` (kept for `--report`), saying whether the
     /// output holds the unselected points.
     pub fn summary(&self, line: impl Display) {
-        report::log().with(|l| l.unselected_kept(self.keep_unselected));
-        report::summary(line);
+        self.log.with(|l| l.unselected_kept(self.keep_unselected));
+        report::summary(&self.log, line);
+    }
+
+    /// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
+    pub fn mesh_summary(&self, audit: &MeshAudit, line: impl Display) {
+        self.log.with(|l| l.mesh_audit(audit));
+        report::summary(&self.log, line);
+    }
+
+    /// Progress bars (or nothing, when `--quiet` or `quiet`), every stage
+    /// timed into the run's log.
+    pub fn progress(&self, quiet: bool) -> Box<dyn Progress> {
+        progress::progress(self.quiet || quiet, &self.log)
     }
 
     /// Prints `note` on stderr, if any, unless `--quiet`.
@@ -496,9 +517,13 @@ impl Settings {
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    // The run's cost is counted from here.
-    report::log();
     let report = cli.command.common().and_then(|c| c.report.clone());
+    // Begun when the command line was parsed: the run's cost counts from there.
+    let log = cli
+        .command
+        .common()
+        .map(|c| c.log.clone())
+        .unwrap_or_default();
     if let Some(path) = &report {
         place::check_output(path)?;
     }
@@ -523,7 +548,7 @@ pub fn run() -> Result<()> {
         .map_err(hints::with_flag_hints)
         .and_then(|()| within_the_promise(promised));
     if let Some(path) = &report {
-        report::write(path, &outcome)?;
+        report::write(&log, path, &outcome)?;
     }
     outcome
 }
@@ -652,12 +677,6 @@ pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Resu
 pub fn closing<'a, R>(report: &'a R, t0: Instant, output: &'a Path) -> Summary<'a, R> {
     let peak = scanmesh::memory::peak_rss_bytes();
     Summary::new(report, t0.elapsed().as_secs_f64(), peak, output)
-}
-
-/// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
-pub fn mesh_summary(audit: &MeshAudit, line: impl Display) {
-    report::log().with(|l| l.mesh_audit(audit));
-    report::summary(line);
 }
 
 #[cfg(test)]
