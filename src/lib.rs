@@ -69,11 +69,13 @@ pub mod recon;
 pub mod render;
 pub mod rng;
 pub mod rundir;
+pub mod runlog;
 pub mod spatial;
 pub mod stats;
 pub mod store;
 pub mod summary;
 pub mod synth;
+pub mod telemetry;
 pub(crate) mod tiling;
 pub mod units;
 

@@ -300,7 +300,7 @@ fn report_records_stages_and_outcome() {
         text.contains("\"outcome\": \"error: reading /nonexistent/scan.ply"),
         "{text}"
     );
-    no_output_left(dir.path(), ".run.json.tmp");
+    no_output_left(dir.path(), ".run.json.partial");
 }
 
 #[test]

@@ -25,7 +25,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     s.no_scratch_limit("convert")?;
     super::check_distinct(&a.input, &a.output)?;
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let read = s.read_options();
     let stats = convert_keeping(
@@ -37,7 +37,8 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     )?;
     s.note(not_held(&a.output, stats.dropped));
     let source = a.input.display().to_string();
-    super::report::input_skipped(&source, stats.skipped, stats.left_out);
+    s.log
+        .with(|l| l.input_skipped(&source, stats.skipped, stats.left_out));
     s.summary(super::closing(&stats, t0, &a.output));
     Ok(())
 }

@@ -32,7 +32,7 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let spec = curvature_output(&a.output)?;
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;

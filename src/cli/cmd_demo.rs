@@ -46,7 +46,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let t0 = Instant::now();
     let sample = DemoSample::new(a.n)?;
     outln!("{sample}")?;
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let method = match a.method {
         Method::Implicit => DemoMethod::Implicit,
         Method::Projection => DemoMethod::Projection,
@@ -54,9 +54,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
     s.check_floor(&method.cost())?;
     let out = &a.output;
     match method.reconstruct(&sample, &s.lib(), out, progress.as_ref())? {
-        DemoMesh::Projection(r) => super::mesh_summary(&r.audit, super::closing(&r, t0, out)),
+        DemoMesh::Projection(r) => s.mesh_summary(&r.audit, super::closing(&r, t0, out)),
         DemoMesh::Implicit(r, normals) => {
-            super::mesh_summary(&r.audit, super::closing(&r, t0, out));
+            s.mesh_summary(&r.audit, super::closing(&r, t0, out));
             outln!("{}", normals_line(&normals))?;
         }
     }

@@ -40,7 +40,7 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
-    let progress = super::progress::progress(s.quiet || a.json);
+    let progress = s.progress(a.json);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;

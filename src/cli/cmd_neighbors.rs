@@ -83,7 +83,7 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
             bail!("--summary and -o name the same file");
         }
     }
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let out = OutputOptions {

@@ -51,7 +51,7 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     if a.drop {
         spec.drop_flagged = OUTLIER;
     }
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
     let store = &mut run.ws.store;

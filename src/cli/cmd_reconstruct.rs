@@ -77,7 +77,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         Method::Implicit => {}
     }
     let params = a.recon.implicit(&a.hood)?;
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut run = s.open_input(input, output, params.cost(), progress.as_ref())?;
     if params.cell.is_some() {
@@ -93,7 +93,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         run.opts,
         progress.as_ref(),
     )
-    .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
-    super::mesh_summary(&r.audit, super::closing(&r, t0, output));
+    .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
+    s.mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
 }

@@ -14,7 +14,7 @@ pub fn run(
     format: MeshFormat,
     params: &DelaunayParams,
 ) -> Result<()> {
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut prepared = s.open_input(input, output, cost(), progress.as_ref())?;
     let r = reconstruct_delaunay(
@@ -25,8 +25,8 @@ pub fn run(
         prepared.opts,
         progress.as_ref(),
     )
-    .inspect_err(|e| super::report::broken_promise(e.mesh()))
+    .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
     .with_context(|| format!("reconstructing {}", input.display()))?;
-    super::mesh_summary(&r.audit, super::closing(&r, t0, output));
+    s.mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
 }

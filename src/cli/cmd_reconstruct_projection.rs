@@ -15,7 +15,7 @@ pub fn run(
     format: MeshFormat,
     params: &ProjectionParams,
 ) -> Result<()> {
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     let mut prepared = s.open_input(input, output, params.cost(), progress.as_ref())?;
     let r = reconstruct_projection(
@@ -26,7 +26,7 @@ pub fn run(
         prepared.opts,
         progress.as_ref(),
     )
-    .inspect_err(|e| super::report::broken_promise(e.mesh()))?;
-    super::mesh_summary(&r.audit, super::closing(&r, t0, output));
+    .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
+    s.mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
 }

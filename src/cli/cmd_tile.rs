@@ -30,7 +30,7 @@ pub fn run(a: TileArgs) -> Result<()> {
         bail!("{}: exists and is not empty", a.output.display());
     }
     place::check_writable_dir(&place::directory_of(&a.output), "output")?;
-    let progress = super::progress::progress(s.quiet);
+    let progress = s.progress(false);
     let t0 = Instant::now();
     // Removed if the build is interrupted: a store without its manifest is
     // no store.
@@ -49,7 +49,8 @@ pub fn run(a: TileArgs) -> Result<()> {
     ensure_spacing(&mut store)?;
     drop(building);
     let m = &store.manifest();
-    super::report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
+    s.log
+        .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     s.summary(super::closing(store.manifest(), t0, &a.output));
     Ok(())
 }

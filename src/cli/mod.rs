@@ -2,7 +2,6 @@
 //! into [`Settings`], then dispatch to one module per command.
 
 mod args;
-mod clock;
 mod cmd_convert;
 mod cmd_curvature;
 mod cmd_demo;
@@ -37,6 +36,7 @@ use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::mesh::MeshAudit;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
 use scanmesh::rundir::{Session, StageId};
+use scanmesh::runlog::SharedRunLog;
 use scanmesh::store::{BuildOptions, Job, PointStore};
 use scanmesh::summary::Summary;
 use std::fmt::Display;
@@ -170,6 +170,10 @@ pub struct CommonArgs {
     /// peak RSS and disk traffic, the summary, the outcome, the version.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
+    /// What the run does and costs, for `--report` (begun when the
+    /// command line is parsed).
+    #[arg(skip)]
+    log: SharedRunLog,
 }
 
 /// The run directory's options, taken by the commands that can keep one
@@ -281,6 +285,8 @@ pub struct Settings {
     pub scratch_limit: Option<u64>,
     /// This process's part of the run in its directory (`--run-dir`).
     pub run: Option<Session>,
+    /// The run's log, for `--report`: its stages, summary line, what it left out.
+    pub log: SharedRunLog,
 }
 
 /// Threads beyond this many per core only take turns: a slip of the
@@ -384,6 +390,7 @@ impl CommonArgs {
             keep_unselected: self.unselected == Unselected::Keep
                 && !self.select.selection().is_all(),
             run: run.session.clone(),
+            log: self.log.clone(),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -501,14 +508,27 @@ impl Settings {
     /// The summary says how many input records the store lacks.
     fn say_skipped(&self, store: &PointStore) {
         let m = store.manifest();
-        report::input_skipped(&m.source, m.skipped_invalid, m.left_out);
+        self.log
+            .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     }
 
     /// Prints the closing `line` (kept for `--report`), saying whether the
     /// output holds the unselected points.
     pub fn summary(&self, line: impl Display) {
-        report::unselected_kept(self.keep_unselected);
-        report::summary(line.to_string());
+        self.log.with(|l| l.unselected_kept(self.keep_unselected));
+        report::summary(&self.log, line);
+    }
+
+    /// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
+    pub fn mesh_summary(&self, audit: &MeshAudit, line: impl Display) {
+        self.log.with(|l| l.mesh_audit(audit));
+        report::summary(&self.log, line);
+    }
+
+    /// Progress bars (or nothing, when `--quiet` or `quiet`), every stage
+    /// timed into the run's log.
+    pub fn progress(&self, quiet: bool) -> Box<dyn Progress> {
+        progress::progress(self.quiet || quiet, &self.log)
     }
 
     /// Prints `note` on stderr, if any, unless `--quiet`.
@@ -529,8 +549,13 @@ impl Settings {
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    let start = clock::Mark::now();
     let report = cli.command.common().and_then(|c| c.report.clone());
+    // Begun when the command line was parsed: the run's cost counts from there.
+    let log = cli
+        .command
+        .common()
+        .map(|c| c.log.clone())
+        .unwrap_or_default();
     if let Some(path) = &report {
         place::check_output(path)?;
     }
@@ -555,7 +580,7 @@ pub fn run() -> Result<()> {
         .map_err(hints::with_flag_hints)
         .and_then(|()| within_the_promise(promised));
     if let Some(path) = &report {
-        report::write(path, &start, &outcome)?;
+        report::write(&log, path, &outcome)?;
     }
     outcome
 }
@@ -623,12 +648,6 @@ pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Resu
 pub fn closing<'a, R>(report: &'a R, t0: Instant, output: &'a Path) -> Summary<'a, R> {
     let peak = scanmesh::memory::peak_rss_bytes();
     Summary::new(report, t0.elapsed().as_secs_f64(), peak, output)
-}
-
-/// Prints a mesh's closing `line`, keeping the mesh's audit for `--report`.
-pub fn mesh_summary(audit: &MeshAudit, line: impl Display) {
-    report::mesh_audit(audit);
-    report::summary(line.to_string());
 }
 
 #[cfg(test)]

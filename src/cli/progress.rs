@@ -1,9 +1,10 @@
 //! The terminal side of [`scanmesh::pipeline::Progress`]: one indicatif bar
 //! per stage with rate and ETA, on stderr, only when stderr is a terminal.
 
-use super::clock::Mark;
 use indicatif::{ProgressBar, ProgressStyle};
 use scanmesh::pipeline::{NoProgress, Progress};
+use scanmesh::runlog::SharedRunLog;
+use scanmesh::telemetry::Mark;
 use std::io::IsTerminal;
 use std::sync::Mutex;
 
@@ -130,9 +131,15 @@ impl Progress for Timings {
 }
 
 /// Bars on a terminal, nothing otherwise or when `quiet`; every stage is
-/// timed for `--report` either way.
-pub fn progress(quiet: bool) -> Box<dyn Progress> {
-    let shown: Box<dyn Progress> = if std::env::var_os("SCANMESH_TIMINGS").is_some() {
+/// timed into `log` for `--report` either way.
+pub fn progress(quiet: bool, log: &SharedRunLog) -> Box<dyn Progress> {
+    Box::new(log.timed(untimed(quiet)))
+}
+
+/// Bars on a terminal, nothing otherwise or when `quiet`, for a command
+/// that keeps no run log (`info`).
+pub fn untimed(quiet: bool) -> Box<dyn Progress> {
+    if std::env::var_os("SCANMESH_TIMINGS").is_some() {
         Box::new(Timings {
             start: Mutex::new(None),
             last_end: Mutex::new(Mark::now()),
@@ -143,8 +150,7 @@ pub fn progress(quiet: bool) -> Box<dyn Progress> {
         Box::new(Bars {
             bar: Mutex::new(None),
         })
-    };
-    Box::new(super::report::Recorder::new(shown))
+    }
 }
 
 #[cfg(test)]

@@ -61,6 +61,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     // Before the directory is made: a missing input leaves nothing behind.
     std::fs::metadata(&input).with_context(|| format!("reading {}", input.display()))?;
     let run = RunDir::create(&dir)?;
+    let log = common.log.clone();
     let job = run_args.job.clone();
     if job == Job::Whole {
         let id = RunIdentity::new(stable_args(&args), std::env::current_dir()?, &input)?;
@@ -72,11 +73,14 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             return super::stdout::write(format_args!("{script}"));
         }
         if let Some(summary) = run.finished(&output, &input)? {
-            super::report::summary(format!(
-                "nothing to do: {} is complete ({})",
-                output.display(),
-                run.dir().display()
-            ));
+            super::report::summary(
+                &log,
+                format!(
+                    "nothing to do: {} is complete ({})",
+                    output.display(),
+                    run.dir().display()
+                ),
+            );
             if !summary.is_empty() && !common.quiet {
                 super::stdout::outln!("  {summary}")?;
             }
@@ -97,7 +101,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     }
     match outcome {
         Err(_) if session.log_stopped() => Ok(()),
-        Ok(()) => Ok(session.log_done(&output, super::report::last_summary())?),
+        Ok(()) => Ok(session.log_done(&output, log.with(|l| l.last_summary().map(String::from)))?),
         Err(e) => {
             session.log_failed(&e);
             Err(e)

@@ -1,8 +1,10 @@
 //! What a stage cost the process: wall and CPU time, storage bytes, RSS,
-//! read from `/proc/self` (Linux; elsewhere the fields read 0).
+//! read from `/proc/self` (Linux; elsewhere the fields read 0). This module
+//! owns the measurement ([`Mark`], [`Span`]); what is done with it (a run's
+//! report, `SCANMESH_TIMINGS` lines) belongs to its callers.
 
 /// A point in wall time, process CPU time and storage traffic.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub struct Mark {
     wall: std::time::Instant,
     cpu: f64,
@@ -12,19 +14,24 @@ pub struct Mark {
 /// The cost between two marks.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Span {
+    /// Wall time, in seconds.
     pub wall_s: f64,
     /// User + system time of all threads (steadier than wall time on a
     /// shared machine).
     pub cpu_s: f64,
+    /// Resident set size at the end.
     pub rss_bytes: u64,
     /// Peak RSS of the process so far (to see which stage sets it).
     pub peak_rss_bytes: u64,
+    /// Bytes the process made the storage layer read.
     pub disk_read_bytes: u64,
-    /// Pages dirtied through a mapping count too.
+    /// Bytes the process made the storage layer write (pages dirtied
+    /// through a mapping count too).
     pub disk_written_bytes: u64,
 }
 
 impl Mark {
+    /// This moment.
     pub fn now() -> Self {
         Mark {
             wall: std::time::Instant::now(),
@@ -45,7 +52,7 @@ impl Mark {
             wall_s: now.wall.duration_since(self.wall).as_secs_f64(),
             cpu_s: now.cpu - self.cpu,
             rss_bytes: rss_bytes().unwrap_or(0),
-            peak_rss_bytes: scanmesh::memory::peak_rss_bytes().unwrap_or(0),
+            peak_rss_bytes: crate::memory::peak_rss_bytes().unwrap_or(0),
             disk_read_bytes: now.io[0].saturating_sub(self.io[0]),
             disk_written_bytes: now.io[1].saturating_sub(self.io[1]),
         }
@@ -54,7 +61,7 @@ impl Mark {
 
 impl std::fmt::Display for Span {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let b = scanmesh::units::human_bytes;
+        let b = crate::units::human_bytes;
         write!(
             f,
             "{:.3} s (cpu {:.2} s, rss {}, peak {}, disk r {} w {})",
