@@ -10,13 +10,24 @@ pub enum UnitError {
     Empty,
     /// The size string is not a number with an optional unit.
     #[error("size `{0}`: expected a number, optionally followed by B, KB, MB, GB, TB, KiB, MiB, GiB or TiB")]
-    Malformed(String),
+    Malformed(
+        /// The size as the user typed it (free text: kept as given).
+        String,
+    ),
     /// The unit (second field) of the size string (first field) is not one scanmesh knows.
     #[error("size `{0}`: unknown unit `{1}` (use B, KB, MB, GB, TB, KiB, MiB, GiB or TiB)")]
-    UnknownUnit(String, String),
+    UnknownUnit(
+        /// The size as the user typed it (free text: kept as given).
+        String,
+        /// The unit as typed, which names none scanmesh knows (free text).
+        String,
+    ),
     /// The size does not fit in 64 bits of bytes.
     #[error("size `{0}` is too large (more than 2^64 - 1 bytes)")]
-    Overflow(String),
+    Overflow(
+        /// The size as the user typed it (free text: kept as given).
+        String,
+    ),
 }
 
 /// Bytes per unit; decimal units are powers of 1000, binary ones of 1024.

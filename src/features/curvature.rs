@@ -236,11 +236,11 @@ impl CurvatureMeta {
         let path = store.dir().join(CURVATURE_META_FILE);
         let text = serde_json::to_string_pretty(self).map_err(|e| FeaturesError::Meta {
             path: path.clone(),
-            reason: e.to_string(),
+            source: Box::new(e),
         })?;
         std::fs::write(&path, text).map_err(|e| FeaturesError::Meta {
             path,
-            reason: e.to_string(),
+            source: Box::new(e),
         })
     }
 }
@@ -277,10 +277,12 @@ pub fn compute_curvature(
     let estimate = ensure_spacing(store)?;
     let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;
     if !(d > 0.0 && d.is_finite()) {
-        return Err(FeaturesError::BadParameter(format!(
-            "{}: every point coincides with its neighbours (mean spacing {d}): no curvature",
-            store.dir().display()
-        )));
+        return Err(FeaturesError::BadParameter(
+            super::BadFeatureParameter::Coincident {
+                store: store.dir().to_path_buf(),
+                spacing: d,
+            },
+        ));
     }
     // The tangent-plane noise in nearest-neighbour distances, when the
     // normals pass measured it (exact sums: the same for any tiling).

@@ -8,7 +8,7 @@
 //! region.
 
 use super::CurvatureHood;
-use crate::pipeline::KernelError;
+use crate::pipeline::{KernelError, TileFault};
 use crate::spatial::rtree::RTreeIndex;
 use crate::spatial::topological::{topological_neighbours, TopoParams, TopoScratch};
 use crate::spatial::BallGrid;
@@ -35,8 +35,9 @@ impl<'a> HoodIndex<'a> {
         let (points, ids) = (&tile.points[..], &tile.ids[..]);
         Ok(match hood {
             CurvatureHood::Radius(r) => HoodIndex::Radius(
-                BallGrid::new(points, ids, r)
-                    .ok_or_else(|| KernelError::Failed(format!("unusable curvature radius {r}")))?,
+                BallGrid::new(points, ids, r).ok_or(KernelError::Failed(
+                    TileFault::CurvatureRadius { radius: r },
+                ))?,
                 r,
             ),
             CurvatureHood::Knn(k) => HoodIndex::Knn(

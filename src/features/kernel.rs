@@ -45,7 +45,7 @@ use super::stages::{
 use super::{CURVATURE, CURVATURE_FLAGS};
 use crate::geom::Aabb;
 use crate::geom::LineKind;
-use crate::pipeline::{KernelError, TileKernel};
+use crate::pipeline::{KernelError, TileFault, TileKernel};
 use crate::spatial::BallGrid;
 use crate::store::{ColumnSpec, FLAGS, NORMALS};
 use crate::tiling::{TilePoints, Values};
@@ -230,11 +230,10 @@ impl FeaturesKernel {
             return Ok(class);
         };
         let Some(grid) = BallGrid::new(&tile.points, &tile.ids, test.wide) else {
-            return Err(KernelError::Failed(format!(
-                "the crest test's radius {:e} indexes no grid over the tile's {} points",
-                test.wide,
-                tile.points.len()
-            )));
+            return Err(KernelError::Failed(TileFault::CrestRadius {
+                radius: test.wide,
+                points: tile.points.len(),
+            }));
         };
         // NaN where unknown: 8 B a loaded point, not an Option's 16.
         let k_i: Vec<f64> = (0..tile.points.len())
@@ -270,9 +269,7 @@ struct CurvatureColumns<'a> {
 fn curvature_of(tile: &TilePoints) -> Result<CurvatureColumns<'_>, KernelError> {
     match (tile.column(&CURVATURE), tile.column(&CURVATURE_FLAGS)) {
         (Some(Values::F32(vals)), Some(Values::U8(flags))) => Ok(CurvatureColumns { vals, flags }),
-        _ => Err(KernelError::Failed(
-            "the tile carries no curvature columns".into(),
-        )),
+        _ => Err(KernelError::Failed(TileFault::NoCurvature)),
     }
 }
 

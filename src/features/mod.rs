@@ -11,6 +11,7 @@
 //! Flags of a point's curvature (a bit set means the values it names are
 //! not available, and they are NaN, never made up).
 
+mod bad_parameter;
 pub(crate) mod cost;
 pub(crate) mod crest;
 pub mod curvature;
@@ -36,6 +37,7 @@ pub(crate) mod stages;
 pub(crate) mod stats;
 mod summary;
 
+pub use bad_parameter::BadFeatureParameter;
 pub use curvature::{compute_curvature, CurvatureReport};
 
 use crate::normals::NormalParams;
@@ -163,10 +165,10 @@ impl HoodChoice {
         if ok {
             Ok(())
         } else {
-            Err(FeaturesError::BadParameter(format!(
-                "curvature neighbourhood {self:?}: a radius must be positive, k at least {}",
-                quadric::MIN_FIT_POINTS - 1
-            )))
+            Err(FeaturesError::BadParameter(BadFeatureParameter::Hood {
+                hood: *self,
+                min_k: quadric::MIN_FIT_POINTS - 1,
+            }))
         }
     }
 }
@@ -207,13 +209,14 @@ pub enum FeaturesError {
     Io(#[from] crate::io::IoError),
     /// A parameter is out of range; the message says which and why.
     #[error("{0}")]
-    BadParameter(String),
+    BadParameter(BadFeatureParameter),
     /// The curvature metadata beside the store cannot be written.
-    #[error("{path}: {reason}")]
+    #[error("{path}: {source}")]
     Meta {
         /// The metadata file.
         path: std::path::PathBuf,
-        /// Why it cannot be written.
-        reason: String,
+        /// Why it cannot be written (the encoder's or the system's error).
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }

@@ -6,8 +6,11 @@
 use super::crest::Slab;
 use super::curvature::CurvatureMeta;
 use super::peak::{PeakTest, BAND_SPACINGS, DEFAULT_CONTRAST, WIDE_RADII};
-use super::{CurvatureHood, CurvatureParams, FeaturesError, DEFAULT_RADIUS_SPACINGS};
+use super::{
+    BadFeatureParameter, CurvatureHood, CurvatureParams, FeaturesError, DEFAULT_RADIUS_SPACINGS,
+};
 use std::f64::consts::PI;
+use BadFeatureParameter as B;
 
 /// User-facing parameters; lengths in mean spacings `d`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -190,49 +193,52 @@ impl FeatureParams {
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(bad(format!("{name} must be positive and finite, not {v}")));
+                return Err(bad(B::NotPositive { name, value: v }));
             }
         }
         if !(self.crest.is_finite() && self.crest >= 0.0) {
-            return Err(bad(format!(
-                "crest width must be finite and >= 0, not {}",
-                self.crest
-            )));
+            return Err(bad(B::Negative {
+                name: "crest width",
+                value: self.crest,
+            }));
         }
         if !(self.peak.is_finite() && self.peak >= 0.0) {
-            return Err(bad(format!(
-                "peak contrast must be finite and >= 0, not {}",
-                self.peak
-            )));
+            return Err(bad(B::Negative {
+                name: "peak contrast",
+                value: self.peak,
+            }));
         }
         if !(self.refine.is_finite() && self.refine >= 0.0) {
-            return Err(bad(format!(
-                "refine radius must be finite and >= 0, not {}",
-                self.refine
-            )));
+            return Err(bad(B::Negative {
+                name: "refine radius",
+                value: self.refine,
+            }));
         }
         if let Some(a) = self.alpha {
             if !(a.is_finite() && a >= 0.0) {
-                return Err(bad(format!("alpha must be finite and >= 0, not {a}")));
+                return Err(bad(B::Negative {
+                    name: "alpha",
+                    value: a,
+                }));
             }
         }
         if !(self.delta_growth.is_finite() && self.delta_growth > 1.0) {
-            return Err(bad("delta growth must be above 1".into()));
+            return Err(bad(B::DeltaGrowth));
         }
         if self.delta_max < self.delta {
-            return Err(bad("delta max must be at least delta".into()));
+            return Err(bad(B::DeltaMax));
         }
         if !(0.0..1.0).contains(&self.rho) {
-            return Err(bad("rho must lie in [0, 1)".into()));
+            return Err(bad(B::Rho));
         }
         if self.sector >= PI / 2.0 {
-            return Err(bad("the sector angle must be below pi/2".into()));
+            return Err(bad(B::Sector));
         }
         if self.cone_angle >= PI / 2.0 {
-            return Err(bad("the cone half-angle must be below pi/2".into()));
+            return Err(bad(B::ConeAngle));
         }
         if self.min_curve_points < 3 {
-            return Err(bad("a quadratic curve needs at least 3 points".into()));
+            return Err(bad(B::CurvePoints));
         }
         Ok(())
     }
@@ -283,7 +289,7 @@ impl FeatureParams {
     }
 }
 
-fn bad(reason: String) -> FeaturesError {
+fn bad(reason: BadFeatureParameter) -> FeaturesError {
     FeaturesError::BadParameter(reason)
 }
 

@@ -32,6 +32,7 @@ mod summary;
 
 pub use csr::{read_csr, Csr, IdWidth, OutputFormat};
 pub use kernel::{NeighboursKernel, NeighboursTile};
+pub use spill::ScratchFault;
 pub use stats::{HoodStats, Summary};
 
 use crate::io::IoError;
@@ -167,9 +168,7 @@ impl NeighbourParams {
     pub fn validate(&self) -> Result<(), NeighboursError> {
         let k = self.k();
         if !(1..=MAX_K).contains(&k) {
-            return Err(NeighboursError::BadParams {
-                reason: format!("k = {k}: must be in 1..={MAX_K}"),
-            });
+            return Err(NeighboursError::BadParams { k });
         }
         Ok(())
     }
@@ -199,16 +198,16 @@ pub enum NeighboursError {
     #[error(transparent)]
     Io(#[from] IoError),
     /// The parameters are out of range.
-    #[error("bad neighbourhood parameters: {reason}")]
+    #[error("bad neighbourhood parameters: k = {k}: must be in 1..={MAX_K}")]
     BadParams {
-        /// Which parameter and why.
-        reason: String,
+        /// The `k` given, outside `1..=MAX_K`.
+        k: usize,
     },
     /// The spilled per-tile lists do not add up (a damaged scratch file).
-    #[error("neighbour scratch records are inconsistent: {reason}")]
+    #[error("neighbour scratch records are inconsistent: {fault}")]
     Scratch {
         /// What does not add up.
-        reason: String,
+        fault: ScratchFault,
     },
 }
 

@@ -177,7 +177,7 @@ impl SpillReader {
             let header = self
                 .raw
                 .get(pos..pos + width + 4)
-                .ok_or_else(|| corrupt("cut record"))?;
+                .ok_or_else(|| corrupt(ScratchFault::CutRecord))?;
             let id = self.width.get(&header[..width]);
             let count = u32::from_le_bytes([
                 header[width],
@@ -188,15 +188,20 @@ impl SpillReader {
             let slot = id
                 .checked_sub(range.start)
                 .filter(|_| range.contains(&id))
-                .ok_or_else(|| corrupt(format!("id {id} outside window {range:?}")))?;
+                .ok_or_else(|| {
+                    corrupt(ScratchFault::OutsideWindow {
+                        id,
+                        window: range.clone(),
+                    })
+                })?;
             match &mut self.slots[slot as usize] {
-                Some(_) => return Err(corrupt(format!("id {id} twice"))),
+                Some(_) => return Err(corrupt(ScratchFault::Twice { id })),
                 s => *s = Some((pos + width + 4, count)),
             }
             pos += width + 4 + count as usize * width;
         }
         if pos != self.raw.len() {
-            return Err(corrupt("cut record"));
+            return Err(corrupt(ScratchFault::CutRecord));
         }
         self.decode(range.start, out)
     }
@@ -210,7 +215,12 @@ impl SpillReader {
             self.index.read_at(&mut pair, (t * row + w) * 8)?;
             let (lo, hi) = (IdWidth::U64.get(&pair[..8]), IdWidth::U64.get(&pair[8..]));
             if hi < lo {
-                return Err(corrupt(format!("tile {t} window {w}: range {lo}..{hi}")));
+                return Err(corrupt(ScratchFault::BackwardRange {
+                    tile: t,
+                    window: w,
+                    lo,
+                    hi,
+                }));
             }
             let at = self.raw.len();
             self.raw.resize(at + (hi - lo) as usize, 0);
@@ -226,8 +236,11 @@ impl SpillReader {
         out.neighbours.clear();
         out.offsets.push(0);
         for (i, slot) in self.slots.iter().enumerate() {
-            let (at, count) =
-                slot.ok_or_else(|| corrupt(format!("no record for id {}", first + i as u64)))?;
+            let (at, count) = slot.ok_or_else(|| {
+                corrupt(ScratchFault::NoRecord {
+                    id: first + i as u64,
+                })
+            })?;
             let bytes = &self.raw[at..at + count as usize * width];
             out.neighbours
                 .extend(bytes.chunks_exact(width).map(|b| self.width.get(b)));
@@ -237,8 +250,63 @@ impl SpillReader {
     }
 }
 
-fn corrupt(reason: impl Into<String>) -> NeighboursError {
-    NeighboursError::Scratch {
-        reason: reason.into(),
+fn corrupt(fault: ScratchFault) -> NeighboursError {
+    NeighboursError::Scratch { fault }
+}
+
+/// What does not add up in the spilled per-tile neighbour lists.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ScratchFault {
+    /// A record runs past the end of the bytes gathered.
+    CutRecord,
+    /// A record names a point outside the window being read.
+    OutsideWindow {
+        /// The point's id.
+        id: u64,
+        /// The window's ids.
+        window: std::ops::Range<u64>,
+    },
+    /// Two records name the same point.
+    Twice {
+        /// The point's id.
+        id: u64,
+    },
+    /// A tile's byte range for a window ends before it starts.
+    BackwardRange {
+        /// 0-based index of the tile.
+        tile: u64,
+        /// 0-based index of the window.
+        window: u64,
+        /// Where the range starts, in bytes.
+        lo: u64,
+        /// Where it ends.
+        hi: u64,
+    },
+    /// No record names a point of the window.
+    NoRecord {
+        /// The point's id.
+        id: u64,
+    },
+}
+
+impl std::fmt::Display for ScratchFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ScratchFault::CutRecord => f.write_str("cut record"),
+            ScratchFault::OutsideWindow { id, window } => {
+                write!(f, "id {id} outside window {window:?}")
+            }
+            ScratchFault::Twice { id } => write!(f, "id {id} twice"),
+            ScratchFault::BackwardRange {
+                tile,
+                window,
+                lo,
+                hi,
+            } => {
+                write!(f, "tile {tile} window {window}: range {lo}..{hi}")
+            }
+            ScratchFault::NoRecord { id } => write!(f, "no record for id {id}"),
+        }
     }
 }

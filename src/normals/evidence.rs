@@ -114,13 +114,9 @@ pub fn resolve(orientation: Orientation, store: &PointStore) -> Result<Orientati
             Some(Evidence::Up) => Orientation::Aerial,
             None => Orientation::SpanningTree,
         }),
-        Orientation::Stations if store.manifest().stations.is_empty() => {
-            Err(NormalsError::BadParameter(
-                "orientation toward the scan stations, but the input names no station \
-                 (E57 scan poses give them)"
-                    .into(),
-            ))
-        }
+        Orientation::Stations if store.manifest().stations.is_empty() => Err(
+            NormalsError::BadParameter(super::BadNormalParameter::NoStations),
+        ),
         o => Ok(o),
     }
 }

@@ -7,6 +7,7 @@
 //! Results land in two store columns: `normal.f32` (unit, oriented; zero when
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
+mod bad_parameter;
 mod components;
 mod contract;
 pub mod eigen;
@@ -99,6 +100,7 @@ impl Orientation {
     }
 }
 
+pub use bad_parameter::BadNormalParameter;
 pub use evidence::{Evidence, EvidenceCheck, Sensor};
 pub use output::normals_output;
 
@@ -178,28 +180,21 @@ impl NormalParams {
     /// a viewpoint or a source direction must be finite (and the direction
     /// not zero), tau a bound on `|ni.nj|` in `[0, 1]`.
     pub fn validate(&self) -> Result<(), NormalsError> {
-        let bad = |why: String| Err(NormalsError::BadParameter(why));
+        let bad = |why| Err(NormalsError::BadParameter(why));
         if self.k < 3 {
-            return bad(format!(
-                "k = {}: a tangent plane needs at least 3 neighbours",
-                self.k
-            ));
+            return bad(BadNormalParameter::TooFewNeighbours { k: self.k });
         }
         match self.orientation {
-            Orientation::Viewpoint(v) if !v.is_finite() => {
-                bad(format!("the viewpoint {v} is not a finite position"))
-            }
+            Orientation::Viewpoint(v) if !v.is_finite() => bad(BadNormalParameter::Viewpoint(v)),
             Orientation::SixSources { tau } | Orientation::SingleSource { tau, .. }
                 if !(0.0..=1.0).contains(&tau) =>
             {
-                bad(format!("tau = {tau} is not a bound on |ni.nj| in [0, 1]"))
+                bad(BadNormalParameter::Tau(tau))
             }
             Orientation::SingleSource { direction, .. }
                 if !direction.is_finite() || direction == DVec3::ZERO =>
             {
-                bad(format!(
-                    "the source direction {direction} is not a direction"
-                ))
+                bad(BadNormalParameter::Direction(direction))
             }
             _ => Ok(()),
         }
@@ -283,7 +278,7 @@ pub enum NormalsError {
     Sources(#[from] sources::SourcesError),
     /// The parameters cannot give normals; the message says which and why.
     #[error("normal parameters: {0}")]
-    BadParameter(String),
+    BadParameter(BadNormalParameter),
 }
 
 /// What the normals pass did.

@@ -84,16 +84,10 @@ impl OutlierParams {
     /// local) and a ratio that is not a finite positive number.
     pub fn validate(&self) -> Result<(), OutliersError> {
         if !(1..=1000).contains(&self.k) {
-            return Err(OutliersError::BadParameter(format!(
-                "k must be 1 to 1000 neighbours, got {}",
-                self.k
-            )));
+            return Err(OutliersError::BadK { k: self.k });
         }
         if !(self.ratio.is_finite() && self.ratio > 0.0) {
-            return Err(OutliersError::BadParameter(format!(
-                "ratio must be a positive number of standard deviations, got {}",
-                self.ratio
-            )));
+            return Err(OutliersError::BadRatio { ratio: self.ratio });
         }
         Ok(())
     }
@@ -132,9 +126,18 @@ pub enum OutliersError {
     /// Writing an output failed.
     #[error(transparent)]
     Io(#[from] IoError),
-    /// A parameter is out of range; the message says which and why.
-    #[error("{0}")]
-    BadParameter(String),
+    /// `k` is outside 1..=1000.
+    #[error("k must be 1 to 1000 neighbours, got {k}")]
+    BadK {
+        /// The `k` given.
+        k: usize,
+    },
+    /// The ratio is not a finite positive number.
+    #[error("ratio must be a positive number of standard deviations, got {ratio}")]
+    BadRatio {
+        /// The ratio given.
+        ratio: f64,
+    },
 }
 
 /// What the outlier pass found.

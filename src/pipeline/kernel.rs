@@ -20,12 +20,51 @@ pub enum KernelError {
     /// Reading the tile's points or columns from the store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
-    /// The tile cannot be processed; the message says why.
-    #[error("{0}")]
-    Failed(String),
+    /// The tile cannot be processed; the fault says why.
+    #[error(transparent)]
+    Failed(#[from] TileFault),
     /// The tile cannot be processed; the typed error says why.
     #[error(transparent)]
     Source(Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// Why a kernel cannot process a tile, where no typed error of a layer
+/// below says it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TileFault {
+    /// The crest test's radius indexes no grid over the tile's points.
+    #[error("the crest test's radius {radius:e} indexes no grid over the tile's {points} points")]
+    CrestRadius {
+        /// The radius.
+        radius: f64,
+        /// Points loaded.
+        points: usize,
+    },
+    /// The tile carries no curvature columns.
+    #[error("the tile carries no curvature columns")]
+    NoCurvature,
+    /// The curvature radius indexes no grid.
+    #[error("unusable curvature radius {radius}")]
+    CurvatureRadius {
+        /// The radius.
+        radius: f64,
+    },
+    /// A point's index in the store does not fit a mesh's 32-bit indices.
+    #[error("more than 2^32 points: mesh indices are 32-bit")]
+    IndexTooLarge,
+    /// A cut edge's corner has no value.
+    #[error("a cut edge has an undefined corner")]
+    UndefinedCorner,
+    /// A cut edge's corner was never evaluated.
+    #[error("a cut edge's corner was not evaluated")]
+    CornerNotEvaluated,
+    /// Not all corners of a corner's coarse cell were found.
+    #[error("corner {corner:?}: its coarse cell's corners were not all found")]
+    CoarseCorners {
+        /// The corner, in lattice coordinates.
+        corner: [i64; 3],
+    },
 }
 
 impl KernelError {

@@ -13,7 +13,7 @@ mod workspace;
 mod budget_tests;
 
 pub use codec::Codec;
-pub use kernel::{KernelError, TileKernel};
+pub use kernel::{KernelError, TileFault, TileKernel};
 pub use options::RunOptions;
 pub use run::{run_tiles, RunStats};
 pub use workspace::{reclaim, Prepared, RunSettings, WorkspaceError};
@@ -78,13 +78,14 @@ pub enum PipelineError {
     /// job): not a failure.
     #[error("stopped at stage `{stage}` as the job asked")]
     Stopped {
-        /// The stage the job stopped at.
+        /// The stage the job stopped at (a kernel's name:
+        /// `TileKernel::name` lends it as `&str`, so it is owned here).
         stage: String,
     },
     /// A job needs a stage whose tile jobs have not all finished.
     #[error("stage `{stage}` has {done} of {total} tiles done: its tile jobs must finish before this job")]
     StageIncomplete {
-        /// The unfinished stage.
+        /// The unfinished stage (a kernel's name; see `Stopped`).
         stage: String,
         /// Its tiles done.
         done: usize,
@@ -94,18 +95,19 @@ pub enum PipelineError {
     /// A tile job was asked of a stage that keeps no tile results.
     #[error("stage `{stage}` keeps no tile results, so it cannot run as tile jobs")]
     NotSplittable {
-        /// The stage.
+        /// The stage (a kernel's name; see `Stopped`).
         stage: String,
     },
     /// A saved tile result of a resumable run cannot be read back.
-    #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({reason})")]
+    #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({source})")]
     Codec {
-        /// The stage.
+        /// The stage (a kernel's name; see `Stopped`).
         stage: String,
         /// 0-based index of the tile.
         tile: usize,
-        /// The decoder's message.
-        reason: String,
+        /// The encoder's or decoder's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 

@@ -224,7 +224,7 @@ fn fetch<K: TileKernel>(
     let bytes = (codec.encode)(&out).map_err(|e| PipelineError::Codec {
         stage: kernel.name().to_string(),
         tile: t,
-        reason: e.to_string(),
+        source: Box::new(e),
     })?;
     c.save(kernel.name(), t, &bytes)?;
     Ok((out, margin, retries))
@@ -302,10 +302,10 @@ fn run_one<K: TileKernel>(
                 })
             }
             Err(KernelError::Store(e)) => return Err(e.into()),
-            Err(KernelError::Failed(reason)) => {
+            Err(KernelError::Failed(fault)) => {
                 return Err(PipelineError::Kernel {
                     tile: t,
-                    source: reason.into(),
+                    source: Box::new(fault),
                 })
             }
             Err(KernelError::Source(source)) => {

@@ -137,7 +137,8 @@ pub enum RunDirError {
     /// A tile job named a stage the run never came to.
     #[error("run-job --stage {stage}: the run has no tile stage of that name (see `scanmesh status {}`)", dir.display())]
     NoSuchTileStage {
-        /// The stage as the job named it.
+        /// The stage as the job named it (the user's `--stage` word, which
+        /// names no stage: free text, kept as given).
         stage: String,
         /// The run directory.
         dir: PathBuf,

@@ -113,7 +113,7 @@ impl PointStore {
     fn attribute_column(&self, a: Attribute) -> Result<Column, StoreError> {
         if !self.attributes().contains(a) {
             return Err(StoreError::MissingColumn {
-                column: column_file(a),
+                column: super::ColumnName::Attribute(a),
             });
         }
         Column::open(&self.dir.join(column_file(a)), a.item_bytes(), false)

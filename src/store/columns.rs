@@ -97,7 +97,7 @@ impl PointStore {
     pub fn column(&self, spec: &ColumnSpec) -> Result<Column, StoreError> {
         if !self.has_column(spec) {
             return Err(StoreError::MissingColumn {
-                column: spec.name.to_string(),
+                column: super::ColumnName::Computed(spec.name),
             });
         }
         let col = Column::open(&self.dir.join(spec.name), spec.bytes(), true)?;

@@ -11,7 +11,7 @@
 //! it makes anyway.
 
 use super::manifest::Manifest;
-use super::{Column, PointStore, StoreError, TileEntry, BLOCK, BLOCKS_FILE};
+use super::{Column, DamagedPart, PointStore, StoreError, TileEntry, BLOCK, BLOCKS_FILE};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -56,10 +56,13 @@ fn segments(layout: Layout, tiles: &[TileEntry], count: u64) -> Vec<Range<u64>> 
 }
 
 /// What a segment is, in words, for an error.
-fn describe(layout: Layout, segment: usize, range: &Range<u64>) -> String {
+fn describe(layout: Layout, segment: usize, range: &Range<u64>) -> DamagedPart {
     match layout {
-        Layout::Tiles | Layout::Blocks => format!("tile {segment}"),
-        Layout::Input => format!("input points {}..{}", range.start, range.end),
+        Layout::Tiles | Layout::Blocks => DamagedPart::Tile(segment),
+        Layout::Input => DamagedPart::InputPoints {
+            start: range.start,
+            end: range.end,
+        },
     }
 }
 
@@ -110,7 +113,10 @@ impl PointStore {
             if ranges.len() != sums.len() {
                 return Err(StoreError::Damaged {
                     path,
-                    what: format!("{} checksums for {} segments", sums.len(), ranges.len()),
+                    what: DamagedPart::SegmentCount {
+                        sums: sums.len(),
+                        segments: ranges.len(),
+                    },
                 });
             }
             let items = ranges.last().map_or(0, |r| r.end);
@@ -155,7 +161,10 @@ fn item_bytes(path: &std::path::Path, items: u64) -> Result<usize, StoreError> {
         n if len % n == 0 && len > 0 => Ok((len / n) as usize),
         n => Err(StoreError::Damaged {
             path: path.to_path_buf(),
-            what: format!("its {len} bytes are not whole items for {n} entries"),
+            what: DamagedPart::PartialItems {
+                bytes: len,
+                entries: n,
+            },
         }),
     }
 }

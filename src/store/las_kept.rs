@@ -162,7 +162,7 @@ impl PointStore {
             if file_crc32(&path)? != crc {
                 return Err(StoreError::Damaged {
                     path,
-                    what: "the LAS input's header, VLRs or EVLRs".into(),
+                    what: super::DamagedPart::LasHeader,
                 });
             }
         }

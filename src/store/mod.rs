@@ -18,6 +18,7 @@ mod cells;
 pub mod checkpoint;
 mod column;
 pub(crate) mod columns;
+mod damage;
 pub mod describe;
 mod exact;
 pub(crate) mod export;
@@ -44,6 +45,7 @@ pub use build::{build_store, BuildOptions, TileTarget};
 pub use checkpoint::{Checkpoints, Job, TileSet};
 pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
+pub use damage::{ColumnName, DamagedPart};
 pub use exact::Coordinates;
 pub use export::{export_columns, export_points, export_points_keeping, export_values, Computed};
 pub use footprint::store_bytes_per_point;
@@ -119,8 +121,8 @@ pub enum StoreError {
     /// A pass needs a column the store does not have.
     #[error("store has no `{column}` column (run the pass that computes it first)")]
     MissingColumn {
-        /// The column's file name.
-        column: String,
+        /// The column (its file name, as shown).
+        column: ColumnName,
     },
     /// The memory budget cannot hold what the plan needs.
     #[error(transparent)]
@@ -131,7 +133,7 @@ pub enum StoreError {
         /// The file concerned.
         path: PathBuf,
         /// Which part of it (a tile, a range of input points).
-        what: String,
+        what: DamagedPart,
     },
     /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
@@ -451,7 +453,7 @@ pub fn read_manifest(dir: &Path) -> Result<Manifest, StoreError> {
         Some(c) if c == sum => Ok(manifest),
         Some(_) => Err(StoreError::Damaged {
             path,
-            what: "the manifest".into(),
+            what: DamagedPart::Manifest,
         }),
         None => Err(corrupt("the manifest has no checksum".into())),
     }

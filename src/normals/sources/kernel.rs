@@ -46,13 +46,13 @@ impl TileKernel for SourcesKernel {
     }
 
     fn run(&self, tile: &TilePoints) -> Result<Vec<Edge>, KernelError> {
-        let failed = |e: &dyn std::fmt::Display| KernelError::Failed(e.to_string());
         let normals = usable_normals(tile).map_err(KernelError::failed)?;
-        let index =
-            build_index(KnnBackend::KdTree, &tile.points, &tile.ids).map_err(|e| failed(&e))?;
+        let index = build_index(KnnBackend::KdTree, &tile.points, &tile.ids)
+            .map_err(KernelError::failed)?;
         let grid = match self.params.hood {
             Neighbourhood::Radius(r) => Some(
-                super::hood::RadiusGrid::new(&tile.points, &tile.ids, r).map_err(|e| failed(&e))?,
+                super::hood::RadiusGrid::new(&tile.points, &tile.ids, r)
+                    .map_err(KernelError::failed)?,
             ),
             Neighbourhood::Nearest(_) => None,
         };

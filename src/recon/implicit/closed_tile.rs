@@ -17,7 +17,7 @@ use super::dilate::dilate;
 use super::kernel::ImplicitKernel;
 use super::refine::CornerValue;
 use super::sdf::{Known, Samples};
-use crate::pipeline::KernelError;
+use crate::pipeline::{KernelError, TileFault};
 use crate::tiling::TilePoints;
 use rayon::prelude::*;
 
@@ -157,11 +157,9 @@ impl ImplicitKernel {
             }
         }
         let cell = CoarseValues::new(corners, w);
-        cell.interpolate(c).map(Ok).ok_or_else(|| {
-            KernelError::Failed(format!(
-                "corner {c:?}: its coarse cell's corners were not all found"
-            ))
-        })
+        cell.interpolate(c)
+            .map(Ok)
+            .ok_or(KernelError::Failed(TileFault::CoarseCorners { corner: c }))
     }
 
     /// The field's value at corner `c`, or the loaded region's shortfall.

@@ -20,7 +20,7 @@ use super::lattice::{edge_from_key, Lattice};
 use super::mls::{edge_root, MlsValue};
 use super::polygonize::CubeVertex;
 use super::sdf::{Known, Samples};
-use crate::pipeline::KernelError;
+use crate::pipeline::{KernelError, TileFault};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -145,9 +145,7 @@ fn known(corners: &[CornerValue], c: [i64; 3]) -> Result<Known, KernelError> {
     match corners.binary_search_by_key(&key, |e| e.0) {
         Ok(i) => corners[i]
             .1
-            .ok_or_else(|| KernelError::Failed("a cut edge has an undefined corner".into())),
-        Err(_) => Err(KernelError::Failed(
-            "a cut edge's corner was not evaluated".into(),
-        )),
+            .ok_or(KernelError::Failed(TileFault::UndefinedCorner)),
+        Err(_) => Err(KernelError::Failed(TileFault::CornerNotEvaluated)),
     }
 }

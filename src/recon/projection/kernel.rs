@@ -18,7 +18,7 @@ use super::local::wanted_data;
 use super::params::ProjectionParams;
 use crate::geom::Aabb;
 use crate::mesh::volume6;
-use crate::pipeline::{KernelError, TileKernel};
+use crate::pipeline::{KernelError, TileFault, TileKernel};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -205,9 +205,8 @@ fn contains_half_open(core: &Aabb, p: DVec3) -> bool {
 }
 
 fn store_u32(tile: &TilePoints, i: u32) -> Result<u32, KernelError> {
-    u32::try_from(tile.store_index(i as usize)).map_err(|_| {
-        KernelError::Failed("more than 2^32 points: mesh indices are 32-bit".to_string())
-    })
+    u32::try_from(tile.store_index(i as usize))
+        .map_err(|_| KernelError::Failed(TileFault::IndexTooLarge))
 }
 
 /// The owned jobs' triangles in store indices, with their pieces' volumes.
