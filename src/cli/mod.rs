@@ -33,6 +33,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use command::CommandArgs;
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
+use scanmesh::memory::{cores, too_many_threads, too_much_memory};
 use scanmesh::mesh::MeshAudit;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
 use scanmesh::rundir::{Session, StageId};
@@ -289,41 +290,12 @@ pub struct Settings {
     pub log: SharedRunLog,
 }
 
-/// Threads beyond this many per core only take turns: a slip of the
-/// keyboard (`--threads 100000`) spent minutes spawning threads.
-const MAX_THREADS_PER_CORE: usize = 8;
-
-fn cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}
-
-/// Why `threads` is too many for this machine, if it is.
-fn too_many_threads(threads: usize) -> Option<String> {
-    let cores = cores();
-    let most = MAX_THREADS_PER_CORE * cores;
-    (threads > most).then(|| {
-        format!(
-            "--threads {threads} is more than {MAX_THREADS_PER_CORE} x the {cores} cores here: give at most {most}"
-        )
-    })
-}
-
-/// Why `mem` is more than this machine can give, if it is: the plan would
-/// size tiles for memory that is not there.
-fn too_much_memory(mem: u64) -> Option<String> {
-    let machine = scanmesh::memory::MachineMemory::of_this_process();
-    let limit = machine.limit().filter(|&l| mem > l)?;
-    let ram = machine
-        .ram
-        .map_or("unknown".to_string(), scanmesh::units::human_bytes);
-    let cgroup = machine
-        .cgroup
-        .map_or("none".to_string(), scanmesh::units::human_bytes);
-    Some(format!(
-        "--mem {} is more than this machine can give (RAM {ram}, cgroup limit {cgroup}): give at most {}MiB",
-        scanmesh::units::human_bytes(mem),
-        limit >> 20
-    ))
+/// What of `--mem` and `--threads` this machine cannot keep, each naming
+/// its option.
+fn beyond_this_machine(mem: u64, threads: usize) -> impl Iterator<Item = String> {
+    let threads = too_many_threads(threads).map(|why| format!("--threads {why}"));
+    let mem = too_much_memory(mem).map(|why| format!("--mem {why}"));
+    threads.into_iter().chain(mem)
 }
 
 impl CommonArgs {
@@ -341,7 +313,7 @@ impl CommonArgs {
             None => cores(),
         };
         if !emit {
-            if let Some(why) = too_many_threads(threads).or_else(|| too_much_memory(mem)) {
+            if let Some(why) = beyond_this_machine(mem, threads).next() {
                 bail!(why);
             }
         }
@@ -353,10 +325,7 @@ impl CommonArgs {
     fn check_against_this_machine(&self, emit: bool) -> Result<()> {
         let (mem, threads) = self.mem_and_threads(emit)?;
         if emit {
-            for why in [too_many_threads(threads), too_much_memory(mem)]
-                .into_iter()
-                .flatten()
-            {
+            for why in beyond_this_machine(mem, threads) {
                 eprintln!("warning: {why} (--emit: each job checks it again where it runs)");
             }
         }

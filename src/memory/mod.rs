@@ -5,10 +5,12 @@
 
 mod budget;
 mod disk;
+mod machine;
 pub mod plan;
 mod plan_table;
 
 pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget, BASE_BYTES};
 pub use disk::DiskPlan;
+pub use machine::{cores, too_many_threads, too_much_memory, BeyondMachine, MAX_THREADS_PER_CORE};
 pub use plan::{BudgetError, KernelCost, MemoryPlan};
 pub use plan_table::PlanTable;
