@@ -90,13 +90,13 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     let mut command = Cli::try_parse_from(&args)
         .with_context(|| format!("{}: the recorded command line", a.dir.display()))?
         .command;
-    let Some(run) = command.run_args_mut() else {
+    let Some(run) = command.args_mut().run_dir_mut() else {
         bail!("{}: the recorded command keeps no run", a.dir.display());
     };
     run.job = a.job();
     // Refused here, before the job is logged as started: --threads from
     // the script, --mem from the recorded command, against this node.
-    if let Some(common) = command.common() {
+    if let Some(common) = command.args().common() {
         common.mem_and_threads(false)?;
     }
     super::run_in_dir::run_in_dir(command, args[1..].to_vec())

@@ -36,7 +36,7 @@ use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::memory::{cores, too_many_threads, too_much_memory};
 use scanmesh::mesh::MeshAudit;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
-use scanmesh::rundir::{Session, StageId};
+use scanmesh::rundir::Session;
 use scanmesh::runlog::SharedRunLog;
 use scanmesh::store::{BuildOptions, Job, PointStore};
 use scanmesh::summary::Summary;
@@ -518,10 +518,11 @@ impl Settings {
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    let report = cli.command.common().and_then(|c| c.report.clone());
+    let report = cli.command.args().common().and_then(|c| c.report.clone());
     // Begun when the command line was parsed: the run's cost counts from there.
     let log = cli
         .command
+        .args()
         .common()
         .map(|c| c.log.clone())
         .unwrap_or_default();
@@ -530,13 +531,19 @@ pub fn run() -> Result<()> {
     }
     // Before a run directory is made or written: a refused --mem must not
     // leave a run behind that the corrected command line then differs from.
-    let emit = cli.command.run_args().is_some_and(|r| r.emit.is_some());
+    let emit = cli
+        .command
+        .args()
+        .run_dir()
+        .is_some_and(|r| r.emit.is_some());
     let checked = cli
         .command
+        .args()
         .common()
         .map_or(Ok(()), |c| c.check_against_this_machine(emit));
     let promised = cli
         .command
+        .args()
         .common()
         .and_then(|c| c.mem_and_threads(emit).ok())
         .map(|(mem, _)| mem);
@@ -574,32 +581,6 @@ fn within_the_promise(mem: Option<u64>) -> Result<()> {
 /// Runs one command in this process.
 fn dispatch(command: Command) -> Result<()> {
     command.dispatch()
-}
-
-impl Command {
-    /// The options every processing command takes, if this is one.
-    fn common(&self) -> Option<&CommonArgs> {
-        self.args().common()
-    }
-
-    /// The run directory's options of a command that can keep one.
-    fn run_args(&self) -> Option<&RunDirArgs> {
-        self.args().run_dir()
-    }
-
-    fn run_args_mut(&mut self) -> Option<&mut RunDirArgs> {
-        self.args_mut().run_dir_mut()
-    }
-
-    /// Input and output of a command that can keep a run directory.
-    fn paths(&self) -> Option<(&Path, &Path)> {
-        self.args().paths()
-    }
-
-    /// The tile stages whose tiles can run as separate jobs, in order.
-    fn tile_stages(&self) -> Result<Vec<StageId>> {
-        self.args().tile_stages()
-    }
 }
 
 /// Refuses to overwrite an input with an output.

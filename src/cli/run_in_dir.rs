@@ -46,13 +46,14 @@ pub fn stable_args(args: &[String]) -> Vec<String> {
 /// starts or resumes the run there, or prints its job script (`--emit`),
 /// or says there is nothing left to do.
 pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
-    let (Some(common), Some(run_args)) = (command.common(), command.run_args()) else {
+    let (Some(common), Some(run_args)) = (command.args().common(), command.args().run_dir()) else {
         return super::dispatch(command);
     };
     let Some(dir) = run_args.run_dir.clone() else {
         return super::dispatch(command);
     };
     let (input, output) = command
+        .args()
         .paths()
         .map(|(i, o)| (i.to_path_buf(), o.to_path_buf()))
         .ok_or_else(|| {
@@ -67,7 +68,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
         let id = RunIdentity::new(stable_args(&args), std::env::current_dir()?, &input)?;
         run.begin(&id, run_args.restart)?;
         if let Some(kind) = run_args.emit {
-            let stages = command.tile_stages()?;
+            let stages = command.args().tile_stages()?;
             let settings = common.settings_in(run_args)?;
             let script = super::emit::script(kind, &run, &stages, run_args.tasks, &settings);
             return super::stdout::write(format_args!("{script}"));
@@ -91,7 +92,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     // removed when this function returns.
     let _record = ProcessRecord::record(run.dir());
     let session = Session::new(run, job);
-    if let Some(r) = command.run_args_mut() {
+    if let Some(r) = command.args_mut().run_dir_mut() {
         r.session = Some(session.clone());
     }
     session.log_start();
