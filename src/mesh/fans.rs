@@ -7,10 +7,12 @@
 //! another edge non-manifold; it may open a hole (each left out triangle
 //! is counted by the caller).
 //!
-//! Each triangle gives three edge uses `(low, high, triangle, apex,
-//! component, direction)`, sorted out of core (`super::runs`); the uses of
-//! an edge then arrive together. RAM: the sort's buffers, the uses of one
-//! edge, and 8 bytes per triangle named.
+//! Each triangle gives three edge uses `(low, high, triangle, apex, tag,
+//! direction)`, sorted out of core (`super::runs`); the uses of an edge
+//! then arrive together, and every edge that two triangles share (after
+//! the mending, its two kept) is handed to the caller as a [`Twin`]: the
+//! dual edges of the mesh, for its winding (`super::untwist`). RAM: the
+//! sort's buffers, the uses of one edge, and 8 bytes per triangle named.
 
 use super::paged::Element;
 use super::runs::{RunSizes, SortedRuns};
@@ -27,7 +29,50 @@ struct FanUse {
     /// whether it runs the edge from low to high (the bit).
     triangle_and_forward: u64,
     apex: u32,
-    component: u32,
+    /// The caller's word about the triangle.
+    tag: u32,
+}
+
+/// One triangle's use of an edge two triangles share.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct EdgeUse {
+    /// The triangle's place in the stream.
+    pub triangle: u64,
+    /// Whether it runs the edge from its lower vertex to its higher.
+    pub forward: bool,
+    /// Its corner off the edge.
+    pub apex: u32,
+    /// What the caller said of the triangle ([`Fans::add`]).
+    pub tag: u32,
+}
+
+impl From<FanUse> for EdgeUse {
+    fn from(u: FanUse) -> Self {
+        EdgeUse {
+            triangle: u.triangle_and_forward >> 1,
+            forward: u.triangle_and_forward & 1 == 1,
+            apex: u.apex,
+            tag: u.tag,
+        }
+    }
+}
+
+/// An edge two triangles share: a dual edge of the mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Twin {
+    /// The edge's vertices, lower first.
+    pub low: u32,
+    pub high: u32,
+    /// Its two triangles, in stream order.
+    pub uses: [EdgeUse; 2],
+}
+
+impl Twin {
+    /// Whether the two triangles run the edge the same way (then one of
+    /// them must be turned over for the edge to be wound consistently).
+    pub fn same_way(&self) -> bool {
+        self.uses[0].forward == self.uses[1].forward
+    }
 }
 
 impl Element for FanUse {
@@ -40,7 +85,7 @@ impl Element for FanUse {
             high: u32::load(&bytes[4..]),
             triangle_and_forward: u64::from_le_bytes(word),
             apex: u32::load(&bytes[16..]),
-            component: u32::load(&bytes[20..]),
+            tag: u32::load(&bytes[20..]),
         }
     }
     fn store(&self, bytes: &mut [u8]) {
@@ -48,7 +93,7 @@ impl Element for FanUse {
         self.high.store(&mut bytes[4..]);
         bytes[8..16].copy_from_slice(&self.triangle_and_forward.to_le_bytes());
         self.apex.store(&mut bytes[16..]);
-        self.component.store(&mut bytes[20..]);
+        self.tag.store(&mut bytes[20..]);
     }
 }
 
@@ -57,16 +102,13 @@ impl Element for FanUse {
 pub(crate) struct Mended {
     /// Places of the triangles left out, increasing, each once.
     pub left_out: Vec<u64>,
-    /// Per edge mended whose two kept triangles both stay: their
-    /// components and whether the two run the edge the same way (then one
-    /// of them must be turned over for the edge to be wound consistently).
-    pub pairs: Vec<(u32, u32, bool)>,
     /// Edges that had more than two triangles.
     pub edges: u64,
 }
 
-/// Gathers a stream of triangles (with a component each) and names, at the
-/// end, the ones to leave out (see the module doc).
+/// Gathers a stream of triangles (with a tag each) and names, at the end,
+/// the ones to leave out and the edges two triangles share (see the module
+/// doc).
 pub(crate) struct Fans {
     uses: SortedRuns<FanUse>,
     triangles: u64,
@@ -81,8 +123,8 @@ impl Fans {
         }
     }
 
-    /// The next triangle of the stream, in component `component`.
-    pub fn add(&mut self, t: [u32; 3], component: u32) -> io::Result<()> {
+    /// The next triangle of the stream, and the caller's word about it.
+    pub fn add(&mut self, t: [u32; 3], tag: u32) -> io::Result<()> {
         let index = self.triangles;
         self.triangles += 1;
         for k in 0..3 {
@@ -95,31 +137,44 @@ impl Fans {
                 high: a.max(b),
                 triangle_and_forward: index << 1 | u64::from(a < b),
                 apex,
-                component,
+                tag,
             })?;
         }
         Ok(())
     }
 
-    /// The triangles to leave out and the pairs kept; `at` gives a
-    /// vertex's coordinates (asked only round the edges mended).
-    pub fn mend(self, mut at: impl FnMut(u32) -> io::Result<DVec3>) -> io::Result<Mended> {
+    /// The triangles to leave out; every edge two triangles share, or
+    /// the two kept of a mended edge, goes to `twin` in edge order (a
+    /// triangle it names may be left out at another edge: the caller
+    /// checks against `left_out`). `at` gives a vertex's coordinates
+    /// (asked only round the edges mended).
+    pub fn mend(
+        self,
+        mut at: impl FnMut(u32) -> io::Result<DVec3>,
+        mut twin: impl FnMut(Twin) -> io::Result<()>,
+    ) -> io::Result<Mended> {
         let mut mended = Mended::default();
-        let mut kept = Vec::new();
         let mut edge: Vec<FanUse> = Vec::new();
         let mut judge = |edge: &[FanUse], mended: &mut Mended| -> io::Result<()> {
-            if edge.len() <= 2 {
-                return Ok(());
-            }
-            mended.edges += 1;
-            let (i, j) = flattest_pair(edge, &mut at)?;
-            for (k, u) in edge.iter().enumerate() {
-                if k != i && k != j {
-                    mended.left_out.push(u.triangle_and_forward >> 1);
+            let (i, j) = match edge.len() {
+                0 | 1 => return Ok(()),
+                2 => (0, 1),
+                _ => {
+                    mended.edges += 1;
+                    let (i, j) = flattest_pair(edge, &mut at)?;
+                    for (k, u) in edge.iter().enumerate() {
+                        if k != i && k != j {
+                            mended.left_out.push(u.triangle_and_forward >> 1);
+                        }
+                    }
+                    (i, j)
                 }
-            }
-            kept.push((edge[i], edge[j]));
-            Ok(())
+            };
+            twin(Twin {
+                low: edge[i].low,
+                high: edge[i].high,
+                uses: [edge[i].into(), edge[j].into()],
+            })
         };
         self.uses.merge(|u| {
             if edge
@@ -135,20 +190,6 @@ impl Fans {
         judge(&edge, &mut mended)?;
         mended.left_out.sort_unstable();
         mended.left_out.dedup();
-        let out = |u: &FanUse| {
-            mended
-                .left_out
-                .binary_search(&(u.triangle_and_forward >> 1))
-                .is_ok()
-        };
-        mended.pairs = kept
-            .iter()
-            .filter(|(a, b)| !out(a) && !out(b))
-            .map(|(a, b)| {
-                let same_way = (a.triangle_and_forward ^ b.triangle_and_forward) & 1 == 0;
-                (a.component, b.component, same_way)
-            })
-            .collect();
         Ok(mended)
     }
 }
@@ -208,13 +249,35 @@ mod tests {
             for (c, &t) in order.iter().enumerate() {
                 fans.add(tris[t], c as u32).unwrap();
             }
-            let mended = fans.mend(|v| Ok(points[v as usize])).unwrap();
+            let mut twins = Vec::new();
+            let mended = fans
+                .mend(
+                    |v| Ok(points[v as usize]),
+                    |t| {
+                        twins.push(t);
+                        Ok(())
+                    },
+                )
+                .unwrap();
             let fin = order.iter().position(|&t| t == 2).unwrap() as u64;
             assert_eq!(mended.left_out, vec![fin], "{order:?}");
             assert_eq!(mended.edges, 1);
-            // The two kept run the edge oppositely: no turn needed.
-            assert_eq!(mended.pairs.len(), 1);
-            assert!(!mended.pairs[0].2);
+            // The mended edge's two kept run it oppositely (no turn
+            // needed), and the edge 1-2 is shared by [0, 1, 2] and
+            // [1, 5, 2], which run it oppositely too.
+            let at = |t: usize| order.iter().position(|&o| o == t).unwrap() as u64;
+            let mended_edge = twins.iter().find(|t| (t.low, t.high) == (0, 1)).unwrap();
+            let kept = mended_edge.uses.map(|u| u.triangle);
+            assert!(kept.contains(&at(0)) && kept.contains(&at(1)), "{twins:?}");
+            assert!(!mended_edge.same_way());
+            let side = twins.iter().find(|t| (t.low, t.high) == (1, 2)).unwrap();
+            assert!(!side.same_way());
+            assert_eq!(side.uses.map(|u| u.triangle), {
+                let mut pair = [at(0), at(3)];
+                pair.sort_unstable();
+                pair
+            });
+            assert_eq!(twins.len(), 2, "{twins:?}");
             let kept: Vec<[u32; 3]> = order
                 .iter()
                 .enumerate()

@@ -17,13 +17,14 @@ pub(crate) mod audit_mesh;
 pub mod distance;
 pub(crate) mod error;
 pub(crate) mod fans;
-mod paged;
+pub(crate) mod paged;
 pub(crate) mod pieces;
 pub(crate) mod quality;
 pub(crate) mod runs;
 pub(crate) mod scratch;
 pub(crate) mod self_intersect;
 pub mod shapes;
+pub(crate) mod untwist;
 pub(crate) mod wound;
 pub(crate) mod write;
 

@@ -61,7 +61,7 @@ impl fmt::Display for Summary<'_, DelaunayReport> {
         let r = self.report;
         write!(
             f,
-            "reconstruct (delaunay): {} points, {} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left, {} edges of more than two triangles mended ({} triangles left out); triangulation {:.0} B/point; {:.2} s, peak {} -> {}; checked: {}",
+            "reconstruct (delaunay): {} points, {} tiles ({} reloaded, margin up to {:.3e}), hole {}, {} duplicates -> {} vertices, {} triangles, {} components ({} non-orientable); deleted type 1/2/forced {}/{}/{}, {} small holes closed, {} incompatible edges left, {} edges of more than two triangles mended ({} triangles left out), {} triangles cut at short twists; triangulation {:.0} B/point; {:.2} s, peak {} -> {}; checked: {}",
             r.points,
             r.run.tiles,
             r.run.retries,
@@ -79,6 +79,7 @@ impl fmt::Display for Summary<'_, DelaunayReport> {
             r.incompatible_left,
             r.non_manifold_mended,
             r.fins_left_out,
+            r.twists_cut,
             r.triangulation_bytes_per_point,
             self.secs,
             self.peak_text(),

@@ -11,20 +11,21 @@
 //! deletion rounds can carry it, see [`super::cleanup`]); a tile with a
 //! doubtful core point asks for a wider margin.
 //!
-//! Winding is global (a component may cross many tiles), so the kernel
-//! winds its own triangles ([`super::wind`]), numbers their components, and
-//! lists its seam edges: edges of an owned triangle that one other triangle
-//! of the cloud shares, owned by another tile. The stitcher pairs them
-//! across tiles. An edge's order is the cloud's: every triangle on it has
-//! one of its corners, and a triangle with a sure corner is the cloud's
-//! (a tile whose owned triangle has an edge between two doubtful corners
-//! asks for a wider margin).
+//! Winding is global (a component may cross many tiles, and a twist is
+//! found only over the whole surface), so it is the seam side's
+//! (`mesh::untwist`): the kernel gives each owned triangle its unit normal
+//! with its corners in input order and its signed volume as its corners
+//! are listed, both computed from the corners in input order so that
+//! every tiling gives the same bits. An
+//! edge's order is the cloud's: every triangle on it has one of its
+//! corners, and a triangle with a sure corner is the cloud's (a tile whose
+//! owned triangle has an edge between two doubtful corners asks for a
+//! wider margin).
 
 use super::fan::Hole;
 use super::select::{select, SelectionReport};
 use super::umbrella::Region;
-use super::wind::wind_beside;
-use crate::mesh::volume6;
+use crate::mesh::untwist::pack_normal;
 use crate::pipeline::{KernelError, TileKernel};
 use crate::store::PointStore;
 use crate::tiling::{Beyond, TilePoints};
@@ -44,20 +45,14 @@ pub(crate) const BYTES_PER_POINT: u64 = 1000;
 /// One tile's share of the surface.
 #[derive(Debug, Default)]
 pub struct DelaunayTile {
-    /// Owned triangles, wound, as store indices.
+    /// Owned triangles, as store indices, in no particular winding.
     pub tris: Vec<[u64; 3]>,
-    /// Tile-local component of each triangle.
-    pub component: Vec<u32>,
-    /// Per tile-local component: it could not be wound consistently.
-    pub inconsistent: Vec<bool>,
-    /// Per tile-local component: six times the signed volume of its owned
-    /// triangles as wound, about the store origin (the seam side turns
-    /// each whole component to a positive sum).
+    /// Each triangle's unit normal with its corners in input order
+    /// (`mesh::untwist::pack_normal`).
+    pub normals: Vec<u32>,
+    /// Six times each triangle's signed volume about the store origin, as
+    /// its corners run.
     pub volumes: Vec<f64>,
-    /// Edges no other owned triangle shares (another tile's triangle may,
-    /// or none): `(a, b)` as wound in the owned triangle (store indices),
-    /// and its component.
-    pub seams: Vec<(u64, u64, u32)>,
     pub report: SelectionReport,
 }
 
@@ -112,39 +107,48 @@ impl TileKernel for DelaunayKernel<'_> {
             let first = t.iter().min_by_key(|&&v| tile.ids[v as usize]);
             first.is_some_and(|&v| (v as usize) < tile.n_core)
         };
-        // The owned triangles stay in place: one copy, of the others.
         let mut owned = std::mem::take(&mut sel.tris);
-        let beside: Vec<[u32; 3]> = owned
+        if owned
             .iter()
-            .filter(|t| !owner_is_core(t))
-            .copied()
-            .collect();
-        owned.retain(owner_is_core);
-        if owned.iter().any(|t| doubtful_edge(t, &sel.doubtful)) {
+            .any(|t| owner_is_core(t) && doubtful_edge(t, &sel.doubtful))
+        {
             // Doubt within a triangle of the core: the order of that edge
-            // is not proven, so neither are the seams and winding through it.
+            // is not proven, so neither is the winding through it.
             let depth = doubt_depth(tile, &sel.doubtful);
             let short = (DEPTH_SPARE * depth - tile.margin).max(f64::MIN_POSITIVE);
             KernelError::unless_short(short, tile.margin)?;
         }
-        let w = wind_beside(&mut owned, &beside);
-        let seams = seam_edges(&owned, &beside, &w.component, tile);
-        let mut volumes = vec![0.0; w.inconsistent.len()];
-        for (t, &c) in owned.iter().zip(&w.component) {
-            volumes[c as usize] += volume6(&tile.points, *t, DVec3::ZERO);
-        }
+        owned.retain(owner_is_core);
+        let tris: Vec<[u64; 3]> = owned
+            .iter()
+            .map(|t| t.map(|v| tile.store_index(v as usize)))
+            .collect();
+        let (normals, volumes) = owned
+            .iter()
+            .map(|t| facing(&tile.points, *t, t.map(|v| tile.ids[v as usize])))
+            .unzip();
         Ok(DelaunayTile {
-            tris: owned
-                .iter()
-                .map(|t| t.map(|v| tile.store_index(v as usize)))
-                .collect(),
-            component: w.component,
-            inconsistent: w.inconsistent,
+            tris,
+            normals,
             volumes,
-            seams,
             report: sel.report,
         })
     }
+}
+
+/// Triangle `t`'s packed unit normal with its corners in input order
+/// (`ids`, the points' input-order ids), and six times its signed volume
+/// about the origin computed so and turned as `t` lists them: the same
+/// bits in every tiling, whatever order a tile lists the corners in.
+fn facing(points: &[DVec3], t: [u32; 3], ids: [u64; 3]) -> (u32, f64) {
+    let mut order = [0usize, 1, 2];
+    order.sort_unstable_by_key(|&k| ids[k]);
+    // A rotation of the corners keeps the winding; a swap turns it.
+    let turned = !matches!(order, [0, 1, 2] | [1, 2, 0] | [2, 0, 1]);
+    let [a, b, c] = order.map(|k| points[t[k] as usize]);
+    let normal = (b - a).cross(c - a).normalize_or_zero();
+    let volume6 = a.dot(b.cross(c));
+    (pack_normal(normal), if turned { -volume6 } else { volume6 })
 }
 
 /// Margin asked for per depth of doubt seen (see `run`).
@@ -165,107 +169,41 @@ fn doubtful_edge(t: &[u32; 3], doubtful: &[bool]) -> bool {
     (0..3).any(|k| doubtful[t[k] as usize] && doubtful[t[(k + 1) % 3] as usize])
 }
 
-/// Edges of owned triangles that exactly one other triangle shares, not
-/// owned (`beside`): the edges the tile that owns it winds across to this
-/// one. Read off the owned triangles and the edges' order in the cloud:
-/// matching by the tile's other triangles' edges missed joins (the 10M
-/// noisy dragon was reported as 9 components in 256 tiles and 11 in 4,
-/// and a missed join leaves two sides wound apart), and pairing edges of
-/// order one among the owned paired two triangles of a non-manifold edge
-/// whose third lay in another tile, which the untiled walk never crosses.
-/// Boundary and non-manifold edges are not sent: they join nothing.
-fn seam_edges(
-    owned: &[[u32; 3]],
-    beside: &[[u32; 3]],
-    component: &[u32],
-    tile: &TilePoints,
-) -> Vec<(u64, u64, u32)> {
-    let key = |a: u32, b: u32| (a.min(b), a.max(b));
-    let sides = |t: &[u32; 3]| [key(t[0], t[1]), key(t[1], t[2]), key(t[0], t[2])];
-    let mut mine: Vec<(u32, u32)> = owned.iter().flat_map(sides).collect();
-    mine.sort_unstable();
-    let mut all: Vec<(u32, u32)> = beside
-        .iter()
-        .flat_map(sides)
-        .filter(|e| mine.binary_search(e).is_ok())
-        .chain(mine.iter().copied())
-        .collect();
-    all.sort_unstable();
-    let order = |edges: &[(u32, u32)], e: (u32, u32)| {
-        edges.partition_point(|&x| x <= e) - edges.partition_point(|&x| x < e)
-    };
-    let mut out = Vec::new();
-    for (t, c) in owned.iter().zip(component) {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if order(&mine, key(a, b)) == 1 && order(&all, key(a, b)) == 2 {
-                out.push((
-                    tile.store_index(a as usize),
-                    tile.store_index(b as usize),
-                    *c,
-                ));
-            }
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use glam::DVec3;
-    use std::collections::HashMap;
 
-    /// Seam edges are exactly the owned triangles' edges that one owned
-    /// and one other triangle share, each as its triangle runs it, with
-    /// its component: checked against counting every edge, over random
-    /// triangle sets with shared, lone and non-manifold edges.
+    /// Any listing of a triangle's corners gives the same normal (the
+    /// store order's) and the same volume, turned over when the listing
+    /// is not a rotation of the store order.
     #[test]
-    fn seam_edges_are_the_edges_an_owned_and_one_other_triangle_share() {
-        let tile = TilePoints::whole(vec![DVec3::ZERO; 12]);
-        let mut rng = Rng::new(7);
-        let mut random = |n: usize| {
-            let mut tris: Vec<[u32; 3]> = Vec::new();
-            while tris.len() < n {
-                let t = [0, 1, 2].map(|_| rng.below(12) as u32);
-                if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
-                    tris.push(t);
-                }
+    fn facing_depends_on_the_winding_not_the_listing() {
+        let mut rng = Rng::new(3);
+        for _ in 0..500 {
+            let points: Vec<DVec3> = (0..3)
+                .map(|_| DVec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 1e3)
+                .collect();
+            let ids = [
+                rng.below(1000),
+                1000 + rng.below(1000),
+                2000 + rng.below(1000),
+            ];
+            let (n0, v0) = facing(&points, [0, 1, 2], ids);
+            let plain = (points[1] - points[0]).cross(points[2] - points[0]);
+            let back = crate::mesh::untwist::tests::unpack(n0);
+            assert!(back.dot(plain.normalize()) > 0.9999);
+            for (perm, turned) in [
+                ([1, 2, 0], false),
+                ([2, 0, 1], false),
+                ([1, 0, 2], true),
+                ([0, 2, 1], true),
+                ([2, 1, 0], true),
+            ] {
+                let (n, v) = facing(&points, perm, perm.map(|k| ids[k as usize]));
+                assert_eq!(n, n0);
+                assert_eq!(v, if turned { -v0 } else { v0 });
             }
-            tris
-        };
-        let (mut seen, mut kept) = (0, 0);
-        for _ in 0..200 {
-            let (owned, beside) = (random(8), random(8));
-            let component: Vec<u32> = (0..owned.len() as u32).map(|t| t % 3).collect();
-            let mut order: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
-            for (t, mine) in owned
-                .iter()
-                .map(|t| (t, 1))
-                .chain(beside.iter().map(|t| (t, 0)))
-            {
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
-                    let o = order.entry((a.min(b), a.max(b))).or_default();
-                    o.0 += mine;
-                    o.1 += 1;
-                }
-            }
-            let mut want = Vec::new();
-            for (t, c) in owned.iter().zip(&component) {
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
-                    seen += 1;
-                    if order[&(a.min(b), a.max(b))] == (1, 2) {
-                        want.push((a as u64, b as u64, *c));
-                    }
-                }
-            }
-            kept += want.len();
-            assert_eq!(seam_edges(&owned, &beside, &component, &tile), want);
         }
-        // The sets exercise both outcomes.
-        assert!(kept > 0 && kept < seen, "{kept} of {seen}");
     }
 }

@@ -1,40 +1,41 @@
 //! `reconstruct --method delaunay` end to end over a store: the tile kernel
 //! (`super::kernel`), then the seam side: every tile's core points become
 //! the output vertices (store order), its owned triangles go to a spool
-//! with a global component number, and seam edges met from both sides join
-//! components in a parity union-find (the two triangles must run the edge
-//! in opposite directions). At the end each component's flip is known and
-//! the spool is replayed into the mesh writer; a component whose parities
-//! contradict each other is non-orientable (a Moebius band) and is counted.
+//! (paged, with each one's signed volume) and their edges to an
+//! out-of-core sort. At the end the edges give the mesh's dual edges, the
+//! winding is decided over the whole surface flattest crossing first and
+//! short twists are cut (`mesh::untwist`), and the spool is replayed into
+//! the mesh writer, each triangle turned as the winding says; a component
+//! whose long odd cycle cannot be wound (a Moebius band) is counted
+//! non-orientable.
 //!
 //! An edge of more than two triangles (paper 4's fans on real scans leave
 //! some: 204 on two depth-camera frames of a room, 16 on a city block)
 //! keeps the two that continue each other most nearly flat, and the
 //! others are left out (`mesh::fans`, out of core, over the whole stream,
-//! so the choice is the same in any tiling); the two kept then join their
-//! components like a seam edge, so they are wound consistently. A
-//! deviation from paper 4, which keeps multi-sheet contacts: a mesh with a
-//! non-manifold edge is refused by most tools downstream.
+//! so the choice is the same in any tiling); the two kept are then wound
+//! like any other pair. A deviation from paper 4, which keeps multi-sheet
+//! contacts: a mesh with a non-manifold edge is refused by most tools
+//! downstream.
 //!
-//! Memory: the seam edges waiting for their twin (about the tiles' borders;
-//! a tile sends only edges whose twin another tile owns, so each meets
-//! it), one union-find entry per tile component; the triangles wait on
+//! Memory: the sorts' buffers and the paged arrays' caches
+//! (`mesh::untwist::RESIDENT_BYTES`); the triangles, edges and sets wait on
 //! disk.
 
 use super::fan::{Hole, LOCAL_HOLE, OUTLIER, SPARSEST};
 use super::kernel::{DelaunayKernel, DelaunayTile, BYTES_PER_POINT};
 use super::scale::median_spacing;
 use crate::memory::plan::MARGIN_FACTOR;
-use crate::mesh::fans::{Fans, Mended};
+use crate::mesh::fans::Fans;
+use crate::mesh::paged::Paged;
 use crate::mesh::runs::RunSizes;
+use crate::mesh::scratch::scratch_beside;
+use crate::mesh::untwist::{self, Spooled, Untwist};
 use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter};
-use crate::normals::unionfind::ParityUnionFind;
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::PointStore;
 use glam::DVec3;
-use std::collections::HashMap;
-use std::io::{BufReader, BufWriter, Read, Seek, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Margin first loaded, in store spacings: the doubt from the loaded
 /// region's faces reaches about 90 spacings in on the noisy dragon (the
@@ -51,8 +52,8 @@ const MARGIN_SPACINGS: f64 = 110.0;
 const LOADED_PER_CORE: f64 = 2.6;
 
 /// What the run costs (ARCHITECTURE.md, memory model): the kernel's bytes
-/// per loaded point and nothing per stored point beyond the seam side's
-/// map (seam-sized) and one union-find entry per tile component.
+/// per loaded point; the seam side's caches and sort buffers whatever the
+/// size; its triangles, edges and sets on disk.
 pub fn cost() -> KernelCost {
     KernelCost {
         // The plan allows for MARGIN_FACTOR loaded points per core point.
@@ -61,19 +62,20 @@ pub fn cost() -> KernelCost {
         contracts_boundaries: false,
         resident_per_point: 0.0,
         window_bytes_per_point: 0,
-        // Beside the store: the mesh spool and the edge uses of
-        // `mesh::fans` (three of 24 B per triangle); the mesh is about two
-        // triangles per input point (vertices are the input points).
-        scratch_per_point: 2 * 12 + 2 * 3 * 24,
+        // Beside the store: the seam side's spool, edge uses, dual edges
+        // and neighbours at their peak; the mesh is about two triangles
+        // per input point (vertices are the input points).
+        scratch_per_point: 2 * untwist::SCRATCH_PER_TRIANGLE,
         output_per_point: 24 + 2 * 13,
         // The face spool and the audit beside the output, two triangles
         // per point.
         beside_output_per_point: (2.0 * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE) as u64,
         parallel_in_tile: false,
         margin_spacings: 0.0,
-        // `mesh::fans`' sort buffer fills beside the tiles; its merge runs
-        // after them.
-        resident_bytes: RunSizes::DEFAULT.chunk_bytes as u64,
+        // `mesh::fans`' sort buffer fills beside the tiles; the winding's
+        // caches and buffers after them (no more than the tiles held, but
+        // freed tile memory may stay in the workers' allocator arenas).
+        resident_bytes: (RunSizes::DEFAULT.chunk_bytes as u64).max(untwist::RESIDENT_BYTES),
     }
 }
 
@@ -124,6 +126,13 @@ pub struct DelaunayReport {
     pub non_manifold_mended: u64,
     /// Triangles left out at edges of more than two.
     pub fins_left_out: u64,
+    /// Triangles left out where a short odd cycle of triangles (a ring
+    /// turned over round a hole) kept the surface from being wound
+    /// (`mesh::untwist`).
+    pub twists_cut: u64,
+    /// Edges left unwound: each on an odd cycle longer than a twist (the
+    /// surface's own, as a Moebius band's).
+    pub unwound_edges: u64,
     /// Largest triangulation of a tile, bytes per loaded point.
     pub triangulation_bytes_per_point: f64,
     /// The hole-closing rule used, for the report.
@@ -157,7 +166,7 @@ pub enum DelaunayReconError {
     /// Reading the store failed.
     #[error(transparent)]
     Store(#[from] crate::store::StoreError),
-    /// The scratch file of the seam triangles could not be written or read.
+    /// The scratch files of the seam side could not be written or read.
     #[error("triangle spool: {0}")]
     Spool(#[from] std::io::Error),
 }
@@ -211,7 +220,11 @@ pub fn reconstruct_delaunay(
     let run = run_tiles(store, &kernel, opts, progress, |t, out| {
         seam.add_tile(store, t, out).map_err(PipelineError::seam)
     })?;
-    let mut report = seam.finish(store)?;
+    // After the tiles their memory is the seam side's.
+    let room = opts
+        .tile_room
+        .or(opts.tile_bytes.map(|b| b * opts.in_flight as u64));
+    let mut report = seam.finish(store, room)?;
     report.run = run;
     report.points = store.len();
     report.hole = match hole {
@@ -226,31 +239,27 @@ pub fn reconstruct_delaunay(
 /// The seam side of the run (see the module doc).
 struct Seams {
     writer: MeshWriter,
-    spool: BufWriter<std::fs::File>,
-    /// Every triangle's edges, for the edges of more than two (taken at
-    /// the end).
+    /// Every triangle as its tile listed it, with its signed volume.
+    spool: Option<Paged<Spooled>>,
+    /// Every triangle's edges, for the edges of more than two and the
+    /// dual edges (taken at the end).
     fans: Option<Fans>,
-    /// Edge (low, high store index) -> component and whether it runs low
-    /// to high in its triangle.
-    waiting: HashMap<(u64, u64), (u32, bool)>,
-    joins: Vec<(u32, u32, bool)>,
-    inconsistent: Vec<bool>,
-    /// Per global component: six times its signed volume as the tile
-    /// wound it, about the store origin.
-    volumes: Vec<f64>,
+    untwist: Option<Untwist>,
+    beside: PathBuf,
     report: DelaunayReport,
 }
+
+/// RAM of the spool's page cache (it is written and read in order).
+const SPOOL_CACHE: usize = untwist::SMALL_CACHE;
 
 impl Seams {
     fn new(writer: MeshWriter, output: &Path) -> Result<Self, DelaunayReconError> {
         Ok(Seams {
             writer,
-            spool: BufWriter::new(tempfile::tempfile()?),
+            spool: None,
             fans: Some(Fans::new(output, RunSizes::DEFAULT)),
-            waiting: HashMap::new(),
-            joins: Vec::new(),
-            inconsistent: Vec::new(),
-            volumes: Vec::new(),
+            untwist: Some(Untwist::new(output)?),
+            beside: output.to_path_buf(),
             report: DelaunayReport::default(),
         })
     }
@@ -267,32 +276,23 @@ impl Seams {
         let mut vertices = Vec::new();
         store.read_exact_in_store_order(entry.start, entry.count, &mut vertices)?;
         self.writer.add_vertices(&vertices)?;
-        let base = self.inconsistent.len() as u32;
-        self.inconsistent.extend_from_slice(&tile.inconsistent);
-        self.volumes.extend_from_slice(&tile.volumes);
-        for (t, c) in tile.tris.iter().zip(&tile.component) {
-            for v in t {
-                self.spool.write_all(&(*v as u32).to_le_bytes())?;
-            }
-            self.spool.write_all(&(base + c).to_le_bytes())?;
-            if let Some(fans) = &mut self.fans {
-                fans.add(t.map(|v| v as u32), base + c)?;
-            }
+        let mut ids = Vec::new();
+        store.read_indices(entry.start, entry.count, &mut ids)?;
+        let untwist = self.untwist.as_mut().ok_or_else(gone)?;
+        untwist.add_ids(entry.start, &ids)?;
+        if self.spool.is_none() {
+            self.spool = Some(Paged::new(scratch_beside(&self.beside)?, SPOOL_CACHE));
         }
-        for (a, b, c) in tile.seams {
-            let key = (a.min(b), a.max(b));
-            let forward = a < b;
-            match self.waiting.remove(&key) {
-                // Consistent when the two run the edge in opposite ways.
-                Some((other, dir)) => self.joins.push((other, base + c, dir == forward)),
-                None => {
-                    self.waiting.insert(key, (base + c, forward));
-                }
-            }
+        let spool = self.spool.as_mut().ok_or_else(gone)?;
+        let fans = self.fans.as_mut().ok_or_else(gone)?;
+        for ((t, &normal), &volume6) in tile.tris.iter().zip(&tile.normals).zip(&tile.volumes) {
+            let corners = t.map(|v| v as u32);
+            spool.set(self.report.triangles, Spooled { corners, volume6 })?;
+            fans.add(corners, normal)?;
+            self.report.triangles += 1;
         }
         let r = &tile.report;
         let rep = &mut self.report;
-        rep.triangles += tile.tris.len() as u64;
         rep.duplicates += r.duplicates;
         rep.type1 += r.cleanup.type1;
         rep.type2 += r.cleanup.type2;
@@ -306,78 +306,43 @@ impl Seams {
         Ok(())
     }
 
-    fn finish(mut self, store: &PointStore) -> Result<DelaunayReport, DelaunayReconError> {
+    fn finish(
+        mut self,
+        store: &PointStore,
+        room: Option<u64>,
+    ) -> Result<DelaunayReport, DelaunayReconError> {
+        let mut spool = match self.spool.take() {
+            Some(spool) => spool,
+            None => Paged::new(scratch_beside(&self.beside)?, SPOOL_CACHE),
+        };
+        let fans = self.fans.take().ok_or_else(gone)?;
+        let mut untwist = self.untwist.take().ok_or_else(gone)?;
         let mut exact = Vec::new();
-        let mended = match self.fans.take() {
-            Some(fans) => fans.mend(|v| {
+        let mended = fans.mend(
+            |v| {
                 store
                     .read_exact_in_store_order(u64::from(v), 1, &mut exact)
                     .map_err(std::io::Error::other)?;
                 Ok(exact.first().copied().unwrap_or(DVec3::ZERO))
-            })?,
-            None => Mended::default(),
-        };
+            },
+            |twin| untwist.add(&twin),
+        )?;
         self.report.non_manifold_mended = mended.edges;
         self.report.fins_left_out = mended.left_out.len() as u64;
-        self.joins.extend(mended.pairs.iter().copied());
-        let n = self.inconsistent.len();
-        let mut uf = ParityUnionFind::new(n);
-        let mut bad = self.inconsistent.clone();
-        for &(a, b, parity) in &self.joins {
-            let ((ra, pa), (rb, pb)) = (uf.find(a), uf.find(b));
-            if ra == rb {
-                if pa ^ pb != parity {
-                    bad[ra as usize] = true;
-                }
-            } else {
-                let carried = bad[ra as usize] || bad[rb as usize];
-                uf.union(a, b, parity);
-                let root = uf.find(a).0;
-                bad[root as usize] |= carried;
-            }
-        }
-        let mut roots = vec![false; n];
-        for c in 0..n as u32 {
-            let (r, _) = uf.find(c);
-            if !roots[r as usize] {
-                roots[r as usize] = true;
-                self.report.components += 1;
-                self.report.non_orientable += bad[r as usize] as u64;
-            }
-        }
-        let flips = outward(&mut uf, &self.volumes);
-        self.replay(&flips, &mended.left_out)?;
-        let written = self.writer.finish()?;
-        (self.report.vertices, self.report.triangles) = written.counts();
-        self.report.audit = written.audit;
-        Ok(self.report)
-    }
-
-    /// Writes the spooled triangles but those `left_out` (places,
-    /// increasing), each component flipped as `flips` says.
-    fn replay(&mut self, flips: &[bool], left_out: &[u64]) -> Result<(), DelaunayReconError> {
-        self.spool.flush()?;
-        let mut file = self.spool.get_ref().try_clone()?;
-        file.rewind()?;
-        let mut reader = BufReader::with_capacity(1 << 20, file);
-        let mut record = [0u8; 16];
+        let mut winding =
+            untwist.wind(self.report.triangles, &mended.left_out, &mut spool, room)?;
+        self.report.twists_cut = winding.cut;
+        self.report.unwound_edges = winding.unwound;
+        self.report.components = winding.components;
+        self.report.non_orientable = winding.non_orientable;
+        let mut removed = std::mem::take(&mut winding.removed).into_iter().peekable();
         let mut batch = Vec::with_capacity(1 << 16);
-        let mut out = left_out.iter().peekable();
         for index in 0..self.report.triangles {
-            reader.read_exact(&mut record)?;
-            if out.next_if_eq(&&index).is_some() {
+            if removed.next_if_eq(&index).is_some() {
                 continue;
             }
-            let w = |k: usize| {
-                u32::from_le_bytes([
-                    record[4 * k],
-                    record[4 * k + 1],
-                    record[4 * k + 2],
-                    record[4 * k + 3],
-                ])
-            };
-            let mut t = [w(0), w(1), w(2)];
-            if flips[w(3) as usize] {
+            let mut t = spool.get(index)?.corners;
+            if winding.flip(index)? {
                 t.swap(1, 2);
             }
             batch.push(t);
@@ -387,24 +352,15 @@ impl Seams {
             }
         }
         self.writer.add_triangles(&batch)?;
-        Ok(())
+        let written = self.writer.finish()?;
+        (self.report.vertices, self.report.triangles) = written.counts();
+        self.report.audit = written.audit;
+        Ok(self.report)
     }
 }
 
-/// Whether each tile component is flipped: as its parity to its root says,
-/// and the whole root once more when its signed volume, summed over its
-/// components as they will be written, is negative. A closed surface then
-/// faces outward (paper 4 leaves the result unoriented; the audit found
-/// the torus wound inward); an open one faces away from the store origin,
-/// the projection method's convention (`recon::projection::orient`).
-fn outward(uf: &mut ParityUnionFind, volumes: &[f64]) -> Vec<bool> {
-    let mut total = vec![0.0f64; volumes.len()];
-    let parity: Vec<(u32, bool)> = (0..volumes.len() as u32).map(|c| uf.find(c)).collect();
-    for (&(root, flip), &v) in parity.iter().zip(volumes) {
-        total[root as usize] += if flip { -v } else { v };
-    }
-    parity
-        .iter()
-        .map(|&(root, flip)| flip ^ (total[root as usize] < 0.0))
-        .collect()
+/// The seam side's state was taken before its end: a fault of this
+/// module, reported as an I/O error rather than a panic.
+fn gone() -> std::io::Error {
+    std::io::Error::other("the seam side's scratch was closed before the run ended")
 }
