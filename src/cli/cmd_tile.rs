@@ -30,7 +30,7 @@ pub fn run(a: TileArgs) -> Result<()> {
         bail!("{}: exists and is not empty", a.output.display());
     }
     place::check_writable_dir(&place::directory_of(&a.output), "output")?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
     // Removed if the build is interrupted: a store without its manifest is
     // no store.
@@ -39,7 +39,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let cost = NormalParams::default().cost();
     s.check_floor(&cost)?;
     let opts = s.build_options(cost);
-    let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress.as_ref()) {
+    let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress) {
         Ok(st) => st,
         Err(e) => {
             let _ = std::fs::remove_dir_all(&a.output);

@@ -35,7 +35,7 @@ use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::memory::{cores, too_many_threads, too_much_memory};
 use scanmesh::mesh::MeshAudit;
-use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
+use scanmesh::pipeline::{KernelCost, MemoryBudget, NoProgress, Prepared, Progress, RunSettings};
 use scanmesh::rundir::Session;
 use scanmesh::runlog::SharedRunLog;
 use scanmesh::store::{BuildOptions, Job, PointStore};
@@ -267,7 +267,6 @@ pub enum HoodKind {
 }
 
 /// Validated common options.
-#[derive(Clone, Debug)]
 pub struct Settings {
     pub mem: u64,
     pub threads: usize,
@@ -288,6 +287,17 @@ pub struct Settings {
     pub run: Option<Session>,
     /// The run's log, for `--report`: its stages, summary line, what it left out.
     pub log: SharedRunLog,
+    /// Progress bars (none with `--quiet`), every stage timed into `log`.
+    progress: Box<dyn Progress>,
+}
+
+/// Bars on a terminal, nothing otherwise or when `quiet`; stage timings
+/// instead when `SCANMESH_TIMINGS` asks for them.
+fn shown(quiet: bool) -> Box<dyn Progress> {
+    progress::timings().unwrap_or_else(|| match quiet {
+        true => Box::new(NoProgress),
+        false => progress::bars(),
+    })
 }
 
 /// What of `--mem` and `--threads` this machine cannot keep, each naming
@@ -360,6 +370,7 @@ impl CommonArgs {
                 && !self.select.selection().is_all(),
             run: run.session.clone(),
             log: self.log.clone(),
+            progress: Box::new(self.log.timed(shown(self.quiet))),
             policy: if self.skip_invalid {
                 InvalidPolicy::Skip
             } else {
@@ -494,10 +505,19 @@ impl Settings {
         report::summary(&self.log, line);
     }
 
-    /// Progress bars (or nothing, when `--quiet` or `quiet`), every stage
-    /// timed into the run's log.
-    pub fn progress(&self, quiet: bool) -> Box<dyn Progress> {
-        progress::progress(self.quiet || quiet, &self.log)
+    /// Progress bars (or nothing, with `--quiet`), every stage timed into
+    /// the run's log.
+    pub fn progress(&self) -> &dyn Progress {
+        self.progress.as_ref()
+    }
+
+    /// These settings without progress bars when `off` (`features
+    /// --json`), the stages still timed into the run's log.
+    pub fn no_bars_if(mut self, off: bool) -> Self {
+        if off {
+            self.progress = Box::new(self.log.timed(shown(true)));
+        }
+        self
     }
 
     /// Prints `note` on stderr, if any, unless `--quiet`.
