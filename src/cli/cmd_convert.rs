@@ -27,7 +27,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
     let progress = s.progress();
     let t0 = Instant::now();
-    let read = s.read_options();
+    let read = s.lib.read.clone();
     let stats = convert_keeping(&a.input, &a.output, read, s.keep_unselected, progress)?;
     s.note(not_held(&a.output, stats.dropped));
     let source = a.input.display().to_string();

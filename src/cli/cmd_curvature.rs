@@ -37,10 +37,8 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     let report = compute_curvature(store, &params, run.opts, progress)?;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
     let window = run.plan.window_points;
-    write_curvature(store, &a.output, &spec, window, keep, progress)
+    write_curvature(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     s.summary(super::closing(&report, t0, &a.output));
     Ok(())

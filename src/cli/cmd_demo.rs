@@ -51,9 +51,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
         Method::Implicit => DemoMethod::Implicit,
         Method::Projection => DemoMethod::Projection,
     };
-    s.check_floor(&method.cost())?;
+    s.lib.check_floor(&method.cost())?;
     let out = &a.output;
-    match method.reconstruct(&sample, &s.lib(), out, progress)? {
+    match method.reconstruct(&sample, &s.lib, out, progress)? {
         DemoMesh::Projection(r) => s.mesh_summary(&r.audit, super::closing(&r, t0, out)),
         DemoMesh::Implicit(r, normals) => {
             s.mesh_summary(&r.audit, super::closing(&r, t0, out));

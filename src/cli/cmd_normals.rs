@@ -78,9 +78,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     };
     s.note(not_held(&a.output, spec.carry(store.attributes())));
     let window = run.plan.window_points;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
-    export_points_keeping(store, &a.output, &spec, window, keep, progress)
+    export_points_keeping(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     s.summary(super::closing(&report, t0, &a.output));
     Ok(())

@@ -56,10 +56,8 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     let report = compute_outliers(store, &params, run.opts, progress)?;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
     let window = run.plan.window_points;
-    let rows = write_outliers(store, &a.output, &spec, window, keep, progress)
+    let rows = write_outliers(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     let written = OutliersWritten {
         report: &report,

@@ -83,7 +83,8 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     if params.cell.is_some() {
         // The run needs the spacing anyway; kept in the store's manifest.
         let spacing = scanmesh::store::spacing::ensure_spacing(&mut run.ws.store)?;
-        s.check_stage_space(&run.ws.store, output, &params.cost_with_spacing(spacing))?;
+        s.lib
+            .check_stage_space(&run.ws.store, output, &params.cost_with_spacing(spacing))?;
     }
     let r = reconstruct_implicit(
         &mut run.ws.store,
