@@ -25,16 +25,10 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     s.no_scratch_limit("convert")?;
     super::check_distinct(&a.input, &a.output)?;
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let read = s.read_options();
-    let stats = convert_keeping(
-        &a.input,
-        &a.output,
-        read,
-        s.keep_unselected,
-        progress.as_ref(),
-    )?;
+    let read = s.lib.read.clone();
+    let stats = convert_keeping(&a.input, &a.output, read, s.keep_unselected, progress)?;
     s.note(not_held(&a.output, stats.dropped));
     let source = a.input.display().to_string();
     s.log

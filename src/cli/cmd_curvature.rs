@@ -32,15 +32,13 @@ pub fn run(a: CurvatureArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let spec = curvature_output(&a.output)?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
-    let report = compute_curvature(store, &params, run.opts, progress.as_ref())?;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
+    let report = compute_curvature(store, &params, run.opts, progress)?;
     let window = run.plan.window_points;
-    write_curvature(store, &a.output, &spec, window, keep, progress.as_ref())
+    write_curvature(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     s.summary(super::closing(&report, t0, &a.output));
     Ok(())

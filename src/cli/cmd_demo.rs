@@ -46,14 +46,14 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let t0 = Instant::now();
     let sample = DemoSample::new(a.n)?;
     outln!("{sample}")?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let method = match a.method {
         Method::Implicit => DemoMethod::Implicit,
         Method::Projection => DemoMethod::Projection,
     };
-    s.check_floor(&method.cost())?;
+    s.lib.check_floor(&method.cost())?;
     let out = &a.output;
-    match method.reconstruct(&sample, &s.lib(), out, progress.as_ref())? {
+    match method.reconstruct(&sample, &s.lib, out, progress)? {
         DemoMesh::Projection(r) => s.mesh_summary(&r.audit, super::closing(&r, t0, out)),
         DemoMesh::Implicit(r, normals) => {
             s.mesh_summary(&r.audit, super::closing(&r, t0, out));

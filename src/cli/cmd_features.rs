@@ -34,17 +34,17 @@ pub struct FeaturesArgs {
 }
 
 pub fn run(a: FeaturesArgs) -> Result<()> {
-    let s = a.common.settings_in(&a.run)?;
+    let s = a.common.settings_in(&a.run)?.no_bars_if(a.json);
     s.no_keep("feature lines")?;
     let params = a.thresholds.params(a.fit.params()?)?;
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
-    let progress = s.progress(a.json);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
-    let (graph, report) = extract_lines(store, &params, run.opts, progress.as_ref())?;
+    let (graph, report) = extract_lines(store, &params, run.opts, progress)?;
     graph
         .write(&a.output, store.origin(), format)
         .with_context(|| format!("writing {}", a.output.display()))?;

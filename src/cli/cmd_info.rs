@@ -74,7 +74,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
             Some(t) => t,
             None => std::thread::available_parallelism().map_or(1, |n| n.get()),
         };
-        let progress = super::progress::untimed(a.quiet);
+        let progress = super::shown(a.quiet);
         let (points, store) = points_to_plan(&a.input, a.policy(), progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
         let cost = a.command.cost(a.closed);
@@ -89,7 +89,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
         }
         describe_store(&a.input)?
     } else {
-        let progress = super::progress::untimed(a.quiet);
+        let progress = super::shown(a.quiet);
         describe_file(&a.input, a.policy(), progress.as_ref())?
     };
     match a.json {

@@ -83,9 +83,9 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
             bail!("--summary and -o name the same file");
         }
     }
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let out = OutputOptions {
         format: a.format(),
         window_points: run.plan.window_points,
@@ -96,7 +96,7 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
         &a.output,
         &out,
         run.opts,
-        progress.as_ref(),
+        progress,
     )
     .with_context(|| format!("writing {}", a.output.display()))?;
     let secs = t0.elapsed().as_secs_f64();

@@ -57,9 +57,9 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     s.init_threads();
     super::check_distinct(&a.input, &a.output)?;
     let mut spec = normals_output(&a.output, a.ascii)?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     // A resumed run keeps normals it finished (its store outlives it).
     let kept = match &s.run {
@@ -69,7 +69,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let report = match kept {
         Some(report) if store.has_column(&NORMALS) => report,
         _ => {
-            let report = compute_normals(store, &params, run.opts, progress.as_ref())?;
+            let report = compute_normals(store, &params, run.opts, progress)?;
             if let Some(r) = &s.run {
                 r.run().keep_stage(StageId::Normals, &report)?;
             }
@@ -78,9 +78,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     };
     s.note(not_held(&a.output, spec.carry(store.attributes())));
     let window = run.plan.window_points;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
-    export_points_keeping(store, &a.output, &spec, window, keep, progress.as_ref())
+    export_points_keeping(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     s.summary(super::closing(&report, t0, &a.output));
     Ok(())

@@ -51,15 +51,13 @@ pub fn run(a: OutliersArgs) -> Result<()> {
     if a.drop {
         spec.drop_flagged = OUTLIER;
     }
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
-    let report = compute_outliers(store, &params, run.opts, progress.as_ref())?;
-    let read = s.read_options();
-    let keep = s.keep_unselected.then_some((a.input.as_path(), &read));
+    let report = compute_outliers(store, &params, run.opts, progress)?;
     let window = run.plan.window_points;
-    let rows = write_outliers(store, &a.output, &spec, window, keep, progress.as_ref())
+    let rows = write_outliers(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
     let written = OutliersWritten {
         report: &report,

@@ -77,13 +77,14 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         Method::Implicit => {}
     }
     let params = a.recon.implicit(&a.hood)?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut run = s.open_input(input, output, params.cost(), progress.as_ref())?;
+    let mut run = s.open_input(input, output, params.cost(), progress)?;
     if params.cell.is_some() {
         // The run needs the spacing anyway; kept in the store's manifest.
         let spacing = scanmesh::store::spacing::ensure_spacing(&mut run.ws.store)?;
-        s.check_stage_space(&run.ws.store, output, &params.cost_with_spacing(spacing))?;
+        s.lib
+            .check_stage_space(&run.ws.store, output, &params.cost_with_spacing(spacing))?;
     }
     let r = reconstruct_implicit(
         &mut run.ws.store,
@@ -91,7 +92,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         output,
         format,
         run.opts,
-        progress.as_ref(),
+        progress,
     )
     .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
     s.mesh_summary(&r.audit, super::closing(&r, t0, output));

@@ -14,16 +14,16 @@ pub fn run(
     format: MeshFormat,
     params: &DelaunayParams,
 ) -> Result<()> {
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut prepared = s.open_input(input, output, cost(), progress.as_ref())?;
+    let mut prepared = s.open_input(input, output, cost(), progress)?;
     let r = reconstruct_delaunay(
         &mut prepared.ws.store,
         params,
         output,
         format,
         prepared.opts,
-        progress.as_ref(),
+        progress,
     )
     .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
     .with_context(|| format!("reconstructing {}", input.display()))?;

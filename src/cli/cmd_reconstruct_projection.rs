@@ -15,16 +15,16 @@ pub fn run(
     format: MeshFormat,
     params: &ProjectionParams,
 ) -> Result<()> {
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
-    let mut prepared = s.open_input(input, output, params.cost(), progress.as_ref())?;
+    let mut prepared = s.open_input(input, output, params.cost(), progress)?;
     let r = reconstruct_projection(
         &mut prepared.ws.store,
         params,
         output,
         format,
         prepared.opts,
-        progress.as_ref(),
+        progress,
     )
     .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
     s.mesh_summary(&r.audit, super::closing(&r, t0, output));

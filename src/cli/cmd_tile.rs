@@ -30,16 +30,16 @@ pub fn run(a: TileArgs) -> Result<()> {
         bail!("{}: exists and is not empty", a.output.display());
     }
     place::check_writable_dir(&place::directory_of(&a.output), "output")?;
-    let progress = s.progress(false);
+    let progress = s.progress();
     let t0 = Instant::now();
     // Removed if the build is interrupted: a store without its manifest is
     // no store.
     let building = cleanup::register(&a.output);
-    let mut reader = open_reader(&a.input, s.read_options())?;
+    let mut reader = open_reader(&a.input, s.lib.read.clone())?;
     let cost = NormalParams::default().cost();
-    s.check_floor(&cost)?;
-    let opts = s.build_options(cost);
-    let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress.as_ref()) {
+    s.lib.check_floor(&cost)?;
+    let opts = s.lib.build_options(cost);
+    let mut store = match build_store(reader.as_mut(), &a.output, &opts, progress) {
         Ok(st) => st,
         Err(e) => {
             let _ = std::fs::remove_dir_all(&a.output);

@@ -19,7 +19,6 @@ mod cmd_run_job;
 mod cmd_status;
 mod cmd_tile;
 mod command;
-mod emit;
 mod hints;
 mod progress;
 mod report;
@@ -35,10 +34,10 @@ use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::memory::{cores, too_many_threads, too_much_memory};
 use scanmesh::mesh::MeshAudit;
-use scanmesh::pipeline::{KernelCost, MemoryBudget, Prepared, Progress, RunSettings};
-use scanmesh::rundir::Session;
+use scanmesh::pipeline::{KernelCost, MemoryBudget, NoProgress, Prepared, Progress, RunSettings};
+use scanmesh::rundir::{open_input, Session};
 use scanmesh::runlog::SharedRunLog;
-use scanmesh::store::{BuildOptions, Job, PointStore};
+use scanmesh::store::{Job, PointStore};
 use scanmesh::summary::Summary;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -192,7 +191,7 @@ pub struct RunDirArgs {
     /// With --run-dir: print a job script for GNU parallel or Slurm
     /// instead of running (tile stages as parallel jobs).
     #[arg(long, value_enum, requires = "run_dir")]
-    emit: Option<emit::Scheduler>,
+    emit: Option<Scheduler>,
     /// With --emit: jobs per tile stage.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     tasks: u32,
@@ -202,6 +201,25 @@ pub struct RunDirArgs {
     /// The job in its run directory, once the run is begun there.
     #[arg(skip)]
     session: Option<Session>,
+}
+
+/// `--emit`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Scheduler {
+    /// A shell script running each tile stage with GNU parallel.
+    Parallel,
+    /// A bash script submitting the jobs with sbatch: single jobs and
+    /// array jobs chained by `afterok` dependencies.
+    Slurm,
+}
+
+impl From<Scheduler> for scanmesh::rundir::Scheduler {
+    fn from(s: Scheduler) -> Self {
+        match s {
+            Scheduler::Parallel => Self::Parallel,
+            Scheduler::Slurm => Self::Slurm,
+        }
+    }
 }
 
 /// Which points of the input to process (`--classes`, `--returns`),
@@ -266,28 +284,32 @@ pub enum HoodKind {
     Knn,
 }
 
-/// Validated common options.
-#[derive(Clone, Debug)]
+/// Validated common options: the library's run settings, and what the
+/// command line keeps beside them.
 pub struct Settings {
-    pub mem: u64,
-    pub threads: usize,
-    pub tile_points: Option<u64>,
+    /// `--mem`, `--threads`, `--tile-points`, how the input is read
+    /// (`--skip-invalid`, `--scans`, `--classes`, `--returns`),
+    /// `--scratch-dir`, `--scratch`.
+    pub lib: RunSettings,
     pub quiet: bool,
-    pub policy: InvalidPolicy,
-    /// `--scans`: the E57 scans to read (`None`: all).
-    pub scans: Option<Vec<usize>>,
-    /// `--classes`, `--returns`: the points to process.
-    pub select: Selection,
     /// `--unselected keep`, with a selection: per-point outputs write the
     /// points it leaves out too, flagged.
     pub keep_unselected: bool,
-    pub scratch_dir: Option<PathBuf>,
-    /// `--scratch`: the most scratch disk the run may use.
-    pub scratch_limit: Option<u64>,
     /// This process's part of the run in its directory (`--run-dir`).
     pub run: Option<Session>,
     /// The run's log, for `--report`: its stages, summary line, what it left out.
     pub log: SharedRunLog,
+    /// Progress bars (none with `--quiet`), every stage timed into `log`.
+    progress: Box<dyn Progress>,
+}
+
+/// Bars on a terminal, nothing otherwise or when `quiet`; stage timings
+/// instead when `SCANMESH_TIMINGS` asks for them.
+fn shown(quiet: bool) -> Box<dyn Progress> {
+    progress::timings().unwrap_or_else(|| match quiet {
+        true => Box::new(NoProgress),
+        false => progress::bars(),
+    })
 }
 
 /// What of `--mem` and `--threads` this machine cannot keep, each naming
@@ -343,42 +365,38 @@ impl CommonArgs {
         if self.tile_points == Some(0) {
             bail!("--tile-points must be at least 1");
         }
+        let scratch_limit = self
+            .scratch
+            .as_deref()
+            .map(|s| scanmesh::units::parse_size(s).with_context(|| format!("--scratch {s}")))
+            .transpose()?;
+        let policy = match self.skip_invalid {
+            true => InvalidPolicy::Skip,
+            false => InvalidPolicy::Reject,
+        };
+        let select = self.select.selection();
         Ok(Settings {
-            mem,
-            threads,
-            tile_points: self.tile_points,
+            keep_unselected: self.unselected == Unselected::Keep && !select.is_all(),
+            lib: RunSettings {
+                budget: MemoryBudget::new(mem, threads),
+                tile_points: self.tile_points,
+                read: ReadOptions {
+                    policy,
+                    scans: self.scans.clone(),
+                    select,
+                },
+                scratch_dir: self.scratch_dir.clone(),
+                scratch_limit,
+            },
             quiet: self.quiet,
-            scratch_dir: self.scratch_dir.clone(),
-            scratch_limit: self
-                .scratch
-                .as_deref()
-                .map(|s| scanmesh::units::parse_size(s).with_context(|| format!("--scratch {s}")))
-                .transpose()?,
-            scans: self.scans.clone(),
-            select: self.select.selection(),
-            keep_unselected: self.unselected == Unselected::Keep
-                && !self.select.selection().is_all(),
             run: run.session.clone(),
             log: self.log.clone(),
-            policy: if self.skip_invalid {
-                InvalidPolicy::Skip
-            } else {
-                InvalidPolicy::Reject
-            },
+            progress: Box::new(self.log.timed(shown(self.quiet))),
         })
     }
 }
 
 impl Settings {
-    /// How to read the input file (policy and scan selection).
-    pub fn read_options(&self) -> ReadOptions {
-        ReadOptions {
-            policy: self.policy,
-            scans: self.scans.clone(),
-            select: self.select.clone(),
-        }
-    }
-
     /// Refuses `--unselected keep` for a command whose output has no row
     /// per point (`what` says what it writes).
     pub fn no_keep(&self, what: &str) -> Result<()> {
@@ -388,30 +406,10 @@ impl Settings {
         Ok(())
     }
 
-    pub fn budget(&self) -> MemoryBudget {
-        MemoryBudget::new(self.mem, self.threads)
-    }
-
-    /// The library's run settings these options make.
-    pub fn lib(&self) -> RunSettings {
-        RunSettings {
-            budget: self.budget(),
-            tile_points: self.tile_points,
-            read: self.read_options(),
-            scratch_dir: self.scratch_dir.clone(),
-            scratch_limit: self.scratch_limit,
-        }
-    }
-
-    /// Checks that some plan fits the promise whatever the point count
-    /// (the fixed costs and the smallest tiles), before any input is read.
-    pub fn check_floor(&self, cost: &KernelCost) -> Result<()> {
-        Ok(self.lib().check_floor(cost)?)
-    }
-
-    /// Tile sizes for a kernel: forced by --tile-points, else from the plan.
-    pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
-        self.lib().build_options(cost)
+    /// The input and how to read it again beside the processed rows, for
+    /// a per-point output with `--unselected keep`.
+    pub fn keep<'a>(&'a self, input: &'a Path) -> Option<(&'a Path, &'a ReadOptions)> {
+        self.keep_unselected.then_some((input, &self.lib.read))
     }
 
     /// The store to work on (`input` itself when it is one, else a scratch
@@ -425,31 +423,17 @@ impl Settings {
         cost: KernelCost,
         progress: &dyn Progress,
     ) -> Result<Prepared> {
-        let lib = self.lib();
-        let (prepared, reclaimed) = match &self.run {
-            Some(session) => session.open(&lib, input, output, cost, progress)?,
-            None => lib.open(input, output, cost, progress)?,
-        };
+        let (prepared, reclaimed) =
+            open_input(&self.lib, self.run.as_ref(), input, output, cost, progress)?;
         self.say_reclaimed(&reclaimed);
         self.say_skipped(&prepared.ws.store);
         Ok(prepared)
     }
 
-    /// Checks, once the store is built, that the stages' scratch beside it
-    /// and the output fit.
-    pub fn check_stage_space(
-        &self,
-        store: &PointStore,
-        output: &Path,
-        cost: &KernelCost,
-    ) -> Result<()> {
-        Ok(self.lib().check_stage_space(store, output, cost)?)
-    }
-
     /// Refuses `--scratch` for a command that keeps no scratch of its own
     /// to plan (its store or file is the output), rather than ignore it.
     pub fn no_scratch_limit(&self, command: &str) -> Result<()> {
-        match self.scratch_limit {
+        match self.lib.scratch_limit {
             Some(_) => anyhow::bail!(
                 "--scratch: `{command}` writes no planned scratch (the limit is for normals, curvature, outliers, features, neighbors and reconstruct)"
             ),
@@ -494,10 +478,19 @@ impl Settings {
         report::summary(&self.log, line);
     }
 
-    /// Progress bars (or nothing, when `--quiet` or `quiet`), every stage
-    /// timed into the run's log.
-    pub fn progress(&self, quiet: bool) -> Box<dyn Progress> {
-        progress::progress(self.quiet || quiet, &self.log)
+    /// Progress bars (or nothing, with `--quiet`), every stage timed into
+    /// the run's log.
+    pub fn progress(&self) -> &dyn Progress {
+        self.progress.as_ref()
+    }
+
+    /// These settings without progress bars when `off` (`features
+    /// --json`), the stages still timed into the run's log.
+    pub fn no_bars_if(mut self, off: bool) -> Self {
+        if off {
+            self.progress = Box::new(self.log.timed(shown(true)));
+        }
+        self
     }
 
     /// Prints `note` on stderr, if any, unless `--quiet`.
@@ -511,7 +504,7 @@ impl Settings {
     fn init_threads(&self) {
         // Only fails when a pool exists already, which is then kept.
         let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(self.threads)
+            .num_threads(self.lib.budget.threads)
             .build_global();
     }
 }

@@ -3,7 +3,6 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 use scanmesh::pipeline::{NoProgress, Progress};
-use scanmesh::runlog::SharedRunLog;
 use scanmesh::telemetry::Mark;
 use std::io::IsTerminal;
 use std::sync::Mutex;
@@ -130,26 +129,24 @@ impl Progress for Timings {
     }
 }
 
-/// Bars on a terminal, nothing otherwise or when `quiet`; every stage is
-/// timed into `log` for `--report` either way.
-pub fn progress(quiet: bool, log: &SharedRunLog) -> Box<dyn Progress> {
-    Box::new(log.timed(untimed(quiet)))
-}
-
-/// Bars on a terminal, nothing otherwise or when `quiet`, for a command
-/// that keeps no run log (`info`).
-pub fn untimed(quiet: bool) -> Box<dyn Progress> {
-    if std::env::var_os("SCANMESH_TIMINGS").is_some() {
+/// Stage timings on stderr when `SCANMESH_TIMINGS` is set (whatever
+/// `--quiet` says: it is asked for by name).
+pub fn timings() -> Option<Box<dyn Progress>> {
+    std::env::var_os("SCANMESH_TIMINGS").map(|_| -> Box<dyn Progress> {
         Box::new(Timings {
             start: Mutex::new(None),
             last_end: Mutex::new(Mark::now()),
         })
-    } else if quiet || !std::io::stderr().is_terminal() {
-        Box::new(NoProgress)
-    } else {
-        Box::new(Bars {
+    })
+}
+
+/// Bars when stderr is a terminal, nothing otherwise.
+pub fn bars() -> Box<dyn Progress> {
+    match std::io::stderr().is_terminal() {
+        true => Box::new(Bars {
             bar: Mutex::new(None),
-        })
+        }),
+        false => Box::new(NoProgress),
     }
 }
 

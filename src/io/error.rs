@@ -1,5 +1,6 @@
 //! Errors of the format layer: each names the file and what is wrong with it.
 
+use super::reasons::{E57Reason, LasReason, Trailing, UnwritableReason};
 use std::path::PathBuf;
 
 /// Errors of the format layer; every variant names the file it concerns.
@@ -63,8 +64,8 @@ pub enum IoError {
         /// Bytes after the declared data, where the body is binary (at
         /// least this many: counting stops after a bound).
         extra_bytes: Option<u64>,
-        /// What follows the declared data, in words.
-        found: String,
+        /// What follows the declared data.
+        found: Trailing,
     },
     /// The last line of a text body has no end of line, so it may be cut
     /// inside its last number (an unfinished copy or download).
@@ -103,15 +104,17 @@ pub enum IoError {
         /// The output path.
         path: PathBuf,
         /// Why it cannot be written.
-        reason: String,
+        reason: UnwritableReason,
     },
-    /// The LAS/LAZ library reported an error.
+    /// A LAS or LAZ file cannot be read or written: the LAS library's
+    /// error, or what scanmesh finds wrong.
     #[error("{path}: LAS: {reason}")]
     Las {
         /// The file concerned.
         path: PathBuf,
-        /// The LAS library's message.
-        reason: String,
+        /// What is wrong: the LAS library's error, or ours (boxed: the
+        /// error stays small).
+        reason: Box<LasReason>,
     },
     /// A point's value does not fit the LAS point format written.
     #[error("{path}: point {record} has {field} {value}; LAS point format {format} holds up to {max}: {}", holder(*.holds))]
@@ -136,8 +139,9 @@ pub enum IoError {
     E57 {
         /// The file concerned.
         path: PathBuf,
-        /// What is wrong.
-        reason: String,
+        /// What is wrong: the E57 library's error, or ours (boxed: the
+        /// error stays small).
+        reason: Box<E57Reason>,
     },
     /// The file has no header and no points.
     #[error("{path}: file is empty (no header, no points)")]

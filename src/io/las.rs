@@ -21,8 +21,8 @@ use super::las_file::las_error;
 use super::policy::Admitter;
 use super::source::BUF_CAPACITY;
 use super::{
-    Attribute, AttributeSet, Attributes, Format, InvalidPolicy, IoError, LasTransform, PointChunk,
-    PointReader, SourceInfo,
+    Attribute, AttributeSet, Attributes, Format, InvalidPolicy, IoError, LasReason, LasTransform,
+    PointChunk, PointReader, SourceInfo, Trailing,
 };
 use crate::geom::Aabb;
 use byteorder::{ByteOrder, LittleEndian};
@@ -199,7 +199,7 @@ fn check_las_tail(
             path: path.to_path_buf(),
             declared,
             extra_bytes: Some(t.bytes),
-            found: t.describe(Some(record)),
+            found: t.found(Some(record)),
         }),
     }
 }
@@ -229,15 +229,14 @@ fn check_laz_chunks(
     let chunks = table.as_ref();
     let found = if vlr.uses_variable_size_chunks() {
         let listed: u64 = chunks.iter().map(|c| c.point_count).sum();
-        (listed > declared).then(|| format!("its chunk table lists {listed} points"))
+        (listed > declared).then_some(Trailing::ChunkPoints { listed })
     } else {
         let size = u64::from(vlr.chunk_size()).max(1);
         let needed = declared.div_ceil(size).max(1);
-        (chunks.len() as u64 > needed).then(|| {
-            format!(
-                "its chunk table lists {} chunks of {size} points; {needed} would hold them",
-                chunks.len()
-            )
+        (chunks.len() as u64 > needed).then_some(Trailing::Chunks {
+            listed: chunks.len(),
+            size,
+            needed,
         })
     };
     match found {
@@ -410,7 +409,7 @@ impl LasReader {
 fn worker_died(path: &Path) -> IoError {
     IoError::Las {
         path: path.to_path_buf(),
-        reason: "the decoding thread stopped unexpectedly".into(),
+        reason: Box::new(LasReason::DecoderStopped),
     }
 }
 

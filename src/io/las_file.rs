@@ -13,7 +13,7 @@
 //! Records are read from their headers' lengths, each checked against the
 //! bytes there are before anything is allocated.
 
-use super::IoError;
+use super::{IoError, LasReason};
 use byteorder::{LittleEndian, ReadBytesExt, WriteBytesExt};
 use las::raw;
 use las::Version;
@@ -45,7 +45,7 @@ pub(crate) fn las_error(path: &Path, e: las::Error) -> IoError {
         las::Error::Io(e) => IoError::os(path, e),
         e => IoError::Las {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason: Box::new(LasReason::Library(e)),
         },
     }
 }

@@ -25,6 +25,7 @@ pub(crate) mod pcd;
 pub mod place;
 pub(crate) mod ply;
 mod policy;
+mod reasons;
 pub mod reclaim;
 pub(crate) mod scratch;
 pub mod select;
@@ -43,6 +44,7 @@ pub use obj::read_obj_mesh;
 pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
 pub use output::{mesh_format, not_held, output_spec, Carried, MeshFormat};
 pub use ply::read_mesh;
+pub use reasons::{E57Reason, E57Step, LasReason, ScanProblem, Trailing, UnwritableReason};
 pub use select::{LeftOut, Returns, Selection};
 pub use write::{create_writer, create_writer_with, LasOutput};
 

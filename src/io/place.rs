@@ -2,7 +2,7 @@
 //! a missing or read-only directory, or a volume too small for the run, is
 //! reported as what it is (and where), not as a failure to read the input.
 
-use super::IoError;
+use super::{IoError, UnwritableReason};
 use std::path::{Path, PathBuf};
 
 /// The directory a file path lands in (`.` for a bare name).
@@ -15,14 +15,14 @@ pub fn directory_of(path: &Path) -> PathBuf {
 
 /// Checks that `dir` exists, is a directory, and takes a new file; `what`
 /// names the role in the error (for example "output" or "scratch").
-pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), IoError> {
-    let fail = |reason: String| IoError::Unwritable {
+pub fn check_writable_dir(dir: &Path, what: &'static str) -> Result<(), IoError> {
+    let fail = |reason| IoError::Unwritable {
         path: dir.to_path_buf(),
-        reason: format!("{what} directory {reason}"),
+        reason,
     };
     match std::fs::metadata(dir) {
-        Err(e) => return Err(fail(format!("cannot be used: {e}"))),
-        Ok(m) if !m.is_dir() => return Err(fail("is not a directory".into())),
+        Err(cause) => return Err(fail(UnwritableReason::Unusable { role: what, cause })),
+        Ok(m) if !m.is_dir() => return Err(fail(UnwritableReason::NotADirectory { role: what })),
         Ok(_) => {}
     }
     let probe = dir.join(format!(".scanmesh-probe-{}", std::process::id()));
@@ -31,7 +31,7 @@ pub fn check_writable_dir(dir: &Path, what: &str) -> Result<(), IoError> {
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        Err(e) => Err(fail(format!("is not writable: {e}"))),
+        Err(cause) => Err(fail(UnwritableReason::NotWritable { role: what, cause })),
     }
 }
 
@@ -41,7 +41,7 @@ pub fn check_output(output: &Path) -> Result<(), IoError> {
     if output.is_dir() {
         return Err(IoError::Unwritable {
             path: output.to_path_buf(),
-            reason: "output is a directory".into(),
+            reason: UnwritableReason::OutputIsADirectory,
         });
     }
     check_writable_dir(&directory_of(output), "output")
@@ -77,7 +77,7 @@ pub fn check_space(
     output: u64,
 ) -> Result<(), IoError> {
     let same = device(scratch_dir).is_some() && device(scratch_dir) == device(output_dir);
-    let needs: Vec<(&Path, u64, &str)> = if same {
+    let needs: Vec<(&Path, u64, &'static str)> = if same {
         vec![(scratch_dir, scratch + output, "scratch files and output")]
     } else {
         vec![
@@ -91,12 +91,12 @@ pub fn check_space(
             if free - kept < bytes {
                 return Err(IoError::Unwritable {
                     path: dir.to_path_buf(),
-                    reason: format!(
-                        "the {what} need about {} here but only {} is free ({} of it kept free)",
-                        crate::units::human_bytes(bytes),
-                        crate::units::human_bytes(free),
-                        crate::units::human_bytes(kept)
-                    ),
+                    reason: UnwritableReason::NoSpace {
+                        what,
+                        needed: bytes,
+                        free,
+                        kept,
+                    },
                 });
             }
         }

@@ -2,7 +2,7 @@
 //! and decompressed transparently, and the first bytes of the inner content
 //! are kept so formats can be sniffed by content.
 
-use super::IoError;
+use super::{IoError, Trailing};
 use flate2::read::MultiGzDecoder;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Chain, Cursor, Read};
@@ -112,20 +112,15 @@ pub(crate) struct Tail {
 }
 
 impl Tail {
-    /// The tail in words: its size and, for a body of `record`-byte records,
-    /// how many whole records it would hold.
-    pub fn describe(&self, record: Option<u64>) -> String {
-        let at_least = if self.exact { "" } else { "at least " };
-        let mut s = format!("{at_least}{} bytes follow the declared data", self.bytes);
-        if let Some(size) = record.filter(|&r| r > 0) {
-            let (whole, rest) = (self.bytes / size, self.bytes % size);
-            let records = if whole == 1 { "record" } else { "records" };
-            s += &format!(", {at_least}{whole} whole {records} of {size} bytes");
-            if rest > 0 && self.exact {
-                s += &format!(" and {rest} bytes");
-            }
+    /// The tail as an error says what follows the declared data: its size
+    /// and, for a body of `record`-byte records, how many whole records it
+    /// would hold.
+    pub fn found(&self, record: Option<u64>) -> Trailing {
+        Trailing::Bytes {
+            bytes: self.bytes,
+            exact: self.exact,
+            record,
         }
-        s
     }
 }
 
@@ -181,7 +176,8 @@ mod tests {
                 bytes: 30,
                 exact: true
             }
-            .describe(Some(12)),
+            .found(Some(12))
+            .to_string(),
             "30 bytes follow the declared data, 2 whole records of 12 bytes and 6 bytes"
         );
     }

@@ -20,6 +20,12 @@ pub enum BadNormalParameter {
     Direction(DVec3),
     /// Orientation toward the scan stations of an input that names none.
     NoStations,
+    /// A sensor hint with another orientation than the automatic one.
+    SensorNotAuto,
+    /// Orientation toward a viewpoint, with no viewpoint given.
+    NoViewpoint,
+    /// A viewpoint with an orientation that does not go toward it.
+    ViewpointNotAsked,
 }
 
 impl std::fmt::Display for BadNormalParameter {
@@ -40,6 +46,15 @@ impl std::fmt::Display for BadNormalParameter {
             BadNormalParameter::NoStations => f.write_str(
                 "orientation toward the scan stations, but the input names no station \
                  (E57 scan poses give them)",
+            ),
+            BadNormalParameter::SensorNotAuto => {
+                f.write_str("a sensor hint goes with the automatic orientation only")
+            }
+            BadNormalParameter::NoViewpoint => {
+                f.write_str("orientation toward a viewpoint, but no viewpoint is given")
+            }
+            BadNormalParameter::ViewpointNotAsked => f.write_str(
+                "a viewpoint goes with the orientation toward it (or the automatic one) only",
             ),
         }
     }

@@ -8,6 +8,7 @@
 //! degenerate) and `flags.u8` ([`FLAG_DEGENERATE`], [`FLAG_UNORIENTED`]).
 
 mod bad_parameter;
+mod choice;
 mod components;
 mod contract;
 pub mod eigen;
@@ -101,6 +102,7 @@ impl Orientation {
 }
 
 pub use bad_parameter::BadNormalParameter;
+pub use choice::{OrientationChoice, OrientationKind};
 pub use evidence::{Evidence, EvidenceCheck, Sensor};
 pub use output::normals_output;
 

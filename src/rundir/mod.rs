@@ -25,6 +25,7 @@ mod dir;
 mod identity;
 mod liveness;
 mod processes;
+mod script;
 mod sealed;
 mod session;
 mod status;
@@ -34,7 +35,8 @@ pub use dir::{RunDir, MARKER_FILE};
 pub use identity::{fingerprint, Difference, Done, Fingerprint, RunIdentity};
 pub use liveness::ProcessRecord;
 pub use processes::{Processes, Running};
-pub use session::Session;
+pub use script::{job_script, Scheduler};
+pub use session::{open_input, Session};
 pub use status::{OutputState, RunStatus, StageTiles, StoreSize};
 
 use crate::io::IoError;

@@ -186,6 +186,25 @@ impl Session {
     }
 }
 
+/// The store a run works on, with its plan and run options: in the run
+/// directory when `session` keeps one ([`Session::open`]), else `input`
+/// itself when it is a store or a scratch store beside `output` built from
+/// it ([`RunSettings::open`]); and the scratch entries killed runs left
+/// that were removed on the way.
+pub fn open_input(
+    settings: &RunSettings,
+    session: Option<&Session>,
+    input: &Path,
+    output: &Path,
+    cost: KernelCost,
+    progress: &dyn Progress,
+) -> Result<(Prepared, Vec<PathBuf>), RunDirError> {
+    match session {
+        Some(session) => session.open(settings, input, output, cost, progress),
+        None => Ok(settings.open(input, output, cost, progress)?),
+    }
+}
+
 /// A job in words, for the log: `run`, `job --until STAGE`, `job --stage
 /// STAGE --share I/N`.
 fn job_text(job: &Job) -> String {

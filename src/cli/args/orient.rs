@@ -3,10 +3,13 @@
 //! their sign (`normals`).
 
 use crate::cli::HoodKind;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, Result};
 use clap::{Args, ValueEnum};
 use glam::DVec3;
-use scanmesh::normals::{EdgeCost, NormalHood, Orientation, Sensor};
+use scanmesh::normals::{
+    BadNormalParameter, EdgeCost, NormalHood, NormalsError, Orientation, OrientationChoice,
+    OrientationKind, Sensor,
+};
 use scanmesh::spatial::KnnBackend;
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
@@ -88,7 +91,7 @@ enum Cost {
     Offset,
 }
 
-#[derive(Clone, Copy, ValueEnum, PartialEq)]
+#[derive(Clone, Copy, ValueEnum)]
 enum SensorArg {
     /// Judge from the data.
     Auto,
@@ -98,7 +101,7 @@ enum SensorArg {
     Terrestrial,
 }
 
-#[derive(Clone, Copy, ValueEnum, PartialEq)]
+#[derive(Clone, Copy, ValueEnum)]
 enum Orient {
     /// From what the scan knows: stations, up (aerial), else the spanning tree.
     Auto,
@@ -134,43 +137,43 @@ impl OrientArgs {
     /// The orientation and the edge cost the flags ask for; an error names
     /// the flags that do not go together.
     pub fn orientation(&self) -> Result<(Orientation, EdgeCost)> {
-        if self.sensor != SensorArg::Auto && self.orient != Orient::Auto {
-            bail!("--sensor goes with --orient auto only");
-        }
-        let orientation = match (self.orient, self.viewpoint) {
-            (Orient::Viewpoint, None) => bail!("--orient viewpoint needs --viewpoint x,y,z"),
-            (Orient::Auto | Orient::Viewpoint, Some(v)) => Orientation::Viewpoint(v),
-            (Orient::Auto, None) => Orientation::Auto(match self.sensor {
+        let choice = OrientationChoice {
+            kind: match self.orient {
+                Orient::Auto => OrientationKind::Auto,
+                Orient::Mst => OrientationKind::SpanningTree,
+                Orient::Aerial => OrientationKind::Aerial,
+                Orient::Stations => OrientationKind::Stations,
+                Orient::Viewpoint => OrientationKind::Viewpoint,
+                Orient::Sources => OrientationKind::SixSources,
+                Orient::SingleSource => OrientationKind::SingleSource,
+                Orient::None => OrientationKind::None,
+            },
+            sensor: match self.sensor {
                 SensorArg::Auto => Sensor::Auto,
                 SensorArg::Aerial => Sensor::Aerial,
                 SensorArg::Terrestrial => Sensor::Terrestrial,
-            }),
-            (Orient::Mst, None) => Orientation::SpanningTree,
-            (Orient::Aerial, None) => Orientation::Aerial,
-            (Orient::Stations, None) => Orientation::Stations,
-            (Orient::None, _) => Orientation::None,
-            (
-                Orient::Mst
-                | Orient::Aerial
-                | Orient::Stations
-                | Orient::Sources
-                | Orient::SingleSource,
-                Some(_),
-            ) => {
-                bail!("--viewpoint goes with --orient viewpoint only")
-            }
-            (Orient::Sources, None) => Orientation::SixSources { tau: self.tau },
-            (Orient::SingleSource, None) => Orientation::SingleSource {
-                direction: self.source_direction,
-                tau: self.tau,
             },
+            viewpoint: self.viewpoint,
+            tau: self.tau,
+            direction: self.source_direction,
         };
-        if !(0.0..=1.0).contains(&self.tau) {
-            bail!("--tau must lie in [0, 1]");
-        }
-        if self.source_direction.try_normalize().is_none() {
-            bail!("--source-direction must be non-zero");
-        }
+        let orientation = choice.orientation().map_err(|e| match e {
+            NormalsError::BadParameter(bad) => match bad {
+                BadNormalParameter::SensorNotAuto => {
+                    anyhow!("--sensor goes with --orient auto only")
+                }
+                BadNormalParameter::NoViewpoint => {
+                    anyhow!("--orient viewpoint needs --viewpoint x,y,z")
+                }
+                BadNormalParameter::ViewpointNotAsked => {
+                    anyhow!("--viewpoint goes with --orient viewpoint only")
+                }
+                BadNormalParameter::Tau(_) => anyhow!("--tau must lie in [0, 1]"),
+                BadNormalParameter::Direction(_) => anyhow!("--source-direction must be non-zero"),
+                _ => NormalsError::BadParameter(bad).into(),
+            },
+            e => e.into(),
+        })?;
         let cost = match self.cost {
             Cost::Paper => EdgeCost::Paper,
             Cost::Offset => EdgeCost::TangentOffset,

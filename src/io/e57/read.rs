@@ -23,8 +23,8 @@ use super::seekbuf::SeekBuf;
 use crate::io::attributes::to_unsigned;
 use crate::io::policy::Admitter;
 use crate::io::{
-    Attribute, AttributeSet, AttributeValues, Format, IoError, PointChunk, PointReader,
-    ReadOptions, ScanStation, SourceInfo,
+    Attribute, AttributeSet, AttributeValues, E57Reason, E57Step, Format, IoError, PointChunk,
+    PointReader, ReadOptions, ScanStation, SourceInfo,
 };
 use ::e57::{CartesianCoordinate, PointCloud};
 use crossbeam::channel::{bounded, unbounded, Receiver, Sender};
@@ -78,10 +78,10 @@ pub struct E57Reader {
 }
 
 /// An e57 crate error as ours (its message already holds its source's).
-pub(crate) fn e57_error(path: &Path, what: &str, e: ::e57::Error) -> IoError {
+pub(crate) fn e57_error(path: &Path, step: E57Step, error: ::e57::Error) -> IoError {
     IoError::E57 {
         path: path.to_path_buf(),
-        reason: format!("{what}: {e}"),
+        reason: Box::new(E57Reason::Library { step, error }),
     }
 }
 
@@ -96,11 +96,19 @@ pub(crate) fn open_file(path: &Path) -> Result<(File57, Vec<ScanInfo>), IoError>
     if len < HEADER_BYTES {
         return Err(IoError::E57 {
             path: path.to_path_buf(),
-            reason: format!("truncated: {len} bytes, less than the {HEADER_BYTES}-byte header"),
+            reason: Box::new(E57Reason::Truncated {
+                bytes: len,
+                header: HEADER_BYTES,
+            }),
         });
     }
-    let reader = ::e57::E57Reader::new(SeekBuf::new(file))
-        .map_err(|e| e57_error(path, "cannot read the E57 header and XML", e))?;
+    let reader = ::e57::E57Reader::new(SeekBuf::new(file)).map_err(|e| {
+        e57_error(
+            path,
+            E57Step::Named("cannot read the E57 header and XML"),
+            e,
+        )
+    })?;
     let scans = reader
         .pointclouds()
         .iter()
@@ -123,11 +131,10 @@ fn selected(
     if let Some(&bad) = pick.iter().find(|&&i| i >= scans.len()) {
         return Err(IoError::E57 {
             path: path.to_path_buf(),
-            reason: format!(
-                "the scan selection names scan {bad}, but the file has {} (0..{})",
-                scans.len(),
-                scans.len().saturating_sub(1)
-            ),
+            reason: Box::new(E57Reason::NoSuchScan {
+                named: bad,
+                scans: scans.len(),
+            }),
         });
     }
     let mut out = pick.to_vec();
@@ -235,7 +242,7 @@ impl E57Reader {
 fn worker_died(path: &Path) -> IoError {
     IoError::E57 {
         path: path.to_path_buf(),
-        reason: "the decoding thread stopped unexpectedly".into(),
+        reason: Box::new(E57Reason::DecoderStopped),
     }
 }
 
@@ -268,10 +275,14 @@ fn decode_scan(
     if total == 0 {
         return Ok(());
     }
-    let what = |done: u64| format!("scan {}: record {done} of {total}", scan.index);
+    let what = |record: u64| E57Step::Record {
+        scan: scan.index,
+        record,
+        total,
+    };
     let mut points = file
         .pointcloud_simple(&scan.cloud)
-        .map_err(|e| e57_error(path, &what(0), e))?;
+        .map_err(|e| e57_error(path, what(0), e))?;
     // Coordinates only, untouched: the pose is applied here, normalised.
     points.apply_pose(false);
     points.spherical_to_cartesian(true);
@@ -287,8 +298,8 @@ fn decode_scan(
         for _ in 0..want {
             let p = match points.next() {
                 Some(Ok(p)) => p,
-                Some(Err(e)) => return Err(e57_error(path, &what(done), e)),
-                None => return Err(e57_error(path, &what(done), ended_early())),
+                Some(Err(e)) => return Err(e57_error(path, what(done), e)),
+                None => return Err(e57_error(path, what(done), ended_early())),
             };
             block.values.push(values_of(&p));
             block.recs.push(match p.cartesian {

@@ -8,7 +8,7 @@
 //! rather than let it scale the scan. A quaternion of length zero, or a
 //! non-finite pose, is an error.
 
-use crate::io::IoError;
+use crate::io::{E57Reason, IoError, ScanProblem};
 use ::e57::{PointCloud, RecordDataType, RecordName};
 use glam::{DMat3, DQuat, DVec3};
 use std::path::Path;
@@ -94,9 +94,9 @@ impl Transform {
 /// Checks one scan descriptor and describes it; `path` names the file in
 /// errors.
 pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<ScanInfo, IoError> {
-    let bad = |reason: String| IoError::E57 {
+    let bad = |problem| IoError::E57 {
         path: path.to_path_buf(),
-        reason: format!("scan {index}: {reason}"),
+        reason: Box::new(E57Reason::Scan { index, problem }),
     };
     let pose = match &pc.transform {
         None => Pose::IDENTITY,
@@ -108,14 +108,12 @@ pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<Sca
     };
     let (cartesian, spherical) = (pc.has_cartesian(), pc.has_spherical());
     if !cartesian && !spherical {
-        return Err(bad("has neither cartesian nor spherical coordinates".into()));
+        return Err(bad(ScanProblem::NoCoordinates));
     }
     // With no field taking a bit, the decoder could never tell where the
     // records end (the e57 crate would fill its queues without bound).
     if pc.records > 0 && pc.prototype.iter().all(|r| bits(&r.data_type) == 0) {
-        return Err(bad(
-            "every field is a constant of zero bits; such a scan cannot be decoded".into(),
-        ));
+        return Err(bad(ScanProblem::ZeroBitFields));
     }
     Ok(ScanInfo {
         index,
@@ -131,17 +129,16 @@ pub(crate) fn describe(path: &Path, index: usize, pc: &PointCloud) -> Result<Sca
 }
 
 /// Validates and normalises a pose.
-fn pose_from(q: [f64; 4], t: [f64; 3]) -> Result<Pose, String> {
+fn pose_from(q: [f64; 4], t: [f64; 3]) -> Result<Pose, ScanProblem> {
     if q.iter().chain(t.iter()).any(|v| !v.is_finite()) {
-        return Err(format!(
-            "pose is not finite (rotation {q:?}, translation {t:?})"
-        ));
+        return Err(ScanProblem::PoseNotFinite {
+            rotation: q,
+            translation: t,
+        });
     }
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     if !norm.is_finite() || norm <= 1e-12 {
-        return Err(format!(
-            "pose rotation quaternion {q:?} cannot be normalised"
-        ));
+        return Err(ScanProblem::RotationNotNormalisable(q));
     }
     Ok(Pose {
         rotation: q.map(|v| v / norm),

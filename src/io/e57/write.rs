@@ -13,7 +13,8 @@
 use super::read::e57_error;
 use crate::io::write::check_chunk;
 use crate::io::{
-    AtomicFile, Attribute, AttributeSet, Attributes, IoError, PointChunk, PointWriter, WriterSpec,
+    AtomicFile, Attribute, AttributeSet, Attributes, E57Reason, E57Step, IoError, PointChunk,
+    PointWriter, WriterSpec,
 };
 use ::e57::{Record, RecordDataType, RecordName, RecordValue};
 use crossbeam::channel::{bounded, Receiver, Sender};
@@ -76,7 +77,7 @@ impl E57Writer {
             Some(Ok(Err(e))) => e,
             _ => IoError::E57 {
                 path: self.path.clone(),
-                reason: "the writing thread stopped unexpectedly".into(),
+                reason: Box::new(E57Reason::WriterStopped),
             },
         }
     }
@@ -99,7 +100,7 @@ fn write_scan(
     attributes: AttributeSet,
     chunks: Receiver<Msg>,
 ) -> Result<(), IoError> {
-    let err = |what: &'static str| move |e| e57_error(path, what, e);
+    let err = |what: &'static str| move |e| e57_error(path, E57Step::Named(what), e);
     let mut file57 = ::e57::E57Writer::new(file, &guid("file")).map_err(err("cannot start"))?;
     let mut prototype = vec![
         Record::CARTESIAN_X_F64,

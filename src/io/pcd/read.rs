@@ -33,7 +33,7 @@ use crate::io::source::{binary_tail, read_full, Input, Tail};
 use crate::io::text::{self, Line};
 use crate::io::{
     Attribute, AttributeSet, AttributeValues, Format, InvalidPolicy, IoError, LeftOut, PointChunk,
-    PointReader, SourceInfo,
+    PointReader, SourceInfo, Trailing,
 };
 use byteorder::{ByteOrder, LittleEndian};
 use glam::{DVec3, Vec3};
@@ -278,7 +278,10 @@ impl PcdReader {
                         path: path.clone(),
                         declared: self.header.points,
                         extra_bytes: None,
-                        found: format!("line {line_no} follows the declared points"),
+                        found: Trailing::Line {
+                            line: *line_no,
+                            declared: "points",
+                        },
                     });
                 }
             },
@@ -306,7 +309,7 @@ fn trailing(
             path: path.to_path_buf(),
             declared,
             extra_bytes: Some(t.bytes),
-            found: t.describe(record),
+            found: t.found(record),
         }),
     }
 }

@@ -19,7 +19,7 @@ use super::record::{rest, skip_element, RecordDecoder, RecordError, Rest};
 use crate::io::policy::Admitter;
 use crate::io::source::{read_full, Input};
 use crate::io::{
-    AttributeValues, Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo,
+    AttributeValues, Format, InvalidPolicy, IoError, PointChunk, PointReader, SourceInfo, Trailing,
 };
 use byteorder::{BigEndian, ByteOrder, LittleEndian};
 use glam::{DVec3, Vec3};
@@ -213,8 +213,14 @@ pub(crate) fn ensure_end(
 ) -> Result<(), IoError> {
     let (extra_bytes, found) = match rest {
         Rest::End => return Ok(()),
-        Rest::Line(line) => (None, format!("line {line} follows the declared elements")),
-        Rest::Bytes(tail) => (Some(tail.bytes), tail.describe(record)),
+        Rest::Line(line) => (
+            None,
+            Trailing::Line {
+                line,
+                declared: "elements",
+            },
+        ),
+        Rest::Bytes(tail) => (Some(tail.bytes), tail.found(record)),
     };
     Err(IoError::TrailingData {
         path: path.to_path_buf(),

@@ -29,8 +29,8 @@ use crate::io::las_extra::{plan, ExtraPlan, Wanted};
 use crate::io::las_file::las_error;
 use crate::io::las_file::{Frame, RecordHeader, Stats, Vlr, LASZIP};
 use crate::io::{
-    AtomicFile, Attribute, AttributeMaxima, AttributeValues, IoError, LasSource, LasTransform,
-    PointChunk, PointWriter, WriterSpec,
+    AtomicFile, Attribute, AttributeMaxima, AttributeValues, IoError, LasReason, LasSource,
+    LasTransform, PointChunk, PointWriter, WriterSpec,
 };
 use byteorder::{ByteOrder, LittleEndian};
 use glam::DVec3;
@@ -212,27 +212,23 @@ fn laszip_vlr(path: &Path, format: u8, extra: u16) -> Result<(Vlr, LazVlr), IoEr
 /// The transform of points built from attributes: the spec's, or one
 /// chosen from its bounds.
 fn built_transform(path: &Path, spec: &WriterSpec) -> Result<LasTransform, IoError> {
-    let las_fail = |reason: &str| IoError::Las {
+    let las_fail = |reason| IoError::Las {
         path: path.to_path_buf(),
-        reason: reason.into(),
+        reason: Box::new(reason),
     };
     let transform = match (spec.las_transform, &spec.bounds) {
         (Some(t), _) => t,
         (None, Some(b)) => {
-            choose_las_transform(b).ok_or_else(|| las_fail("bounds are empty or not finite"))?
+            choose_las_transform(b).ok_or_else(|| las_fail(LasReason::EmptyBounds))?
         }
-        (None, None) => {
-            return Err(las_fail(
-                "LAS output needs the points' bounds or a scale/offset transform",
-            ))
-        }
+        (None, None) => return Err(las_fail(LasReason::NoBoundsOrTransform)),
     };
     let valid = transform.scale.is_finite()
         && transform.scale.cmpgt(DVec3::ZERO).all()
         && transform.offset.is_finite();
     match valid {
         true => Ok(transform),
-        false => Err(las_fail("scale must be finite and positive, offset finite")),
+        false => Err(las_fail(LasReason::BadTransform)),
     }
 }
 
@@ -415,10 +411,12 @@ fn quantise(t: &LasTransform, path: &Path, p: DVec3, record: u64) -> Result<[i32
     }
     Err(IoError::Las {
         path: path.to_path_buf(),
-        reason: format!(
-            "point {record} ({}, {}, {}) is outside the i32 range of scale {} offset {}",
-            p.x, p.y, p.z, t.scale, t.offset
-        ),
+        reason: Box::new(LasReason::OutOfRange {
+            record,
+            point: p,
+            scale: t.scale,
+            offset: t.offset,
+        }),
     })
 }
 

@@ -5,17 +5,17 @@
 //! range: the tile count is known only after ingest, when Slurm already
 //! has the array). Every job is `scanmesh run-job DIR ...`, stateless and
 //! idempotent: rerun after a failure, it finds the finished tiles and
-//! writes the same files. The jobs run the binary that wrote the script,
-//! by its absolute path, unless `SCANMESH` names another; every path is
-//! quoted for sh wherever it appears (Slurm's `--wrap` text is parsed by
+//! writes the same files. The jobs run the binary the caller names (the
+//! CLI: itself, by its absolute path), unless `SCANMESH` names another;
+//! every path is quoted for sh wherever it appears (Slurm's `--wrap` text is parsed by
 //! sh once more, on the node); a failed submission stops the Slurm script.
 
-use super::Settings;
-use clap::ValueEnum;
-use scanmesh::rundir::{RunDir, StageId};
+use super::{RunDir, StageId};
+use crate::memory::MemoryBudget;
 use std::fmt::Write;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+/// The scheduler a job script is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scheduler {
     /// A shell script running each tile stage with GNU parallel.
     Parallel,
@@ -24,18 +24,21 @@ pub enum Scheduler {
     Slurm,
 }
 
-/// The job script for `stages` of the run in `run`.
-pub fn script(
+/// The job script for `stages` of the run in `run`, each tile stage as
+/// `tasks` jobs, each job running `binary` (`run-job`) with `budget`'s
+/// threads (Slurm: its memory too).
+pub fn job_script(
     kind: Scheduler,
     run: &RunDir,
     stages: &[StageId],
     tasks: u32,
-    s: &Settings,
+    budget: MemoryBudget,
+    binary: &str,
 ) -> String {
     let steps = steps(stages, tasks);
     match kind {
-        Scheduler::Parallel => parallel(run, &steps),
-        Scheduler::Slurm => slurm(run, &steps, s),
+        Scheduler::Parallel => parallel(run, &steps, binary),
+        Scheduler::Slurm => slurm(run, &steps, budget, binary),
     }
 }
 
@@ -60,7 +63,7 @@ fn steps(stages: &[StageId], tasks: u32) -> Vec<Step> {
     steps
 }
 
-fn header(run: &RunDir, shell: &str, strict: &str) -> String {
+fn header(run: &RunDir, shell: &str, strict: &str, binary: &str) -> String {
     let mut out = format!("#!/bin/{shell}\n");
     let _ = writeln!(
         out,
@@ -75,30 +78,15 @@ fn header(run: &RunDir, shell: &str, strict: &str) -> String {
     out += "# SCANMESH=/path/to/scanmesh runs another binary than the one that\n";
     out += "# wrote the script (a compute node's PATH rarely has scanmesh).\n";
     let _ = writeln!(out, "{strict}");
-    let _ = writeln!(out, "SCANMESH=${{SCANMESH:-{}}}", quote(&this_binary()));
+    let _ = writeln!(out, "SCANMESH=${{SCANMESH:-{}}}", quote(binary));
     let _ = writeln!(out, "DIR={}", quote(&run.dir().to_string_lossy()));
     out
 }
 
-/// The absolute path of this binary, which the jobs run unless `SCANMESH`
-/// says otherwise.
-fn this_binary() -> String {
-    let Ok(exe) = std::env::current_exe() else {
-        return "scanmesh".to_string();
-    };
-    let text = exe.to_string_lossy().into_owned();
-    // Linux names a binary replaced since it started (a rebuild) so; the
-    // path itself then holds the new one.
-    match text.strip_suffix(" (deleted)") {
-        Some(path) if !exe.exists() => path.to_string(),
-        _ => text,
-    }
-}
-
-fn parallel(run: &RunDir, steps: &[Step]) -> String {
+fn parallel(run: &RunDir, steps: &[Step], binary: &str) -> String {
     // sh has no pipefail: the one pipeline ends in the command whose
     // status counts (parallel's).
-    let mut out = header(run, "sh", "set -eu");
+    let mut out = header(run, "sh", "set -eu", binary);
     out += "JOBS=${JOBS:-4}\n";
     // The jobs parallel starts take the paths from the environment: on
     // parallel's command line a path is split at blanks and its `{}`
@@ -126,8 +114,8 @@ fn parallel(run: &RunDir, steps: &[Step]) -> String {
     out
 }
 
-fn slurm(run: &RunDir, steps: &[Step], s: &Settings) -> String {
-    let mut out = header(run, "bash", "set -euo pipefail");
+fn slurm(run: &RunDir, steps: &[Step], budget: MemoryBudget, binary: &str) -> String {
+    let mut out = header(run, "bash", "set -euo pipefail", binary);
     // Slurm runs --wrap's text with sh on the node: every word in it is
     // quoted for sh again, here, since SCANMESH may come from the
     // environment.
@@ -136,17 +124,17 @@ fn slurm(run: &RunDir, steps: &[Step], s: &Settings) -> String {
     let _ = writeln!(
         out,
         "JOB=\"$(q \"$SCANMESH\") run-job $(q \"$DIR\") --threads {}\"",
-        s.threads
+        budget.threads
     );
     out += "# SBATCH_EXTRA: more sbatch options, split at blanks.\n";
     out += "read -r -a EXTRA <<< \"${SBATCH_EXTRA:-}\"\n";
     // The promise plus room for the binary and the kernel's page tables.
-    let mem_mb = s.mem / (1 << 20) + 64;
+    let mem_mb = budget.bytes / (1 << 20) + 64;
     // Slurm expands `%` in --output's path: `%%` is a `%` of the path.
     let _ = writeln!(
         out,
         "OPTS=(--job-name=scanmesh --cpus-per-task={} --mem={mem_mb}M \"--output=${{DIR//%/%%}}/slurm-%A_%a.out\")",
-        s.threads
+        budget.threads
     );
     out += "after=\"\"\n";
     out += SUBMIT;
