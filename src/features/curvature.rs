@@ -108,7 +108,7 @@ impl CurvatureKernel {
 impl TileKernel for CurvatureKernel {
     type Output = CurvatureTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "features: curvature"
     }
 

@@ -107,7 +107,7 @@ pub struct FeaturesTile {
 impl TileKernel for FeaturesKernel {
     type Output = FeaturesTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "features: lines"
     }
 

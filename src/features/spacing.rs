@@ -24,7 +24,7 @@ struct SpacingKernel {
 impl TileKernel for SpacingKernel {
     type Output = ExactSum;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "features: spacing"
     }
 

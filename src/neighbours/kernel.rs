@@ -73,7 +73,7 @@ struct Hood {
 impl TileKernel for NeighboursKernel {
     type Output = NeighboursTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         crate::store::StageId::Neighbours.name()
     }
 

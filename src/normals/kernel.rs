@@ -112,7 +112,7 @@ impl NormalsKernel {
 impl TileKernel for NormalsKernel {
     type Output = NormalsTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         crate::store::StageId::Normals.name()
     }
 

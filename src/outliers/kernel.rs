@@ -50,7 +50,7 @@ impl Sums {
 impl TileKernel for ScoreKernel {
     type Output = TileScores;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "outlier scores"
     }
 

@@ -20,7 +20,7 @@ struct Greedy {
 
 impl TileKernel for Greedy {
     type Output = usize;
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "greedy"
     }
     fn margin(&self) -> f64 {

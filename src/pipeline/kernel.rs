@@ -95,8 +95,10 @@ impl KernelError {
 pub trait TileKernel: Sync {
     /// The result of one tile, handed to the seam policy in tile order.
     type Output: Send;
-    /// Stage name shown in progress.
-    fn name(&self) -> &str;
+    /// Stage name shown in progress, saved tiles' directory and errors: a
+    /// literal (or a [`StageId`](crate::store::StageId)'s name), so an
+    /// error keeps it without a copy.
+    fn name(&self) -> &'static str;
     /// Margin to load first; the kernel asks for more when it finds it short.
     fn margin(&self) -> f64;
     /// Computes the tile's result from its core and margin points.

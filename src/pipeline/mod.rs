@@ -78,15 +78,14 @@ pub enum PipelineError {
     /// job): not a failure.
     #[error("stopped at stage `{stage}` as the job asked")]
     Stopped {
-        /// The stage the job stopped at (a kernel's name:
-        /// `TileKernel::name` lends it as `&str`, so it is owned here).
-        stage: String,
+        /// The stage the job stopped at ([`TileKernel::name`]).
+        stage: &'static str,
     },
     /// A job needs a stage whose tile jobs have not all finished.
     #[error("stage `{stage}` has {done} of {total} tiles done: its tile jobs must finish before this job")]
     StageIncomplete {
-        /// The unfinished stage (a kernel's name; see `Stopped`).
-        stage: String,
+        /// The unfinished stage ([`TileKernel::name`]).
+        stage: &'static str,
         /// Its tiles done.
         done: usize,
         /// Its tiles in all.
@@ -95,14 +94,14 @@ pub enum PipelineError {
     /// A tile job was asked of a stage that keeps no tile results.
     #[error("stage `{stage}` keeps no tile results, so it cannot run as tile jobs")]
     NotSplittable {
-        /// The stage (a kernel's name; see `Stopped`).
-        stage: String,
+        /// The stage ([`TileKernel::name`]).
+        stage: &'static str,
     },
     /// A saved tile result of a resumable run cannot be read back.
     #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({source})")]
     Codec {
-        /// The stage (a kernel's name; see `Stopped`).
-        stage: String,
+        /// The stage ([`TileKernel::name`]).
+        stage: &'static str,
         /// 0-based index of the tile.
         tile: usize,
         /// The encoder's or decoder's error.

@@ -46,7 +46,7 @@ pub fn run_tiles<K: TileKernel>(
         .and_then(|c| kernel.codec().map(|k| (c, k)));
     let work = Work::for_job(store.checkpoints(), kernel.name(), n, keep.is_some()).map_err(
         |e| match e {
-            PipelineError::Stopped { stage } => stop(store, &stage),
+            PipelineError::Stopped { stage } => stop(store, stage),
             e => e,
         },
     )?;
@@ -129,13 +129,11 @@ pub fn run_tiles<K: TileKernel>(
 }
 
 /// The job is done at `stage`: says so to whoever holds the checkpoints.
-fn stop(store: &PointStore, stage: &str) -> PipelineError {
+fn stop(store: &PointStore, stage: &'static str) -> PipelineError {
     if let Some(c) = store.checkpoints() {
         c.stop_at(stage);
     }
-    PipelineError::Stopped {
-        stage: stage.to_string(),
-    }
+    PipelineError::Stopped { stage }
 }
 
 /// How many of `tiles` a resumed run reads back, and the stage's name as
@@ -159,7 +157,7 @@ impl Work {
     /// What this process does of stage `stage` (`n` tiles) for its job.
     fn for_job(
         checkpoints: Option<&Checkpoints>,
-        stage: &str,
+        stage: &'static str,
         n: usize,
         kept: bool,
     ) -> Result<Work, PipelineError> {
@@ -173,24 +171,20 @@ impl Work {
         let this = |s: &str| Checkpoints::slug(s) == Checkpoints::slug(stage);
         match &c.job {
             Job::Whole => Ok(all),
-            Job::Until(s) if this(s) => Err(PipelineError::Stopped {
-                stage: stage.to_string(),
-            }),
+            Job::Until(s) if this(s) => Err(PipelineError::Stopped { stage }),
             Job::Until(_) => Ok(all),
             Job::Tiles { stage: s, tiles } if this(s) => match kept {
                 true => Ok(Work {
                     tiles: tiles.tiles(n).filter(|&t| !c.has(stage, t)).collect(),
                     to_seam: false,
                 }),
-                false => Err(PipelineError::NotSplittable {
-                    stage: stage.to_string(),
-                }),
+                false => Err(PipelineError::NotSplittable { stage }),
             },
             // A tile job of a later stage replays this one, complete.
             Job::Tiles { .. } => match c.count(stage, n) {
                 done if kept && done == n => Ok(all),
                 done => Err(PipelineError::StageIncomplete {
-                    stage: stage.to_string(),
+                    stage,
                     done: if kept { done } else { 0 },
                     total: n,
                 }),
@@ -222,7 +216,7 @@ fn fetch<K: TileKernel>(
     }
     let (out, margin, retries) = run_one(store, kernel, shares, t)?;
     let bytes = (codec.encode)(&out).map_err(|e| PipelineError::Codec {
-        stage: kernel.name().to_string(),
+        stage: kernel.name(),
         tile: t,
         source: Box::new(e),
     })?;

@@ -27,7 +27,7 @@ impl TileKernel for SourcesKernel {
     /// The tile's forest, sorted by [`Edge::key`].
     type Output = Vec<Edge>;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         crate::store::StageId::OrientSources.name()
     }
 

@@ -67,7 +67,7 @@ pub struct DelaunayKernel<'a> {
 impl TileKernel for DelaunayKernel<'_> {
     type Output = DelaunayTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "delaunay surface"
     }
 

@@ -53,7 +53,7 @@ struct ScaleKernel {
 impl TileKernel for ScaleKernel {
     type Output = Share;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "delaunay: median spacing"
     }
 

@@ -143,7 +143,7 @@ pub(crate) fn tile_bytes(points: u64, cubes: u64, per_cube: u64) -> u64 {
 impl TileKernel for ImplicitKernel {
     type Output = ImplicitTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         crate::store::StageId::MarchingCubes.name()
     }
 

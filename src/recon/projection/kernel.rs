@@ -56,7 +56,7 @@ pub struct ProjectionKernel {
 impl TileKernel for ProjectionKernel {
     type Output = ProjectionTile;
 
-    fn name(&self) -> &str {
+    fn name(&self) -> &'static str {
         "local projection"
     }
 
