@@ -14,12 +14,14 @@
 //! wound apart closes an odd cycle whose every other crossing is flatter,
 //! so it lies on the cycle's sharpest crease. Such an edge is cut (its
 //! worse triangle left out: the one whose sharpest other crossing is
-//! sharper) when some odd closed walk of at most [`TWIST_STEPS`] triangles
-//! runs through it: a twist round a hole. A longer odd walk is the
-//! surface's own (a Moebius band's runs round the whole band: 205 steps at
-//! 2k points, 696 at 20k), and its edge stays unwound and counted. The
-//! triangles left are wound again by the same order, and each set of the
-//! union-find is turned to a positive signed volume.
+//! sharper) when some odd closed walk through it is short beside its
+//! surface ([`twist_steps`]: a quarter of the square root of its set's
+//! triangles, at least [`TWIST_STEPS`]): a twist round a hole. A longer
+//! odd walk is the surface's own (a Moebius band's runs round the whole
+//! band: 205 steps at 2k points, 3.3 times the root of its 3,832
+//! triangles; 696 at 20k, 3.5 times), and its edge stays unwound and
+//! counted. The triangles left are wound again by the same order, and
+//! each set of the union-find is turned to a positive signed volume.
 //!
 //! Tiling: the order is the edges' angle (quantized to [`BINS_PER_RADIAN`])
 //! then their vertices' input-order ids, the normals are computed by the
@@ -44,10 +46,32 @@ use std::collections::HashSet;
 use std::io::{self, BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
-/// Longest odd closed walk of triangles cut as a twist (see the module
-/// doc): twice the dragon's longest (31), a third of the smallest Moebius
-/// band's (205).
+/// Longest odd closed walk of triangles always cut as a twist (see the
+/// module doc): twice the longest on the 1M dragon (31), a third of the
+/// smallest Moebius band's (205).
 pub(crate) const TWIST_STEPS: usize = 64;
+
+/// Longest odd walk searched for, whatever the set's size.
+const MOST_TWIST_STEPS: usize = 1024;
+
+/// Most triangle-and-parity states a search holds (about 8 MiB): a search
+/// whose walks of one length reach past it stops there, the walk found
+/// long (on a surface, walks of `k` steps reach about `k^2` triangles, so
+/// this is met near 300 steps). Checked between lengths, so it does not
+/// depend on the order neighbours are listed in.
+const MOST_WALK_STATES: usize = 1 << 18;
+
+/// Longest odd closed walk cut as a twist in a set of `triangles`: a
+/// quarter of their square root, at least [`TWIST_STEPS`], at most
+/// [`MOST_TWIST_STEPS`]. Scale-free: a twist's walk rings a hole, and its
+/// length in triangles grows with the sampling density as the root of the
+/// surface's triangles does (the 10M dragon's twists are three times the
+/// 1M's); a band's walk runs its whole length, which is the root of its
+/// triangles times the root of its length over its width, above one for
+/// any band longer than wide.
+fn twist_steps(triangles: u32) -> usize {
+    ((f64::from(triangles).sqrt() / 4.0) as usize).clamp(TWIST_STEPS, MOST_TWIST_STEPS)
+}
 
 /// Angle bins per radian of the dual edges' order (0.05 degrees each):
 /// fine enough that two crossings of one short cycle rarely share a bin,
@@ -57,7 +81,8 @@ pub(crate) const BINS_PER_RADIAN: f64 = 3600.0 / std::f64::consts::PI;
 /// RAM of the union-find's page cache at the least (the whole of it up to
 /// 1M triangles); more when the caller's room allows.
 const SETS_CACHE: usize = 8 << 20;
-/// RAM of the neighbours', the sums' and a caller's spool's page caches.
+/// RAM of the neighbours', the sets' sizes', the sums' and a caller's
+/// spool's page caches.
 pub(crate) const SMALL_CACHE: usize = 1 << 20;
 /// The dual edges' sort: a smaller buffer than the fans' (it fills while
 /// their merge reads).
@@ -70,10 +95,11 @@ const DUAL_SIZES: RunSizes = RunSizes {
 /// RAM the seam side holds after the tiles, at its peak: during the fans'
 /// merge its read buffers, the dual edges' sort buffer and the caches of
 /// the neighbours and the spool; during the dual edges' merge their read
-/// buffers, the union-find's cache and the small ones.
+/// buffers, the union-find's cache and the small ones; then the searches
+/// for odd walks (their states, 32 B each with the set's overhead).
 pub(crate) const RESIDENT_BYTES: u64 = max(
     RunSizes::DEFAULT.merge_bytes + DUAL_SIZES.chunk_bytes + 2 * SMALL_CACHE,
-    DUAL_SIZES.merge_bytes + SETS_CACHE + 3 * SMALL_CACHE + (1 << 20),
+    SETS_CACHE + 4 * SMALL_CACHE + max(DUAL_SIZES.merge_bytes, 32 * MOST_WALK_STATES),
 ) as u64;
 
 const fn max(a: usize, b: usize) -> usize {
@@ -302,8 +328,8 @@ pub(crate) struct Winding {
     pub components: u64,
     /// Sets holding an edge that could not be wound.
     pub non_orientable: u64,
-    /// Edges left unwound (each on an odd walk longer than
-    /// [`TWIST_STEPS`]).
+    /// Edges left unwound (each on an odd walk longer than a twist's,
+    /// [`twist_steps`]).
     pub unwound: u64,
 }
 
@@ -419,7 +445,8 @@ impl Untwist {
             }
             Ok(())
         })?;
-        let cut = cut_twists(&mut surface, spool, &conflicts, left_out)?;
+        let sizes = set_sizes(&mut sets, triangles, left_out, &beside)?;
+        let cut = cut_twists(&mut surface, spool, &conflicts, left_out, &mut sets, sizes)?;
         let mut unwound: Vec<u64> = conflicts.iter().map(|d| d.a).collect();
         if !cut.is_empty() {
             drop(sets);
@@ -459,11 +486,17 @@ fn cut_twists(
     spool: &mut Paged<Spooled>,
     conflicts: &[Dual],
     left_out: &[u64],
+    sets: &mut ExternalParitySets,
+    mut sizes: Paged<u32>,
 ) -> io::Result<Vec<u64>> {
     let mut cut: Vec<u64> = Vec::new();
     for d in conflicts {
         let gone = |t: u64| listed(left_out, t) || listed(&cut, t);
-        if gone(d.a) || gone(d.b) || !odd_walk(&mut surface.across, d, gone)? {
+        if gone(d.a) || gone(d.b) {
+            continue;
+        }
+        let steps = twist_steps(sizes.get(sets.find(d.a)?.0)?);
+        if !odd_walk(&mut surface.across, d, steps, gone)? {
             continue;
         }
         let mut a = with_fans(surface, spool, d.a, gone)?;
@@ -624,15 +657,41 @@ fn fan_side(
     Ok(None)
 }
 
-/// Whether some odd closed walk of at most [`TWIST_STEPS`] triangles runs
-/// through `d`: a walk from `d.b` back to `d.a` whose crossings, with `d`,
-/// cannot all be wound (breadth first over triangle and parity, never
-/// through a triangle `gone`).
-fn odd_walk(across: &mut Paged<Across>, d: &Dual, gone: impl Fn(u64) -> bool) -> io::Result<bool> {
+/// Triangles per set of the first pass (by root), those `left_out` not
+/// counted.
+fn set_sizes(
+    sets: &mut ExternalParitySets,
+    triangles: u64,
+    left_out: &[u64],
+    beside: &Path,
+) -> io::Result<Paged<u32>> {
+    let mut sizes = Paged::new(scratch_beside(beside)?, SMALL_CACHE);
+    let mut out = left_out.iter().peekable();
+    for t in 0..triangles {
+        if out.next_if_eq(&&t).is_some() {
+            continue;
+        }
+        let root = sets.find(t)?.0;
+        let n: u32 = sizes.get(root)?;
+        sizes.set(root, n.saturating_add(1))?;
+    }
+    Ok(sizes)
+}
+
+/// Whether some odd closed walk of at most `steps` triangles runs through
+/// `d`: a walk from `d.b` back to `d.a` whose crossings, with `d`, cannot
+/// all be wound (breadth first over triangle and parity, never through a
+/// triangle `gone`).
+fn odd_walk(
+    across: &mut Paged<Across>,
+    d: &Dual,
+    steps: usize,
+    gone: impl Fn(u64) -> bool,
+) -> io::Result<bool> {
     let target = (d.a, !d.same_way);
     let mut seen = HashSet::from([(d.b, false)]);
     let mut frontier = vec![(d.b, false)];
-    for _ in 1..TWIST_STEPS {
+    for _ in 1..steps {
         let mut next = Vec::new();
         for (t, parity) in frontier {
             for (w, _, same_way) in across.get(t)?.crossings() {
@@ -645,7 +704,7 @@ fn odd_walk(across: &mut Paged<Across>, d: &Dual, gone: impl Fn(u64) -> bool) ->
                 }
             }
         }
-        if next.is_empty() {
+        if next.is_empty() || seen.len() > MOST_WALK_STATES {
             break;
         }
         frontier = next;
@@ -816,6 +875,16 @@ pub(crate) mod tests {
     /// Input ids equal to the store indices, and the triangles in order.
     fn identity(points: usize, tris: usize) -> (Vec<u64>, Vec<usize>) {
         ((0..points as u64).collect(), (0..tris).collect())
+    }
+
+    /// The twist's length follows the set's size, within its bounds.
+    #[test]
+    fn twist_length_grows_with_the_root_of_the_surface() {
+        assert_eq!(twist_steps(0), TWIST_STEPS);
+        assert_eq!(twist_steps(3_832), TWIST_STEPS);
+        assert_eq!(twist_steps(2_000_000), 353);
+        assert_eq!(twist_steps(20_000_000), 1_118.min(MOST_TWIST_STEPS));
+        assert_eq!(twist_steps(u32::MAX), MOST_TWIST_STEPS);
     }
 
     /// A long twist is the surface's own: nothing cut, one set left
