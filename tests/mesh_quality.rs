@@ -3,6 +3,7 @@
 //! invariance under relabelling.
 
 use glam::{DVec2, DVec3};
+use scanmesh::mesh::shapes::moebius;
 use scanmesh::mesh::{quality, shapes, Mesh, QualityReport};
 
 fn v(x: f64, y: f64, z: f64) -> DVec3 {
@@ -225,31 +226,6 @@ fn icosphere_is_genus_zero_at_every_level() {
         let exact = 4.0 * std::f64::consts::PI;
         assert!(r.total_area < exact, "inscribed polyhedron has less area");
     }
-}
-
-/// Moebius strip: `n` quads around a circle, the strip's two rails swapped
-/// where it closes (the half twist).
-fn moebius(n: u32) -> Mesh {
-    let mut vertices = Vec::new();
-    for i in 0..n {
-        let u = std::f64::consts::TAU * i as f64 / n as f64;
-        let (radial, up) = (v(u.cos(), u.sin(), 0.0), v(0.0, 0.0, 1.0));
-        let across = radial * (u / 2.0).cos() + up * (u / 2.0).sin();
-        for s in [-0.3, 0.3] {
-            vertices.push(radial * 2.0 + across * s);
-        }
-    }
-    let mut triangles = Vec::new();
-    for i in 0..n {
-        let (a, b) = (2 * i, 2 * i + 1);
-        let (c, d) = if i + 1 < n {
-            (2 * i + 2, 2 * i + 3)
-        } else {
-            (1, 0)
-        };
-        triangles.extend([[a, c, b], [b, c, d]]);
-    }
-    Mesh::new(vertices, triangles)
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! Procedural meshes with known geometry and topology, for tests, benches
-//! and demos: a subdivided icosahedron (sphere, genus 0), a torus (genus 1)
-//! and a planar grid (a disc with one boundary loop). All consistently
-//! oriented, outward normals for the closed ones.
+//! and demos: a subdivided icosahedron (sphere, genus 0), a torus (genus 1),
+//! a planar grid (a disc with one boundary loop), all consistently
+//! oriented (outward normals for the closed ones), and a Moebius strip
+//! (not orientable).
 
 use super::Mesh;
 use glam::DVec3;
@@ -43,6 +44,33 @@ fn subdivide(mesh: &Mesh) -> Mesh {
         let bc = midpoint(b, c, &mut vertices);
         let ca = midpoint(c, a, &mut vertices);
         triangles.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// Moebius strip: `n` quads (two triangles each) round a circle of radius
+/// 2, 0.6 wide, its two rails swapped where it closes (the half twist):
+/// one boundary loop, Euler characteristic 0, not orientable; its odd
+/// cycle of triangles is `2 n` long.
+pub fn moebius(n: u32) -> Mesh {
+    let mut vertices = Vec::with_capacity(2 * n as usize);
+    for i in 0..n {
+        let u = std::f64::consts::TAU * i as f64 / n as f64;
+        let radial = DVec3::new(u.cos(), u.sin(), 0.0);
+        let across = radial * (u / 2.0).cos() + DVec3::Z * (u / 2.0).sin();
+        for s in [-0.3, 0.3] {
+            vertices.push(radial * 2.0 + across * s);
+        }
+    }
+    let mut triangles = Vec::with_capacity(2 * n as usize);
+    for i in 0..n {
+        let (a, b) = (2 * i, 2 * i + 1);
+        let (c, d) = if i + 1 < n {
+            (2 * i + 2, 2 * i + 3)
+        } else {
+            (1, 0)
+        };
+        triangles.extend([[a, c, b], [b, c, d]]);
     }
     Mesh::new(vertices, triangles)
 }

@@ -850,26 +850,8 @@ pub(crate) mod tests {
 
     /// A Moebius strip of `n` quads (its odd cycle: `2 n` triangles).
     fn moebius(n: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let mut points = Vec::new();
-        for i in 0..n {
-            let u = std::f64::consts::TAU * i as f64 / n as f64;
-            let radial = DVec3::new(u.cos(), u.sin(), 0.0);
-            let across = radial * (u / 2.0).cos() + DVec3::Z * (u / 2.0).sin();
-            for s in [-0.3, 0.3] {
-                points.push(radial * 2.0 + across * s);
-            }
-        }
-        let mut tris = Vec::new();
-        for i in 0..n {
-            let (a, b) = (2 * i, 2 * i + 1);
-            let (c, d) = if i + 1 < n {
-                (2 * i + 2, 2 * i + 3)
-            } else {
-                (1, 0)
-            };
-            tris.extend([[a, c, b], [b, c, d]]);
-        }
-        (points, tris)
+        let m = crate::mesh::shapes::moebius(n);
+        (m.vertices, m.triangles)
     }
 
     /// Input ids equal to the store indices, and the triangles in order.
