@@ -2,7 +2,8 @@
 //! cutting the short twists that keep an orientable surface from being
 //! wound.
 //!
-//! Paper 4 (section 2.4) leaves its triangles unoriented; a mesh needs one
+//! Paper 4 outputs a 2-manifold triangle set and leaves its winding open
+//! (it handles non-orientable surfaces, a Moebius strip); a mesh needs one
 //! winding. Walking the triangles breadth first winds a surface as its
 //! walk meets it, so where a small ring of triangles has turned over round
 //! a hole (the 1M noisy dragon: every odd cycle of triangles 14-31 steps
@@ -22,6 +23,13 @@
 //! triangles; 696 at 20k, 3.5 times), and its edge stays unwound and
 //! counted. The triangles left are wound again by the same order, and
 //! each set of the union-find is turned to a positive signed volume.
+//!
+//! Cutting is a deviation from paper 4, which keeps every triangle it
+//! selects: where its selection turns a ring over round a hole (its
+//! delta-dense condition, delta < r_max / 2, fails in sparse or thin
+//! places), an orientable surface would come out non-orientable, which
+//! most tools downstream refuse; the cut costs about 0.007 % of the
+//! triangles on the noisy dragon.
 //!
 //! Tiling: the order is the edges' angle (quantized to [`BINS_PER_RADIAN`])
 //! then their vertices' input-order ids, the normals are computed by the
