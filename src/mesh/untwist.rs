@@ -453,8 +453,12 @@ impl Untwist {
             }
             Ok(())
         })?;
-        let sizes = set_sizes(&mut sets, triangles, left_out, &beside)?;
-        let cut = cut_twists(&mut surface, spool, &conflicts, left_out, &mut sets, sizes)?;
+        let cut = if conflicts.is_empty() {
+            Vec::new()
+        } else {
+            let sizes = set_sizes(&mut sets, triangles, left_out, &beside)?;
+            cut_twists(&mut surface, spool, &conflicts, left_out, &mut sets, sizes)?
+        };
         let mut unwound: Vec<u64> = conflicts.iter().map(|d| d.a).collect();
         if !cut.is_empty() {
             drop(sets);
