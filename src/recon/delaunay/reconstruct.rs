@@ -35,7 +35,7 @@ use crate::mesh::{MeshAudit, MeshError, MeshFormat, MeshWriter};
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::store::PointStore;
 use glam::DVec3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Margin first loaded, in store spacings: the doubt from the loaded
 /// region's faces reaches about 90 spacings in on the noisy dragon (the
@@ -240,12 +240,11 @@ pub fn reconstruct_delaunay(
 struct Seams {
     writer: MeshWriter,
     /// Every triangle as its tile listed it, with its signed volume.
-    spool: Option<Paged<Spooled>>,
+    spool: Paged<Spooled>,
     /// Every triangle's edges, for the edges of more than two and the
     /// dual edges (taken at the end).
-    fans: Option<Fans>,
-    untwist: Option<Untwist>,
-    beside: PathBuf,
+    fans: Fans,
+    untwist: Untwist,
     report: DelaunayReport,
 }
 
@@ -256,10 +255,9 @@ impl Seams {
     fn new(writer: MeshWriter, output: &Path) -> Result<Self, DelaunayReconError> {
         Ok(Seams {
             writer,
-            spool: None,
-            fans: Some(Fans::new(output, RunSizes::DEFAULT)),
-            untwist: Some(Untwist::new(output)?),
-            beside: output.to_path_buf(),
+            spool: Paged::new(scratch_beside(output)?, SPOOL_CACHE),
+            fans: Fans::new(output, RunSizes::DEFAULT),
+            untwist: Untwist::new(output)?,
             report: DelaunayReport::default(),
         })
     }
@@ -278,17 +276,12 @@ impl Seams {
         self.writer.add_vertices(&vertices)?;
         let mut ids = Vec::new();
         store.read_indices(entry.start, entry.count, &mut ids)?;
-        let untwist = self.untwist.as_mut().ok_or_else(gone)?;
-        untwist.add_ids(entry.start, &ids)?;
-        if self.spool.is_none() {
-            self.spool = Some(Paged::new(scratch_beside(&self.beside)?, SPOOL_CACHE));
-        }
-        let spool = self.spool.as_mut().ok_or_else(gone)?;
-        let fans = self.fans.as_mut().ok_or_else(gone)?;
+        self.untwist.add_ids(entry.start, &ids)?;
         for ((t, &normal), &volume6) in tile.tris.iter().zip(&tile.normals).zip(&tile.volumes) {
             let corners = t.map(|v| v as u32);
-            spool.set(self.report.triangles, Spooled { corners, volume6 })?;
-            fans.add(corners, normal)?;
+            self.spool
+                .set(self.report.triangles, Spooled { corners, volume6 })?;
+            self.fans.add(corners, normal)?;
             self.report.triangles += 1;
         }
         let r = &tile.report;
@@ -307,16 +300,17 @@ impl Seams {
     }
 
     fn finish(
-        mut self,
+        self,
         store: &PointStore,
         room: Option<u64>,
     ) -> Result<DelaunayReport, DelaunayReconError> {
-        let mut spool = match self.spool.take() {
-            Some(spool) => spool,
-            None => Paged::new(scratch_beside(&self.beside)?, SPOOL_CACHE),
-        };
-        let fans = self.fans.take().ok_or_else(gone)?;
-        let mut untwist = self.untwist.take().ok_or_else(gone)?;
+        let Seams {
+            mut writer,
+            mut spool,
+            fans,
+            mut untwist,
+            mut report,
+        } = self;
         let mut exact = Vec::new();
         let mended = fans.mend(
             |v| {
@@ -327,17 +321,16 @@ impl Seams {
             },
             |twin| untwist.add(&twin),
         )?;
-        self.report.non_manifold_mended = mended.edges;
-        self.report.fins_left_out = mended.left_out.len() as u64;
-        let mut winding =
-            untwist.wind(self.report.triangles, &mended.left_out, &mut spool, room)?;
-        self.report.twists_cut = winding.cut;
-        self.report.unwound_edges = winding.unwound;
-        self.report.components = winding.components;
-        self.report.non_orientable = winding.non_orientable;
+        report.non_manifold_mended = mended.edges;
+        report.fins_left_out = mended.left_out.len() as u64;
+        let mut winding = untwist.wind(report.triangles, &mended.left_out, &mut spool, room)?;
+        report.twists_cut = winding.cut;
+        report.unwound_edges = winding.unwound;
+        report.components = winding.components;
+        report.non_orientable = winding.non_orientable;
         let mut removed = std::mem::take(&mut winding.removed).into_iter().peekable();
         let mut batch = Vec::with_capacity(1 << 16);
-        for index in 0..self.report.triangles {
+        for index in 0..report.triangles {
             if removed.next_if_eq(&index).is_some() {
                 continue;
             }
@@ -347,20 +340,14 @@ impl Seams {
             }
             batch.push(t);
             if batch.len() == batch.capacity() {
-                self.writer.add_triangles(&batch)?;
+                writer.add_triangles(&batch)?;
                 batch.clear();
             }
         }
-        self.writer.add_triangles(&batch)?;
-        let written = self.writer.finish()?;
-        (self.report.vertices, self.report.triangles) = written.counts();
-        self.report.audit = written.audit;
-        Ok(self.report)
+        writer.add_triangles(&batch)?;
+        let written = writer.finish()?;
+        (report.vertices, report.triangles) = written.counts();
+        report.audit = written.audit;
+        Ok(report)
     }
-}
-
-/// The seam side's state was taken before its end: a fault of this
-/// module, reported as an I/O error rather than a panic.
-fn gone() -> std::io::Error {
-    std::io::Error::other("the seam side's scratch was closed before the run ended")
 }
