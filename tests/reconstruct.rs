@@ -319,9 +319,48 @@ fn torus_scan() -> Vec<DVec3> {
     scan.points
 }
 
+/// Flat blocks re-triangulated (issue 43): each tile owns whole blocks,
+/// so what a block becomes does not depend on the tiling, open or closed;
+/// the merged mesh has fewer triangles, the same rim and no fold.
+#[test]
+fn tiled_flat_blocks_equal_untiled_and_keep_the_rim() {
+    let scan = generate(&Shape::terrain(), 40_000, 0.002, 9).expect("generate");
+    for closed in [false, true] {
+        let merging = ImplicitParams {
+            closed,
+            flat_tolerance: Some(0.1),
+            ..ImplicitParams::default()
+        };
+        let merged = tiled_equals_untiled_with(&scan.points, &merging);
+        let kept = ImplicitParams {
+            flat_tolerance: Some(0.0),
+            ..merging
+        };
+        let all = reconstruct_with(&scan.points, u64::MAX, 2, &kept);
+        assert!(merged.report.merged_triangles > 0);
+        assert_eq!(
+            merged.mesh.triangles.len() as u64 + merged.report.merged_triangles,
+            all.mesh.triangles.len() as u64
+        );
+        let q = (&merged.quality, &all.quality);
+        assert_eq!(q.0.boundary_edges, q.1.boundary_edges);
+        assert_eq!(q.0.euler_characteristic, q.1.euler_characteristic);
+        assert_eq!((q.0.non_manifold_edges, q.0.inconsistent_edges), (0, 0));
+        assert_eq!(q.0.watertight, closed);
+    }
+}
+
 fn tiled_equals_untiled(points: &[DVec3], closed: bool) {
-    let whole = reconstruct(points, u64::MAX, 2, closed);
-    let tiled = reconstruct(points, 500, 2, closed);
+    let params = ImplicitParams {
+        closed,
+        ..ImplicitParams::default()
+    };
+    tiled_equals_untiled_with(points, &params);
+}
+
+fn tiled_equals_untiled_with(points: &[DVec3], params: &ImplicitParams) -> Recon {
+    let whole = reconstruct_with(points, u64::MAX, 2, params);
+    let tiled = reconstruct_with(points, 500, 2, params);
     assert!(
         tiled.report.run.tiles >= 64,
         "{} tiles",
@@ -341,6 +380,7 @@ fn tiled_equals_untiled(points: &[DVec3], closed: bool) {
     // The seam maps forget each vertex once its last tile is stitched, so
     // nothing but what a hole needs is left at the end.
     assert_eq!(tiled.report.seam_left, 0);
+    tiled
 }
 
 #[test]

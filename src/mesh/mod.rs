@@ -30,7 +30,7 @@ pub(crate) mod write;
 
 mod bvh;
 pub(crate) mod clearance;
-mod closest;
+pub(crate) mod closest;
 pub(crate) mod intersect;
 mod nearest;
 mod sampling;

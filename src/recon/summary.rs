@@ -31,8 +31,8 @@ impl fmt::Display for Summary<'_, ImplicitReport> {
     }
 }
 
-/// " (P small pieces dropped, A % of the surface closed away from the
-/// data)", the parts that apply.
+/// " (A % of the surface closed away from the data, M triangles fewer in
+/// flat blocks, P small pieces dropped)", the parts that apply.
 fn implicit_changes(r: &ImplicitReport) -> String {
     let p = r.pieces;
     let mut parts = Vec::new();
@@ -41,6 +41,12 @@ fn implicit_changes(r: &ImplicitReport) -> String {
         parts.push(format!(
             "{:.2} % of the surface closed away from the data",
             100.0 * r.away_triangles as f64 / drawn.max(1) as f64
+        ));
+    }
+    if r.merged_triangles > 0 {
+        parts.push(format!(
+            "{} triangles fewer in flat blocks",
+            r.merged_triangles
         ));
     }
     if p.pieces_dropped > 0 {

@@ -392,30 +392,6 @@ pub(crate) fn cubes_of(cells: &[[i64; 3]]) -> Result<Vec<u64>, LatticeError> {
     Ok(keys)
 }
 
-/// The owned cube box (half-open, cube indices) of a core box.
-pub(crate) fn owned_cubes(lattice: &Lattice, core: &Aabb) -> ([i64; 3], [i64; 3]) {
-    let first = |v: f64, a: usize| -> i64 {
-        if v == f64::NEG_INFINITY {
-            return i64::MIN / 4;
-        }
-        if v == f64::INFINITY {
-            return i64::MAX / 4;
-        }
-        // The first cube whose min corner is >= v.
-        let mut i = ((v - lattice.origin[a]) / lattice.cell).floor() as i64;
-        while lattice.corner([i, i, i])[a] < v {
-            i += 1;
-        }
-        while lattice.corner([i - 1, i - 1, i - 1])[a] >= v {
-            i -= 1;
-        }
-        i
-    };
-    let lo = [0, 1, 2].map(|a| first(core.min[a], a));
-    let hi = [0, 1, 2].map(|a| first(core.max[a], a));
-    (lo, hi)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

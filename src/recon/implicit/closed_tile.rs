@@ -9,10 +9,10 @@
 //! its corners all share that sign and it holds nothing.
 
 use super::closed::{
-    cells_round_near, cubes_of, from_field, near_corners, owned_cubes, to_field, touching_cubes,
-    CoarseValues, Everywhere, Supers, COARSE,
+    cells_round_near, cubes_of, from_field, near_corners, to_field, touching_cubes, CoarseValues,
+    Everywhere, Supers, COARSE,
 };
-use super::cubes::{corner_of, occupied, owns};
+use super::cubes::{corner_of, occupied, owned_cubes, owns};
 use super::dilate::dilate;
 use super::kernel::ImplicitKernel;
 use super::refine::CornerValue;

@@ -3,6 +3,7 @@
 //! cube, and the forward cursor that reads the corner values of cubes
 //! visited in key order (the marching loop's and the surface walk's).
 
+use super::blocks::{block_of, BLOCK};
 use super::lattice::{edge_from_key, edge_key, Lattice, LatticeError};
 use super::refine::CornerValue;
 use super::sdf::Known;
@@ -112,10 +113,11 @@ fn corner_keys(cube: [i64; 3]) -> Result<[u64; 8], KernelError> {
     Ok(keys)
 }
 
-/// Whether the tile with core box `core` owns `cube`: its min corner lies
-/// in the core, half-open, so the cores' owned cubes partition the lattice.
+/// Whether the tile with core box `core` owns `cube`: the min corner of
+/// its block ([`super::blocks`]) lies in the core, half-open, so the cores'
+/// owned blocks partition the lattice and a block is one tile's whole.
 pub fn owns(lattice: &Lattice, core: &Aabb, cube: [i64; 3]) -> bool {
-    let p = lattice.corner(cube);
+    let p = lattice.corner(block_of(cube).map(|b| b * BLOCK));
     (0..3).all(|a| core.min[a] <= p[a] && p[a] < core.max[a])
 }
 
@@ -123,18 +125,11 @@ pub fn owns(lattice: &Lattice, core: &Aabb, cube: [i64; 3]) -> bool {
 const FAR: f64 = (1u64 << 40) as f64;
 
 /// Cube index bounds (inclusive) holding every cube within `pad` cubes of
-/// one whose min corner lies in `core`: a little wider is harmless,
-/// narrower is not.
+/// one the tile with core `core` owns ([`owned_cubes`]), and one more: a
+/// little wider is harmless, narrower is not.
 pub(crate) fn cube_range(lattice: &Lattice, core: &Aabb, pad: i64) -> [[i64; 2]; 3] {
-    let (o, c) = (lattice.origin, lattice.cell);
-    // Clamped before the cast: an untiled run's core is infinite.
-    let index = |v: f64| ((v / c).floor().clamp(-FAR, FAR)) as i64;
-    std::array::from_fn(|a| {
-        [
-            index(core.min[a] - o[a]) - pad - 1,
-            index(core.max[a] - o[a]) + pad + 1,
-        ]
-    })
+    let (lo, hi) = owned_cubes(lattice, core);
+    std::array::from_fn(|a| [lo[a] - pad - 1, hi[a] + pad])
 }
 
 pub(crate) fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
@@ -145,23 +140,37 @@ pub(crate) fn inside(region: &[[i64; 2]; 3], c: [i64; 3]) -> bool {
 /// index bounds per axis (an empty axis has lower > upper): the test is one
 /// comparison per axis, so its cubes form a box.
 pub(crate) fn owned_range(lattice: &Lattice, core: &Aabb) -> [[i64; 2]; 3] {
-    let range = cube_range(lattice, core, 0);
-    std::array::from_fn(|a| {
-        let owned = |i: i64| {
-            let mut cube = [0; 3];
-            cube[a] = i;
-            let v = lattice.corner(cube)[a];
-            core.min[a] <= v && v < core.max[a]
-        };
-        let [mut lo, mut hi] = range[a];
-        while lo <= hi && !owned(lo) {
-            lo += 1;
+    let (lo, hi) = owned_cubes(lattice, core);
+    std::array::from_fn(|a| [lo[a], hi[a] - 1])
+}
+
+/// The owned cubes as half-open index ranges `[lo, hi)` per axis (huge
+/// values standing for an infinite core side): the blocks whose first
+/// cube's min corner lies in the core, by the comparisons [`owns`] makes.
+pub(crate) fn owned_cubes(lattice: &Lattice, core: &Aabb) -> ([i64; 3], [i64; 3]) {
+    let first = |v: f64, a: usize| -> i64 {
+        if v == f64::NEG_INFINITY {
+            return i64::MIN / 4;
         }
-        while hi >= lo && !owned(hi) {
-            hi -= 1;
+        if v == f64::INFINITY {
+            return i64::MAX / 4;
         }
-        [lo, hi]
-    })
+        // The first cube whose min corner is >= v.
+        let mut i = ((v - lattice.origin[a]) / lattice.cell)
+            .floor()
+            .clamp(-FAR, FAR) as i64;
+        while lattice.corner([i, i, i])[a] < v {
+            i += 1;
+        }
+        while lattice.corner([i - 1, i - 1, i - 1])[a] >= v {
+            i -= 1;
+        }
+        // The first block starting there or after.
+        (i + BLOCK - 1).div_euclid(BLOCK) * BLOCK
+    };
+    let lo = [0, 1, 2].map(|a| first(core.min[a], a));
+    let hi = [0, 1, 2].map(|a| first(core.max[a], a));
+    (lo, hi)
 }
 
 /// The cubes holding a sample, sorted keys.

@@ -5,8 +5,9 @@
 //! zero set crosses, found by walking the surface from the cubes holding
 //! samples ([`super::follow`]); with `--closed`, every cube of the band that
 //! may change sign, every corner having a value ([`super::closed`]). A tile
-//! owns the cubes whose min corner lies in its core box (half-open), so
-//! every cube is polygonised by exactly one tile.
+//! owns the blocks of cubes whose min corner lies in its core box
+//! (half-open), so every cube is polygonised by exactly one tile, and flat
+//! blocks are then re-triangulated whole ([`super::blocks`]).
 //!
 //! Deviation: the paper marches the whole bounding box; here only cubes
 //! within the band (a few spacings of a sample's cube) are asked. A surface
@@ -14,6 +15,7 @@
 //! and the band keeps the work proportional to the surface rather than the
 //! volume.
 
+use super::blocks::{merge_flat_blocks, BLOCK};
 use super::closed::{self, Everywhere};
 use super::cubes::{
     corner_of, cube_range, inside, occupied, owned_range, CornerCursor, CUBES_PER_TASK,
@@ -35,7 +37,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// What one tile contributes: its cubes' triangles, vertices keyed by
-/// global lattice edge, in cube order.
+/// global lattice edge, in block order.
 #[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct ImplicitTile {
     pub triangles: Vec<[CubeVertex; 3]>,
@@ -45,6 +47,8 @@ pub struct ImplicitTile {
     pub undefined_corners: usize,
     /// Triangles in cubes a corner of which the winding number decided.
     pub away: usize,
+    /// Triangles fewer after flat blocks were re-triangulated.
+    pub merged: usize,
 }
 
 impl ImplicitTile {
@@ -61,7 +65,8 @@ impl ImplicitTile {
         };
         self.cubes < 1 << 48
             && self.undefined_corners < 1 << 48
-            && self.away <= self.triangles.len()
+            && self.merged < 1 << 48
+            && self.away <= self.triangles.len() + self.merged
             && self.triangles.iter().all(triangle)
     }
 }
@@ -82,6 +87,9 @@ pub struct ImplicitKernel {
     pub bytes_per_cube: u64,
     /// With `--closed`: the sign of every corner away from the samples.
     pub everywhere: Option<Everywhere>,
+    /// How far a vertex left out of a flat block may lie from the new
+    /// triangles, in the points' units (0: no block is re-triangulated).
+    pub flat_tolerance: f64,
 }
 
 /// Edge of the signed distance's grid index, in lattice cubes. Its queries
@@ -228,6 +236,12 @@ impl TileKernel for ImplicitKernel {
                 KernelError::unless_short(short, tile.margin)?;
             }
         }
+        if self.flat_tolerance > 0.0 {
+            let before = out.triangles.len();
+            out.triangles =
+                merge_flat_blocks(std::mem::take(&mut out.triangles), self.flat_tolerance)?;
+            out.merged = before - out.triangles.len();
+        }
         Ok(out)
     }
 }
@@ -241,10 +255,12 @@ impl ImplicitKernel {
     /// corner up to [`closed::COARSE`] cubes beyond the core is asked
     /// whether it is near the samples.
     fn band_reach(&self) -> f64 {
+        // An owned block reaches BLOCK - 1 cubes past the core.
         let cubes = match self.everywhere {
             None => self.band + 1 + FOLLOW_STEPS,
             Some(_) => self.band + closed::COARSE + 3,
-        };
+        } + BLOCK
+            - 1;
         cubes as f64 * self.lattice.cell * 1.001
     }
 
@@ -428,6 +444,7 @@ mod tests {
             spacing: 1.0,
             bytes_per_cube: BYTES_PER_CUBE,
             everywhere: None,
+            flat_tolerance: 0.0,
         };
         let (dense, sparse) = (plane(1.0, 120.0), plane(3.0, 120.0));
         let bytes = |t: &TilePoints| kernel.bytes_for(t).expect("bytes");

@@ -6,6 +6,7 @@
 //! edge keys), [`mc_table`] (the generated case table) and [`polygonize`]
 //! (one cube, and a reference driver over a set of cubes).
 
+pub mod blocks;
 pub(crate) mod closed;
 mod closed_tile;
 pub(crate) mod cover;

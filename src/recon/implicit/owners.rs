@@ -7,6 +7,7 @@
 //! dragon (64 tiles), about 4 million of each at a billion points, some
 //! 220 MiB in hash tables beside the tiles.
 
+use super::blocks::BLOCK;
 use super::cubes::owns;
 use super::lattice::{edge_from_key, Lattice};
 use crate::geom::Aabb;
@@ -31,8 +32,10 @@ impl TileOwners {
         TileOwners { cores }
     }
 
-    /// Tiles whose cores come within one cube (and a little) of `tile`'s:
-    /// the cubes around an edge of an owned cube lie within one cube of it.
+    /// Tiles whose cores come within two blocks and a cube (and a little)
+    /// of `tile`'s: an owned cube lies within a block past the core, the
+    /// cubes around its edges within one cube of it, and their owners'
+    /// cores within a block of those.
     pub fn around(&self, tile: usize, cell: f64) -> Neighbourhood {
         let Some(core) = self.cores.get(tile) else {
             return Neighbourhood {
@@ -40,7 +43,7 @@ impl TileOwners {
                 tiles: Vec::new(),
             };
         };
-        let reach = 1.01 * cell;
+        let reach = (2 * BLOCK + 1) as f64 * 1.01 * cell;
         let near = |other: &Aabb| {
             (0..3)
                 .all(|a| other.min[a] <= core.max[a] + reach && core.min[a] - reach <= other.max[a])

@@ -6,6 +6,7 @@
 //! (`closed`) and the run promises a closed surface: the
 //! writer's audit checks it.
 
+use super::blocks::BLOCK;
 use super::closed::{self, Everywhere};
 use super::field::Field;
 use super::follow::FOLLOW_STEPS;
@@ -41,7 +42,21 @@ pub struct ImplicitParams {
     pub min_piece: Option<f64>,
     /// The signed distance (default: moving least squares).
     pub field: Field,
+    /// How far from the new triangles a vertex a flat block leaves out may
+    /// lie, in mean spacings ([`super::blocks`]); default
+    /// [`FLAT_TOLERANCE_SPACINGS`], 0 keeps every marching-cubes triangle.
+    pub flat_tolerance: Option<f64>,
 }
+
+/// The default [`ImplicitParams::flat_tolerance`], in mean spacings: 0,
+/// every marching-cubes triangle kept. Merging helps one kind of surface
+/// and costs another: on the 1M noisy terrain (two seeds) 0.1 spacings
+/// halves the triangles and lowers the mean distance to the truth (0.0380
+/// -> 0.0369, 0.0378 -> 0.0368 spacings), while on the 1M noisy dragon it
+/// takes 18 % of them and raises the mean (0.0503 -> 0.0515); at 0.02 the
+/// dragon keeps its figure but the terrain loses 8 % of its triangles and
+/// 0.0002 spacings of accuracy. So the user chooses, per scan.
+pub const FLAT_TOLERANCE_SPACINGS: f64 = 0.0;
 
 impl ImplicitParams {
     /// The `min_piece` share to use (its default filled in), or why it is
@@ -203,6 +218,9 @@ pub struct ImplicitReport {
     /// band's edge wherever the field and the winding number disagree:
     /// a large share says the normals are wrong somewhere).
     pub away_triangles: u64,
+    /// Triangles fewer after flat blocks were re-triangulated
+    /// (`flat_tolerance`).
+    pub merged_triangles: u64,
     /// Small pieces dropped.
     pub pieces: PieceReport,
     /// The mesh written: its edges, vertices, components and volumes.
@@ -241,6 +259,9 @@ pub enum ReconError {
         /// The value given or estimated.
         value: f64,
     },
+    /// The flat blocks' tolerance is negative or not finite.
+    #[error("flat tolerance {0} spacings must be finite and at least 0")]
+    BadFlatTolerance(f64),
     /// The small-piece share lies outside `[0, 1]`.
     #[error("small-piece share {0} must lie between 0 and 1")]
     BadShare(f64),
@@ -305,16 +326,17 @@ pub fn reconstruct_implicit(
         lattice,
         limit: if params.closed { f64::INFINITY } else { reach },
         // The surface walk's reach (the band and its steps) beyond the core.
-        initial_margin: (band + 1 + FOLLOW_STEPS) as f64 * report.cell + 2.0 * reach,
+        initial_margin: (band + FOLLOW_STEPS + BLOCK) as f64 * report.cell + 2.0 * reach,
         band,
         field: params.field,
         spacing,
         bytes_per_cube: bytes_per_cube(params.closed),
         everywhere: None,
+        flat_tolerance: params.flat_tolerance.unwrap_or(FLAT_TOLERANCE_SPACINGS) * spacing,
     };
     if params.closed {
         kernel.everywhere = Some(everywhere(store, &kernel)?);
-        kernel.initial_margin = (closed::COARSE + 6) as f64 * report.cell + 2.0 * reach;
+        kernel.initial_margin = (closed::COARSE + 5 + BLOCK) as f64 * report.cell + 2.0 * reach;
     }
     // A closed surface is watertight, manifold, consistently wound and
     // encloses a positive volume in every piece; a mesh that is not is
@@ -331,6 +353,7 @@ pub fn reconstruct_implicit(
     report.run = run_tiles(store, &kernel, opts, progress, |t, out| {
         report.cubes += out.cubes as u64;
         report.away_triangles += out.away as u64;
+        report.merged_triangles += out.merged as u64;
         let core = core_box(store, &store.tiles()[t]);
         stitcher
             .add_tile(&lattice, (t, &core), &out.triangles)

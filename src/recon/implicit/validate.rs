@@ -5,7 +5,8 @@ use super::reconstruct::{ImplicitParams, ReconError};
 
 impl ImplicitParams {
     /// Refuses a cell that is not positive and finite, a noise bound that
-    /// is negative or not finite, a small-piece share outside `[0, 1]`, and
+    /// is negative or not finite, a flat tolerance that is negative or not
+    /// finite, a small-piece share outside `[0, 1]`, and
     /// normal parameters that cannot give normals.
     pub fn validate(&self) -> Result<(), ReconError> {
         if let Some(cell) = self.cell {
@@ -22,6 +23,11 @@ impl ImplicitParams {
                     what: "noise",
                     value: noise,
                 });
+            }
+        }
+        if let Some(t) = self.flat_tolerance {
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(ReconError::BadFlatTolerance(t));
             }
         }
         self.min_piece_share()?;
