@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::DVec3;
 use scanmesh::features::lines::LineGraph;
-use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk, ReadOptions};
+use scanmesh::io::{open_reader, read_all_xyz, read_mesh_any};
 use scanmesh::render::scene::{Scene, Style};
 use std::path::PathBuf;
 
@@ -65,15 +65,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     }
     let mut scene = Scene::default();
     if let Some(p) = &a.points {
-        let read = ReadOptions {
-            select: a.select.selection(),
-            ..ReadOptions::from(InvalidPolicy::Skip)
-        };
-        let mut r = open_reader(p, read).with_context(|| format!("reading {}", p.display()))?;
-        let mut chunk = PointChunk::default();
-        while r.read_chunk(&mut chunk, 1 << 16)? > 0 {
-            scene.points.extend_from_slice(&chunk.xyz);
-        }
+        let mut r = open_reader(p, a.select.read(true))
+            .with_context(|| format!("reading {}", p.display()))?;
+        scene.points = read_all_xyz(r.as_mut())?;
     }
     if let Some(l) = &a.lines {
         scene.lines = Some(LineGraph::read(l)?);

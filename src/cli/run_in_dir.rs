@@ -7,7 +7,7 @@
 
 use super::Command;
 use anyhow::{anyhow, Context, Result};
-use scanmesh::rundir::{job_script, ProcessRecord, RunDir, RunIdentity, Session};
+use scanmesh::rundir::{job_script, this_binary, ProcessRecord, RunDir, RunIdentity, Session};
 use scanmesh::store::Job;
 
 /// Options that vary between the processes of one run without changing
@@ -71,7 +71,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             let stages = command.args().tile_stages()?;
             let budget = common.settings_in(run_args)?.lib.budget;
             let binary = this_binary();
-            let script = job_script(kind.into(), &run, &stages, run_args.tasks, budget, &binary);
+            let script = job_script(kind, &run, &stages, run_args.tasks, budget, &binary);
             return super::stdout::write(format_args!("{script}"));
         }
         if let Some(summary) = run.finished(&output, &input)? {
@@ -108,21 +108,6 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             session.log_failed(&e);
             Err(e)
         }
-    }
-}
-
-/// The absolute path of this binary, which the jobs run unless `SCANMESH`
-/// says otherwise.
-fn this_binary() -> String {
-    let Ok(exe) = std::env::current_exe() else {
-        return "scanmesh".to_string();
-    };
-    let text = exe.to_string_lossy().into_owned();
-    // Linux names a binary replaced since it started (a rebuild) so; the
-    // path itself then holds the new one.
-    match text.strip_suffix(" (deleted)") {
-        Some(path) if !exe.exists() => path.to_string(),
-        _ => text,
     }
 }
 

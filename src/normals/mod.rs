@@ -107,9 +107,10 @@ pub use evidence::{Evidence, EvidenceCheck, Sensor};
 pub use output::normals_output;
 
 /// Cost of a Riemannian-graph edge for the spanning tree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EdgeCost {
     /// The paper's `1 - |n_i . n_j|`.
+    #[value(help = "The paper's 1 - |ni.nj|")]
     Paper,
     /// Deviation (the default): the paper's cost plus the mean tangent-plane
     /// offset `(|d . n_i| + |d . n_j|) / 2|d|` of the edge `d = x_j - x_i`.
@@ -119,6 +120,10 @@ pub enum EdgeCost {
     /// an edge runs along the normals, so its offset is near 1 and the tree
     /// goes round instead. Within a sheet the offset is near 0.
     #[default]
+    #[value(
+        name = "offset",
+        help = "Paper cost plus the edge's tangent-plane offset"
+    )]
     TangentOffset,
 }
 

@@ -72,13 +72,15 @@ pub trait KnnIndex: Sync {
 /// surfaces it answered k = 12 queries in about 5,400 instructions against
 /// the kd-tree's 9,100 (callgrind), and the normals pipeline ran faster and
 /// in less memory with it (benches/knn.rs, benches/normals.rs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum KnnBackend {
     /// Uniform grid with a search that widens until the k-th distance lies
     /// inside the searched block.
     #[default]
+    #[value(help = None::<&str>)]
     Grid,
     /// kiddo's immutable kd-tree, asked for extra neighbours to settle ties.
+    #[value(name = "kdtree", help = None::<&str>)]
     KdTree,
 }
 

@@ -42,7 +42,7 @@ pub(crate) mod test_store;
 
 pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};
-pub use checkpoint::{Checkpoints, Job, TileSet};
+pub use checkpoint::{Checkpoints, Job, TileSet, TileSetError};
 pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use damage::{ColumnName, DamagedPart};

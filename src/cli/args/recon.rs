@@ -3,7 +3,7 @@
 
 use super::HoodArgs;
 use anyhow::{bail, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use scanmesh::recon::delaunay::reconstruct::DelaunayParams;
 use scanmesh::recon::implicit::field::Field;
 use scanmesh::recon::implicit::reconstruct::{ImplicitParams, ReconError};
@@ -31,8 +31,8 @@ pub struct ReconArgs {
     /// spacings and moves each vertex onto that surface; `sample` is
     /// paper 1's plane through the nearest sample (keeps sharp edges
     /// sharpest, follows the noise), vertices linearly interpolated.
-    #[arg(long, value_enum, default_value_t = Plane::Mls)]
-    plane: Plane,
+    #[arg(long, value_enum, default_value_t = Field::Mls)]
+    plane: Field,
     /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
     /// triangles with a larger circumradius are boundaries. Default: 5 x
     /// the largest spacing of the triangle's corners, a corner's spacing
@@ -56,14 +56,6 @@ pub struct ReconArgs {
     /// --method projection: longest edge, in local spacings.
     #[arg(long, default_value_t = ProjectionParams::default().max_edge)]
     max_edge: f64,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Plane {
-    /// Moving least squares over the local spacing (issue 19).
-    Mls,
-    /// Paper 1's definition: the nearest sample's tangent plane.
-    Sample,
 }
 
 impl ReconArgs {
@@ -100,10 +92,7 @@ impl ReconArgs {
             noise: self.noise,
             closed: self.closed,
             min_piece: self.min_piece,
-            field: match self.plane {
-                Plane::Mls => Field::Mls,
-                Plane::Sample => Field::Paper1,
-            },
+            field: self.plane,
             ..ImplicitParams::default()
         };
         params.normals.k = self.k;
