@@ -1,7 +1,6 @@
 //! `scanmesh neighbors`: every point's topological (paper 3) or k nearest
 //! neighbours, in input order, as a binary CSR file or text.
 
-use super::HoodKind;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use scanmesh::io::place;
@@ -9,6 +8,7 @@ use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
     compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions,
 };
+use scanmesh::spatial::HoodKind;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -44,10 +44,7 @@ pub struct NeighborsArgs {
 
 impl NeighborsArgs {
     fn params(&self) -> Result<NeighbourParams> {
-        let params = match self.neighbours {
-            HoodKind::Topological => NeighbourParams::topological(self.k, self.max_iterations),
-            HoodKind::Knn => NeighbourParams::knn(self.k),
-        };
+        let params = NeighbourParams::of(self.neighbours, self.k, self.max_iterations);
         params
             .validate()
             .with_context(|| format!("--k {}", self.k))?;

@@ -26,11 +26,12 @@ mod stdout;
 pub use stdout::closed as stdout_closed;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 use command::CommandArgs;
+use scanmesh::io::keep::Unselected;
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
-use scanmesh::memory::{cores, too_many_threads, too_much_memory};
+use scanmesh::memory::{cores, too_many_threads, too_much_memory, within_promise};
 use scanmesh::mesh::MeshAudit;
 use scanmesh::pipeline::{KernelCost, MemoryBudget, NoProgress, Prepared, Progress, RunSettings};
 use scanmesh::rundir::{open_input, Scheduler, Session};
@@ -77,6 +78,7 @@ macro_rules! commands {
                 }
             }
 
+            /// Runs the command in this process.
             fn dispatch(self) -> Result<()> {
                 match self {
                     $(Command::$variant(a) => a.run(),)*
@@ -217,16 +219,6 @@ pub struct SelectArgs {
     returns: Returns,
 }
 
-/// `--unselected`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum Unselected {
-    /// Per-point outputs hold the selected points only.
-    #[default]
-    Drop,
-    /// Per-point outputs hold every input point, the unselected flagged.
-    Keep,
-}
-
 impl SelectArgs {
     /// How to read the input: these points, and invalid records skipped
     /// (`--skip-invalid`) or refused.
@@ -249,16 +241,6 @@ impl SelectArgs {
             returns: self.returns,
         }
     }
-}
-
-/// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
-/// `normals --neighbours`, `reconstruct --neighbours`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum HoodKind {
-    /// Paper 3's topological neighbours: mean reverse shift over an R*-tree.
-    Topological,
-    /// The plain k nearest neighbours.
-    Knn,
 }
 
 /// Validated common options: the library's run settings, and what the
@@ -518,49 +500,13 @@ pub fn run() -> Result<()> {
             command => run_in_dir::run_in_dir(command, std::env::args().skip(1).collect()),
         })
         .map_err(hints::with_flag_hints)
-        .and_then(|()| within_the_promise(promised.map(|(mem, _)| mem)));
+        // `--mem` promises the peak RSS: a run that went over it fails,
+        // though its outputs are whole.
+        .and_then(|()| Ok(promised.map_or(Ok(()), |(mem, _)| within_promise(mem))?));
     if let Some(path) = &report {
         // Begun when the command line was parsed: the run's cost counts from there.
         let log = common.map(|c| c.log).unwrap_or_default();
         report::write(&log, path, &outcome)?;
     }
     outcome
-}
-
-/// `--mem` promises the peak RSS: a run that went over it fails, though
-/// its outputs are whole (the plan, not the data, was wrong), so that a
-/// budget bench or a cluster's memory limit learns it from the exit code.
-fn within_the_promise(mem: Option<u64>) -> Result<()> {
-    let (Some(mem), Some(peak)) = (mem, scanmesh::memory::peak_rss_bytes()) else {
-        return Ok(());
-    };
-    if peak > mem {
-        anyhow::bail!(
-            "the run's peak memory {} went over --mem {}: its outputs are complete, but its memory plan failed (please report it with the command line)",
-            scanmesh::units::human_bytes(peak),
-            scanmesh::units::human_bytes(mem)
-        );
-    }
-    Ok(())
-}
-
-/// Runs one command in this process.
-fn dispatch(command: Command) -> Result<()> {
-    command.dispatch()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::within_the_promise;
-
-    /// A peak over `--mem` fails the run, naming both; under it, or with
-    /// no promise, it passes.
-    #[test]
-    fn a_peak_over_the_promise_fails_the_run() {
-        let over = within_the_promise(Some(1024)).expect_err("this process holds more than 1 KiB");
-        let said = over.to_string();
-        assert!(said.contains("went over --mem 1.00KiB"), "{said}");
-        assert!(within_the_promise(Some(u64::MAX)).is_ok());
-        assert!(within_the_promise(None).is_ok());
-    }
 }

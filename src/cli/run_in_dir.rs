@@ -7,7 +7,7 @@
 
 use super::Command;
 use anyhow::{anyhow, Context, Result};
-use scanmesh::rundir::{job_script, this_binary, ProcessRecord, RunDir, RunIdentity, Session};
+use scanmesh::rundir::{job_script, this_binary, RunDir, RunIdentity, Session};
 use scanmesh::store::Job;
 
 /// Options that vary between the processes of one run without changing
@@ -47,10 +47,10 @@ pub fn stable_args(args: &[String]) -> Vec<String> {
 /// or says there is nothing left to do.
 pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     let (Some(common), Some(run_args)) = (command.args().common(), command.args().run_dir()) else {
-        return super::dispatch(command);
+        return command.dispatch();
     };
     let Some(dir) = run_args.run_dir.clone() else {
-        return super::dispatch(command);
+        return command.dispatch();
     };
     let (input, output) = command
         .args()
@@ -89,26 +89,17 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             return Ok(());
         }
     }
-    // `status` tells this process apart from a dead one by its record,
-    // removed when this function returns.
-    let _record = ProcessRecord::record(run.dir());
-    let session = Session::new(run, job);
+    // This process's record, removed when this function returns.
+    let (session, _record) = Session::start(run, job);
     if let Some(r) = command.args_mut().run_dir_mut() {
         r.session = Some(session.clone());
     }
-    session.log_start();
-    let outcome = super::dispatch(command);
+    let outcome = command.dispatch();
     for line in session.log_damaged_tiles() {
         eprintln!("{line}");
     }
-    match outcome {
-        Err(_) if session.log_stopped() => Ok(()),
-        Ok(()) => Ok(session.log_done(&output, log.with(|l| l.last_summary().map(String::from)))?),
-        Err(e) => {
-            session.log_failed(&e);
-            Err(e)
-        }
-    }
+    let summary = log.with(|l| l.last_summary().map(String::from));
+    session.finish(outcome, &output, summary)
 }
 
 #[cfg(test)]

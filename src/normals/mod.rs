@@ -28,7 +28,7 @@ pub(crate) mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
-use crate::spatial::KnnBackend;
+use crate::spatial::{HoodKind, KnnBackend};
 use crate::store::sampling::{SamplingHistograms, SamplingStats};
 use crate::store::{Column, PointStore, Provenance, StoreError, FLAGS, NORMALS};
 use glam::DVec3;
@@ -144,6 +144,15 @@ pub enum NormalHood {
 }
 
 impl NormalHood {
+    /// The neighbourhood of kind `kind` (topological: at most
+    /// `max_iterations` reverse shifts per point).
+    pub fn of(kind: HoodKind, max_iterations: usize) -> Self {
+        match kind {
+            HoodKind::Knn => NormalHood::Knn,
+            HoodKind::Topological => NormalHood::Topological { max_iterations },
+        }
+    }
+
     /// The mean reverse shift's parameters for `k` neighbours per query
     /// (`None` for kNN).
     pub(crate) fn topo_params(&self, k: usize) -> Option<TopoParams> {

@@ -13,8 +13,8 @@ use crate::memory::{BudgetError, DiskPlan};
 use crate::store::build::{build_store, scratch_store_dir_in, MAX_POINTS};
 use crate::store::spacing::ensure_spacing;
 use crate::store::{
-    is_store, open_input, store_bytes_per_point, BuildOptions, PointStore, StoreError, TileTarget,
-    Workspace,
+    is_store, open_input, store_bytes_per_point, BuildOptions, Causes, PointStore, StoreError,
+    TileTarget, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -99,6 +99,24 @@ pub enum WorkspaceError {
     /// The disk plan does not fit the free space.
     #[error("not enough free space (--scratch-dir puts the scratch files elsewhere): {0}")]
     NoSpace(IoError),
+}
+
+impl WorkspaceError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            WorkspaceError::Budget(b) => Causes {
+                budget: Some(b),
+                input: None,
+            },
+            WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. } => e.causes(),
+            WorkspaceError::Io(e) => Causes {
+                budget: None,
+                input: Some(e),
+            },
+            _ => Causes::default(),
+        }
+    }
 }
 
 impl RunSettings {

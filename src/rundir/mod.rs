@@ -41,7 +41,7 @@ pub use status::{OutputState, RunStatus, StageTiles, StoreSize};
 
 use crate::io::IoError;
 use crate::pipeline::WorkspaceError;
-use crate::store::StoreError;
+use crate::store::{Causes, StoreError};
 use std::path::{Path, PathBuf};
 
 /// Why a run directory cannot be used, or a file in it read or written.
@@ -182,6 +182,17 @@ pub enum RunDirError {
     /// A small file cannot be written in place.
     #[error(transparent)]
     Io(#[from] IoError),
+}
+
+impl RunDirError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            RunDirError::Workspace(w) => w.causes(),
+            RunDirError::Store(e) => e.causes(),
+            _ => Causes::default(),
+        }
+    }
 }
 
 /// `path` made absolute.

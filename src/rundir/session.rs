@@ -7,7 +7,7 @@
 //! `processes`), and a global stage's result kept for a resumed run
 //! ([`Session::kept_or`]).
 
-use super::{RunDir, RunDirError};
+use super::{ProcessRecord, RunDir, RunDirError};
 use crate::pipeline::{KernelCost, Prepared, Progress, RunSettings, WorkspaceError};
 use crate::store::{ingest_kept, is_store, Checkpoints, Job, PointStore, StageId, Workspace};
 use serde::{de::DeserializeOwned, Serialize};
@@ -150,6 +150,38 @@ impl Session {
             },
         )?;
         Ok(reclaimed)
+    }
+
+    /// Starts the job `job` in `run`: logged, and recorded as this
+    /// process's (the record, removed when dropped, tells `status` this
+    /// process apart from a dead one).
+    pub fn start(run: RunDir, job: Job) -> (Self, ProcessRecord) {
+        let record = ProcessRecord::record(run.dir());
+        let session = Session::new(run, job);
+        session.log_start();
+        (session, record)
+    }
+
+    /// Logs how the job ended, and returns how the caller's run ends:
+    /// stopped as asked (its error, because it did, is then no failure),
+    /// done (the `output` and its `summary` recorded), or failed.
+    pub fn finish<E>(
+        &self,
+        outcome: Result<(), E>,
+        output: &Path,
+        summary: Option<String>,
+    ) -> Result<(), E>
+    where
+        E: Display + From<RunDirError>,
+    {
+        match outcome {
+            Err(_) if self.log_stopped() => Ok(()),
+            Ok(()) => Ok(self.log_done(output, summary)?),
+            Err(e) => {
+                self.log_failed(&e);
+                Err(e)
+            }
+        }
     }
 
     /// Logs that the job starts.

@@ -2,14 +2,15 @@
 //! (`normals`, `reconstruct`), the kNN structure, and how normals get
 //! their sign (`normals`).
 
-use crate::cli::HoodKind;
 use anyhow::{anyhow, Result};
 use clap::Args;
 use glam::DVec3;
+use scanmesh::geom::{parse_xyz, XyzTextError};
 use scanmesh::normals::{
     BadNormalParameter, EdgeCost, NormalHood, NormalsError, Orientation, OrientationChoice,
     OrientationKind, Sensor,
 };
+use scanmesh::spatial::HoodKind;
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
 #[derive(Args)]
@@ -27,12 +28,7 @@ pub struct HoodArgs {
 
 impl HoodArgs {
     pub fn hood(&self) -> NormalHood {
-        match self.neighbours {
-            HoodKind::Knn => NormalHood::Knn,
-            HoodKind::Topological => NormalHood::Topological {
-                max_iterations: self.max_iterations,
-            },
-        }
+        NormalHood::of(self.neighbours, self.max_iterations)
     }
 }
 
@@ -67,15 +63,10 @@ pub struct OrientArgs {
 }
 
 fn parse_point(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("expected x,y,z: {e}"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
-        _ => Err("expected three finite numbers x,y,z".into()),
-    }
+    parse_xyz(s).map_err(|e| match e {
+        XyzTextError::Number(e) => format!("expected x,y,z: {e}"),
+        e => e.to_string(),
+    })
 }
 
 impl OrientArgs {
