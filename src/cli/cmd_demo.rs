@@ -36,10 +36,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let sample = DemoSample::new(a.n)?;
     outln!("{sample}")?;
     let progress = s.progress();
-    let method = a.method;
-    s.lib.check_floor(&method.cost())?;
+    s.lib.check_floor(&a.method.cost())?;
     let out = &a.output;
-    match method.reconstruct(&sample, &s.lib, out, progress)? {
+    match a.method.reconstruct(&sample, &s.lib, out, progress)? {
         DemoMesh::Projection(r) => s.mesh_summary(&r.audit, s.closing(&r, out)),
         DemoMesh::Implicit(r, normals) => {
             s.mesh_summary(&r.audit, s.closing(&r, out));

@@ -59,13 +59,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
         return outln!("{}", PlanTable::new(budget, points, store, cost)?);
     }
     let report = if is_store(&a.input) {
-        if !a.select.selection().is_all() {
-            anyhow::bail!(
-                "{}: --classes and --returns select points of a point file; a store holds the points it was built from",
-                a.input.display()
-            );
-        }
-        describe_store(&a.input)?
+        describe_store(&a.input, &a.select.selection())?
     } else {
         let progress = super::shown(a.quiet);
         describe_file(&a.input, a.select.read(a.skip_invalid), progress.as_ref())?

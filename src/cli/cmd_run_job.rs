@@ -37,19 +37,6 @@ pub struct RunJobArgs {
     quiet: bool,
 }
 
-impl RunJobArgs {
-    fn job(&self) -> Job {
-        match (&self.stage, self.tiles.or(self.share), &self.until) {
-            (Some(stage), Some(tiles), _) => Job::Tiles {
-                stage: stage.clone(),
-                tiles,
-            },
-            (_, _, Some(stage)) => Job::Until(stage.clone()),
-            _ => Job::Whole,
-        }
-    }
-}
-
 pub fn run(a: RunJobArgs) -> Result<()> {
     let (run, id) = RunDir::recorded(&a.dir, env!("CARGO_PKG_VERSION"))?;
     std::env::set_current_dir(&id.cwd)
@@ -70,7 +57,7 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     let Some(run) = command.args_mut().run_dir_mut() else {
         bail!("{}: the recorded command keeps no run", a.dir.display());
     };
-    run.job = a.job();
+    run.job = Job::of(a.stage.as_deref(), a.tiles.or(a.share), a.until.as_deref());
     // Refused here, before the job is logged as started: --threads from
     // the script, --mem from the recorded command, against this node.
     if let Some(common) = command.args().common() {

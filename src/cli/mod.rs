@@ -33,7 +33,8 @@ use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::memory::{cores, too_many_threads, too_much_memory, within_promise};
 use scanmesh::mesh::MeshAudit;
-use scanmesh::pipeline::{KernelCost, MemoryBudget, NoProgress, Prepared, Progress, RunSettings};
+use scanmesh::pipeline::{reclaimed_note, KernelCost, MemoryBudget, NoProgress, Prepared};
+use scanmesh::pipeline::{Progress, RunSettings};
 use scanmesh::rundir::{open_input, Scheduler, Session};
 use scanmesh::runlog::{SharedRunLog, StageLines};
 use scanmesh::store::{Job, PointStore};
@@ -417,13 +418,8 @@ impl Settings {
     }
 
     fn say_reclaimed(&self, removed: &[PathBuf]) {
-        if !removed.is_empty() && !self.quiet {
-            let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
-            eprintln!(
-                "removed {} scratch entries that killed runs left: {}",
-                removed.len(),
-                names.join(", ")
-            );
+        if let Some(note) = reclaimed_note(removed).filter(|_| !self.quiet) {
+            eprintln!("{note}");
         }
     }
 

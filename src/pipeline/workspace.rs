@@ -315,6 +315,15 @@ fn reading(input: &Path, source: StoreError) -> WorkspaceError {
     }
 }
 
+/// What a caller says of the scratch entries [`reclaim`] removed, if any.
+pub fn reclaimed_note(removed: &[PathBuf]) -> Option<String> {
+    let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+    (!removed.is_empty()).then(|| {
+        let (n, names) = (removed.len(), names.join(", "));
+        format!("removed {n} scratch entries that killed runs left: {names}")
+    })
+}
+
 /// Removes what killed runs left in `dirs` (their scratch stores and
 /// partial outputs), each directory once however it is named; returns
 /// what was removed.

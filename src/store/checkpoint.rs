@@ -39,6 +39,22 @@ pub enum Job {
     },
 }
 
+impl Job {
+    /// The job of `tiles` of the tile stage `stage` when both are given,
+    /// else everything before the tile stage `until` when given, else the
+    /// whole run (`run-job`'s `--stage`, `--tiles` or `--share`, `--until`).
+    pub fn of(stage: Option<&str>, tiles: Option<TileSet>, until: Option<&str>) -> Self {
+        match (stage, tiles, until) {
+            (Some(stage), Some(tiles), _) => Job::Tiles {
+                stage: stage.to_string(),
+                tiles,
+            },
+            (_, _, Some(stage)) => Job::Until(stage.to_string()),
+            _ => Job::Whole,
+        }
+    }
+}
+
 /// The number `part` of a tile set's `text`.
 fn number(text: &str, part: &str) -> Result<usize, TileSetError> {
     part.trim().parse().map_err(|why| TileSetError::Number {

@@ -135,6 +135,12 @@ pub enum StoreError {
         /// Which part of it (a tile, a range of input points).
         what: DamagedPart,
     },
+    /// A selection of points was given for a store.
+    #[error("{}: --classes and --returns select points of a point file; a store holds the points it was built from", path.display())]
+    SelectionOfAStore {
+        /// The store.
+        path: PathBuf,
+    },
     /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
     Busy {
