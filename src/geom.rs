@@ -1,7 +1,32 @@
 //! Plain geometric value types shared by every layer: the scalar, boxes,
-//! and the pseudo-angle that orders planar directions without `atan2`.
+//! the pseudo-angle that orders planar directions without `atan2`, and a
+//! point written as text (`x,y,z`: a viewpoint, a view direction).
 
 use glam::{DVec2, DVec3};
+
+/// Why a point's text `x,y,z` names none.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum XyzTextError {
+    /// A coordinate is not a number.
+    #[error("{0}")]
+    Number(std::num::ParseFloatError),
+    /// Not three coordinates, or one not finite.
+    #[error("expected three finite numbers x,y,z")]
+    NotThree,
+}
+
+/// The point `text` writes as `x,y,z` (blanks round a number allowed).
+pub fn parse_xyz(text: &str) -> Result<DVec3, XyzTextError> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(XyzTextError::Number)?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => Err(XyzTextError::NotThree),
+    }
+}
 
 /// The scalar of all geometry that must be exact or reproducible.
 pub type Real = f64;

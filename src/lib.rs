@@ -64,6 +64,7 @@ pub mod neighbours;
 pub mod normals;
 pub mod outliers;
 pub mod pipeline;
+pub mod planned;
 pub(crate) mod progress;
 pub mod recon;
 pub mod render;

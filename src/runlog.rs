@@ -12,7 +12,9 @@
 //! marks invalid) are told at the end of the summary line
 //! ([`RunLog::summary`]) and in the report (`skipped_invalid`) whatever the
 //! command, so nobody joins an output to its input by position unwarned.
-//! This module prints nothing: the caller prints the line it returns.
+//! This module prints nothing: the caller prints the line it returns, the
+//! report's outcome in words ([`outcome_words`]), and each stage's cost as
+//! a line when asked ([`StageLines`], `SCANMESH_TIMINGS`).
 
 use crate::io::{AtomicFile, IoError, LeftOut};
 use crate::mesh::{MeshAudit, MeshError};
@@ -184,6 +186,17 @@ impl RunLog {
     }
 }
 
+/// A run's outcome as its report words it: `ok`, or `error: ` and the
+/// error with its causes, joined by `: `.
+pub fn outcome_words(outcome: Result<(), &(dyn std::error::Error + 'static)>) -> String {
+    let Err(err) = outcome else {
+        return "ok".to_string();
+    };
+    let chain = std::iter::successors(Some(err), |e| e.source());
+    let words: Vec<String> = chain.map(|c| c.to_string()).collect();
+    format!("error: {}", words.join(": "))
+}
+
 /// The words the summary line ends with when records were left out.
 fn left_out_note(source: &str, l: &LeftOut, kept: bool) -> String {
     let records = if l.total() == 1 { "record" } else { "records" };
@@ -279,6 +292,67 @@ impl Drop for TimedProgress {
     }
 }
 
+/// Each stage's cost as a line, for profiling runs (`SCANMESH_TIMINGS`):
+/// the wall time, the process CPU time (all threads; steadier than wall
+/// time on a shared machine), the RSS at the end and the peak RSS so far
+/// (to see which stage sets it), and the bytes read from and written to
+/// storage. Time spent between stages (store setup, spacing, dropping and
+/// removing scratch data) is a line `(between stages)`, so no cost hides.
+/// Each line goes to the sink the caller gives (the CLI: stderr).
+pub struct StageLines {
+    start: Mutex<Option<(String, Mark)>>,
+    last_end: Mutex<Mark>,
+    sink: Box<dyn Fn(&str) + Send + Sync>,
+}
+
+impl StageLines {
+    /// Lines from now on, each handed to `sink`.
+    pub fn new(sink: impl Fn(&str) + Send + Sync + 'static) -> Self {
+        StageLines {
+            start: Mutex::new(None),
+            last_end: Mutex::new(Mark::now()),
+            sink: Box::new(sink),
+        }
+    }
+
+    fn gap(&self) {
+        if let Ok(mut last) = self.last_end.lock() {
+            if last.elapsed().as_secs_f64() >= 0.005 {
+                (self.sink)(&format!("{:>24}: {}", "(between stages)", last.span()));
+            }
+            *last = Mark::now();
+        }
+    }
+}
+
+impl Drop for StageLines {
+    fn drop(&mut self) {
+        self.gap();
+    }
+}
+
+impl Progress for StageLines {
+    fn begin(&self, stage: &str, _: u64) {
+        self.gap();
+        if let Ok(mut s) = self.start.lock() {
+            *s = Some((stage.to_string(), Mark::now()));
+        }
+    }
+
+    fn advance(&self, _: u64) {}
+
+    fn end(&self) {
+        if let Ok(mut s) = self.start.lock() {
+            if let Some((stage, t0)) = s.take() {
+                (self.sink)(&format!("{stage:>24}: {}", t0.span()));
+                if let Ok(mut last) = self.last_end.lock() {
+                    *last = Mark::now();
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -305,6 +379,17 @@ mod tests {
         );
         assert!(line.ends_with("from in.xyz"), "{line}");
         assert_eq!(log.with(|l| l.last_summary().map(String::from)), Some(line));
+    }
+
+    #[test]
+    fn the_outcome_is_worded_with_its_causes() {
+        assert_eq!(outcome_words(Ok(())), "ok");
+        let inner = std::io::Error::other("disk full");
+        let outer = IoError::os(Path::new("out.ply"), inner);
+        assert_eq!(
+            outcome_words(Err(&outer)),
+            "error: out.ply: disk full: disk full"
+        );
     }
 
     #[test]

@@ -2,10 +2,12 @@
 //! knows (the seconds the run took, its peak memory, the output written).
 //! Each capability renders its own report's line as `impl Display for
 //! Summary<'_, ItsReport>`, so a caller of the library prints the same
-//! line the command-line tool prints. The library measures none of the
-//! three: the caller passes them in.
+//! line the command-line tool prints. The caller passes the three in, or
+//! the moment its run began ([`Summary::since`]: the seconds and the peak
+//! measured then).
 
 use std::path::Path;
+use std::time::Instant;
 
 /// A report and the run it closes, displayed as the run's summary line.
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +32,13 @@ impl<'a, R> Summary<'a, R> {
             peak,
             output,
         }
+    }
+
+    /// The line of `report`, for a run that began at `t0`, peaked at this
+    /// process's peak so far and wrote `output`.
+    pub fn since(report: &'a R, t0: Instant, output: &'a Path) -> Self {
+        let peak = crate::memory::peak_rss_bytes();
+        Summary::new(report, t0.elapsed().as_secs_f64(), peak, output)
     }
 
     /// The peak as the line prints it: `"?"` where the platform does not

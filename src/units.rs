@@ -82,6 +82,25 @@ pub fn parse_size(s: &str) -> Result<u64, UnitError> {
     Ok(bytes as u64)
 }
 
+/// `x` with three significant digits and a k/M/G suffix (a rate as a
+/// progress bar shows it: `7.84M`, where `{x}` prints `7841517.0193`).
+pub fn short_count(x: f64) -> String {
+    let (v, unit) = match x.abs() {
+        a if a >= 1e9 => (x / 1e9, "G"),
+        a if a >= 1e6 => (x / 1e6, "M"),
+        a if a >= 1e3 => (x / 1e3, "k"),
+        _ => (x, ""),
+    };
+    let digits = if v.abs() >= 100.0 {
+        0
+    } else if v.abs() >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{v:.digits$}{unit}")
+}
+
 /// `1536` -> `"1.50KiB"`, `512` -> `"512B"`: binary units, 3 significant
 /// figures, no space (so it fits `key=value` reports; [`parse_size`] reads
 /// it back).
@@ -109,6 +128,15 @@ pub fn human_bytes(bytes: u64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rates_read_short() {
+        assert_eq!(short_count(7_841_517.019), "7.84M");
+        assert_eq!(short_count(12_345.0), "12.3k");
+        assert_eq!(short_count(999.0), "999");
+        assert_eq!(short_count(0.5), "0.50");
+        assert_eq!(short_count(2.5e9), "2.50G");
+    }
 
     #[test]
     fn parses_plain_and_units() {

@@ -4,8 +4,8 @@ use anyhow::Result;
 use clap::Args;
 use scanmesh::io::convert::convert_keeping;
 use scanmesh::io::not_held;
+use scanmesh::io::place;
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(ConvertArgs => run, common);
 #[derive(Args)]
@@ -23,16 +23,15 @@ pub struct ConvertArgs {
 pub fn run(a: ConvertArgs) -> Result<()> {
     let s = a.common.settings()?;
     s.no_scratch_limit("convert")?;
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     s.reclaim(&[&scanmesh::io::place::directory_of(&a.output)]);
     let progress = s.progress();
-    let t0 = Instant::now();
     let read = s.lib.read.clone();
     let stats = convert_keeping(&a.input, &a.output, read, s.keep_unselected, progress)?;
     s.note(not_held(&a.output, stats.dropped));
     let source = a.input.display().to_string();
     s.log
         .with(|l| l.input_skipped(&source, stats.skipped, stats.left_out));
-    s.summary(super::closing(&stats, t0, &a.output));
+    s.summary(s.closing(&stats, &a.output));
     Ok(())
 }

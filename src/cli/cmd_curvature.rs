@@ -5,8 +5,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::features::compute_curvature;
 use scanmesh::features::export::{curvature_output, write_curvature};
+use scanmesh::io::place;
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(CurvatureArgs => run, run_dir);
 #[derive(Args)]
@@ -29,17 +29,15 @@ pub struct CurvatureArgs {
 pub fn run(a: CurvatureArgs) -> Result<()> {
     let s = a.common.settings_in(&a.run)?;
     let params = a.fit.params()?;
-    s.init_threads();
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     let spec = curvature_output(&a.output)?;
     let progress = s.progress();
-    let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     let report = compute_curvature(store, &params, run.opts, progress)?;
     let window = run.plan.window_points;
     write_curvature(store, &a.output, &spec, window, s.keep(&a.input), progress)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    s.summary(super::closing(&report, t0, &a.output));
+    s.summary(s.closing(&report, &a.output));
     Ok(())
 }

@@ -10,7 +10,6 @@ use scanmesh::demo::{
     normals_line, picture, DemoCheck, DemoMesh, DemoMethod, DemoSample, NEXT_STEPS,
 };
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(DemoArgs => run, common);
 #[derive(Args)]
@@ -26,37 +25,23 @@ pub struct DemoArgs {
     #[arg(short, default_value_t = 200_000)]
     n: usize,
     /// Reconstruction method.
-    #[arg(long, value_enum, default_value_t = Method::Implicit)]
-    method: Method,
+    #[arg(long, value_enum, default_value_t = DemoMethod::Implicit)]
+    method: DemoMethod,
     #[command(flatten)]
     pub common: super::CommonArgs,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Method {
-    /// Signed distance + marching cubes (paper 1).
-    Implicit,
-    /// Local-projection triangulation of the points (paper 2).
-    Projection,
-}
-
 pub fn run(a: DemoArgs) -> Result<()> {
     let s = a.common.settings()?;
-    s.init_threads();
-    let t0 = Instant::now();
     let sample = DemoSample::new(a.n)?;
     outln!("{sample}")?;
     let progress = s.progress();
-    let method = match a.method {
-        Method::Implicit => DemoMethod::Implicit,
-        Method::Projection => DemoMethod::Projection,
-    };
-    s.lib.check_floor(&method.cost())?;
+    s.lib.check_floor(&a.method.cost())?;
     let out = &a.output;
-    match method.reconstruct(&sample, &s.lib, out, progress)? {
-        DemoMesh::Projection(r) => s.mesh_summary(&r.audit, super::closing(&r, t0, out)),
+    match a.method.reconstruct(&sample, &s.lib, out, progress)? {
+        DemoMesh::Projection(r) => s.mesh_summary(&r.audit, s.closing(&r, out)),
         DemoMesh::Implicit(r, normals) => {
-            s.mesh_summary(&r.audit, super::closing(&r, t0, out));
+            s.mesh_summary(&r.audit, s.closing(&r, out));
             outln!("{}", normals_line(&normals))?;
         }
     }

@@ -5,8 +5,8 @@ use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::features::extract::extract_lines;
+use scanmesh::io::place;
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(FeaturesArgs => run, run_dir);
 #[derive(Args)]
@@ -37,18 +37,16 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     let s = a.common.settings_in(&a.run)?.no_bars_if(a.json);
     s.no_keep("feature lines")?;
     let params = a.thresholds.params(a.fit.params()?)?;
-    s.init_threads();
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
     let progress = s.progress();
-    let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     let (graph, report) = extract_lines(store, &params, run.opts, progress)?;
     graph
         .write(&a.output, store.origin(), format)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    let summary = super::closing(&report, t0, &a.output);
+    let summary = s.closing(&report, &a.output);
     if a.json {
         outln!("{}", serde_json::to_string_pretty(&summary.json())?)?;
     } else {

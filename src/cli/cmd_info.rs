@@ -1,12 +1,11 @@
 //! `scanmesh info`: what a file or a store holds, or the plan of a run
 //! over it (`--plan`).
 
-use super::args::Planned;
 use super::stdout::outln;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use scanmesh::io::{InvalidPolicy, ReadOptions};
 use scanmesh::memory::{MemoryBudget, PlanTable};
+use scanmesh::planned::Planned;
 use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
 use scanmesh::store::is_store;
 use std::path::PathBuf;
@@ -49,48 +48,21 @@ pub struct InfoArgs {
     select: super::SelectArgs,
 }
 
-impl InfoArgs {
-    /// What to do with invalid records (fail, or count them as skipped)
-    /// and which points to count (`--classes`, `--returns`).
-    fn policy(&self) -> ReadOptions {
-        let policy = match self.skip_invalid {
-            true => InvalidPolicy::Skip,
-            false => InvalidPolicy::Reject,
-        };
-        ReadOptions {
-            policy,
-            select: self.select.selection(),
-            ..ReadOptions::default()
-        }
-    }
-}
-
 pub fn run(a: InfoArgs) -> Result<()> {
     if a.plan {
-        let mem =
-            scanmesh::units::parse_size(&a.mem).with_context(|| format!("--mem {}", a.mem))?;
-        let threads = match a.threads {
-            Some(0) => anyhow::bail!("--threads must be at least 1"),
-            Some(t) => t,
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        };
+        let (mem, threads) = super::mem_and_threads(&a.mem, a.threads)?;
         let progress = super::shown(a.quiet);
-        let (points, store) = points_to_plan(&a.input, a.policy(), progress.as_ref())?;
+        let read = a.select.read(a.skip_invalid);
+        let (points, store) = points_to_plan(&a.input, read, progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
         let cost = a.command.cost(a.closed);
         return outln!("{}", PlanTable::new(budget, points, store, cost)?);
     }
     let report = if is_store(&a.input) {
-        if !a.select.selection().is_all() {
-            anyhow::bail!(
-                "{}: --classes and --returns select points of a point file; a store holds the points it was built from",
-                a.input.display()
-            );
-        }
-        describe_store(&a.input)?
+        describe_store(&a.input, &a.select.selection())?
     } else {
         let progress = super::shown(a.quiet);
-        describe_file(&a.input, a.policy(), progress.as_ref())?
+        describe_file(&a.input, a.select.read(a.skip_invalid), progress.as_ref())?
     };
     match a.json {
         true => outln!("{}", serde_json::to_string_pretty(report.json())?),

@@ -1,17 +1,16 @@
 //! `scanmesh neighbors`: every point's topological (paper 3) or k nearest
 //! neighbours, in input order, as a binary CSR file or text.
 
-use super::HoodKind;
 use anyhow::{bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
+use scanmesh::io::place;
 use scanmesh::io::AtomicFile;
 use scanmesh::neighbours::{
     compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions,
 };
-use scanmesh::summary::Summary;
+use scanmesh::spatial::HoodKind;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::Neighbours]));
 #[derive(Args)]
@@ -29,8 +28,8 @@ pub struct NeighborsArgs {
     #[arg(long, default_value_t = 15)]
     k: usize,
     /// Output layout.
-    #[arg(long, value_enum, default_value_t = Layout::Bin)]
-    format: Layout,
+    #[arg(long, value_enum, default_value_t = OutputFormat::Csr)]
+    format: OutputFormat,
     /// Write statistics (sizes, iterations, time) to this JSON file.
     #[arg(long)]
     summary: Option<PathBuf>,
@@ -43,31 +42,13 @@ pub struct NeighborsArgs {
     pub run: super::RunDirArgs,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Layout {
-    /// Binary CSR: header, u64 offsets, u32/u64 neighbour ids.
-    Bin,
-    /// One line per point: its id, then its neighbours' ids.
-    Txt,
-}
-
 impl NeighborsArgs {
     fn params(&self) -> Result<NeighbourParams> {
-        let params = match self.neighbours {
-            HoodKind::Topological => NeighbourParams::topological(self.k, self.max_iterations),
-            HoodKind::Knn => NeighbourParams::knn(self.k),
-        };
+        let params = NeighbourParams::of(self.neighbours, self.k, self.max_iterations);
         params
             .validate()
             .with_context(|| format!("--k {}", self.k))?;
         Ok(params)
-    }
-
-    fn format(&self) -> OutputFormat {
-        match self.format {
-            Layout::Bin => OutputFormat::Csr,
-            Layout::Txt => OutputFormat::Text,
-        }
     }
 }
 
@@ -75,19 +56,17 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     let s = a.common.settings_in(&a.run)?;
     s.no_keep("lists over the selected points only (keeping the others is not implemented for neighbors yet)")?;
     let params = a.params()?;
-    s.init_threads();
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     if let Some(summary) = &a.summary {
-        super::check_distinct(&a.input, summary)?;
+        place::check_distinct(&a.input, summary)?;
         if summary == &a.output {
             bail!("--summary and -o name the same file");
         }
     }
     let progress = s.progress();
-    let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let out = OutputOptions {
-        format: a.format(),
+        format: a.format,
         window_points: run.plan.window_points,
     };
     let report = compute_neighbours(
@@ -99,13 +78,12 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
         progress,
     )
     .with_context(|| format!("writing {}", a.output.display()))?;
-    let secs = t0.elapsed().as_secs_f64();
+    let line = s.closing(&report, &a.output);
     if let Some(path) = &a.summary {
-        write_summary(path, &report, secs)
+        write_summary(path, &report, line.secs)
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    let peak = scanmesh::memory::peak_rss_bytes();
-    s.summary(Summary::new(&report, secs, peak, &a.output));
+    s.summary(line);
     Ok(())
 }
 

@@ -3,11 +3,11 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
+use scanmesh::io::place;
 use scanmesh::outliers::{
     compute_outliers, outliers_output, write_outliers, OutlierParams, OutliersWritten, OUTLIER,
 };
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(OutliersArgs => run, run_dir);
 #[derive(Args)]
@@ -45,14 +45,12 @@ pub fn run(a: OutliersArgs) -> Result<()> {
         ratio: a.ratio,
     };
     params.validate()?;
-    s.init_threads();
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     let mut spec = outliers_output(&a.output)?;
     if a.drop {
         spec.drop_flagged = OUTLIER;
     }
     let progress = s.progress();
-    let t0 = Instant::now();
     let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
     let store = &mut run.ws.store;
     let report = compute_outliers(store, &params, run.opts, progress)?;
@@ -64,6 +62,6 @@ pub fn run(a: OutliersArgs) -> Result<()> {
         rows,
         dropped: a.drop,
     };
-    s.summary(super::closing(&written, t0, &a.output));
+    s.summary(s.closing(&written, &a.output));
     Ok(())
 }

@@ -1,15 +1,17 @@
 //! `scanmesh reconstruct`: a mesh from a point cloud (paper 1's implicit
-//! method, seam-exact in tiles; or paper 2's local projection, whose seams
-//! are re-grown), streaming.
+//! method, seam-exact in tiles; paper 2's local projection, whose seams
+//! are re-grown; or paper 4's Delaunay method, tiled and exact), streaming.
 
 use super::args::{HoodArgs, ReconArgs};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use scanmesh::io::mesh_format;
+use scanmesh::io::place;
+use scanmesh::recon::delaunay::reconstruct::{cost as delaunay_cost, reconstruct_delaunay};
 use scanmesh::recon::implicit::reconstruct::reconstruct_implicit;
-use scanmesh::store::StageId;
+use scanmesh::recon::projection::reconstruct_projection;
+use scanmesh::store::{spacing::ensure_spacing, StageId};
 use std::path::PathBuf;
-use std::time::Instant;
 
 super::command::command_args!(ReconstructArgs => run, run_dir |a| a.tile_stages());
 #[derive(Args)]
@@ -61,40 +63,40 @@ impl ReconstructArgs {
 pub fn run(a: ReconstructArgs) -> Result<()> {
     let s = a.common.settings_in(&a.run)?;
     s.no_keep("a mesh")?;
-    s.init_threads();
-    super::check_distinct(&a.input, &a.output)?;
+    place::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
-    let (input, output) = (&a.input, &a.output);
+    let (input, output, progress) = (&a.input, &a.output, s.progress());
     match a.method {
         Method::Delaunay => {
             let params = a.recon.delaunay()?;
-            return super::cmd_reconstruct_delaunay::run(&s, input, output, format, &params);
+            let mut run = s.open_input(input, output, delaunay_cost(), progress)?;
+            let store = &mut run.ws.store;
+            let r = reconstruct_delaunay(store, &params, output, format, run.opts, progress)
+                .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
+                .with_context(|| format!("reconstructing {}", input.display()))?;
+            s.mesh_summary(&r.audit, s.closing(&r, output));
         }
         Method::Projection => {
             let params = a.recon.projection(&a.hood)?;
-            return super::cmd_reconstruct_projection::run(&s, input, output, format, &params);
+            let mut run = s.open_input(input, output, params.cost(), progress)?;
+            let store = &mut run.ws.store;
+            let r = reconstruct_projection(store, &params, output, format, run.opts, progress)
+                .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
+            s.mesh_summary(&r.audit, s.closing(&r, output));
         }
-        Method::Implicit => {}
+        Method::Implicit => {
+            let params = a.recon.implicit(&a.hood)?;
+            let mut run = s.open_input(input, output, params.cost(), progress)?;
+            let store = &mut run.ws.store;
+            if params.cell.is_some() {
+                // The run needs the spacing anyway; kept in the store's manifest.
+                let cost = params.cost_with_spacing(ensure_spacing(store)?);
+                s.lib.check_stage_space(store, output, &cost)?;
+            }
+            let r = reconstruct_implicit(store, &params, output, format, run.opts, progress)
+                .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
+            s.mesh_summary(&r.audit, s.closing(&r, output));
+        }
     }
-    let params = a.recon.implicit(&a.hood)?;
-    let progress = s.progress();
-    let t0 = Instant::now();
-    let mut run = s.open_input(input, output, params.cost(), progress)?;
-    if params.cell.is_some() {
-        // The run needs the spacing anyway; kept in the store's manifest.
-        let spacing = scanmesh::store::spacing::ensure_spacing(&mut run.ws.store)?;
-        s.lib
-            .check_stage_space(&run.ws.store, output, &params.cost_with_spacing(spacing))?;
-    }
-    let r = reconstruct_implicit(
-        &mut run.ws.store,
-        &params,
-        output,
-        format,
-        run.opts,
-        progress,
-    )
-    .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
-    s.mesh_summary(&r.audit, super::closing(&r, t0, output));
     Ok(())
 }

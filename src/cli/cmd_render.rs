@@ -6,7 +6,8 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::DVec3;
 use scanmesh::features::lines::LineGraph;
-use scanmesh::io::{open_reader, read_mesh_any, InvalidPolicy, PointChunk, ReadOptions};
+use scanmesh::geom::parse_xyz;
+use scanmesh::io::{open_reader, read_all_xyz, read_mesh_any};
 use scanmesh::render::scene::{Scene, Style};
 use std::path::PathBuf;
 
@@ -35,10 +36,10 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 900)]
     height: usize,
     /// Viewing direction x,y,z (the camera looks along it).
-    #[arg(long, default_value = "0,0,-1", value_parser = parse_vec)]
+    #[arg(long, default_value = "0,0,-1", value_parser = parse_xyz)]
     view: DVec3,
     /// Up direction x,y,z.
-    #[arg(long, default_value = "0,1,0", value_parser = parse_vec)]
+    #[arg(long, default_value = "0,1,0", value_parser = parse_xyz)]
     up: DVec3,
     /// Point splat radius in pixels.
     #[arg(long, default_value_t = 1.0)]
@@ -48,32 +49,15 @@ pub struct RenderArgs {
     line_width: f64,
 }
 
-fn parse_vec(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>().map_err(|e| e.to_string()))
-        .collect::<Result<_, _>>()?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
-        _ => Err("expected three finite numbers x,y,z".into()),
-    }
-}
-
 pub fn run(a: RenderArgs) -> Result<()> {
     if a.points.is_none() && a.lines.is_none() && a.mesh.is_none() {
         bail!("nothing to draw: give --points, --lines or --mesh");
     }
     let mut scene = Scene::default();
     if let Some(p) = &a.points {
-        let read = ReadOptions {
-            select: a.select.selection(),
-            ..ReadOptions::from(InvalidPolicy::Skip)
-        };
-        let mut r = open_reader(p, read).with_context(|| format!("reading {}", p.display()))?;
-        let mut chunk = PointChunk::default();
-        while r.read_chunk(&mut chunk, 1 << 16)? > 0 {
-            scene.points.extend_from_slice(&chunk.xyz);
-        }
+        let mut r = open_reader(p, a.select.read(true))
+            .with_context(|| format!("reading {}", p.display()))?;
+        scene.points = read_all_xyz(r.as_mut())?;
     }
     if let Some(l) = &a.lines {
         scene.lines = Some(LineGraph::read(l)?);

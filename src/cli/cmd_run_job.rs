@@ -5,11 +5,10 @@
 //! from the directory it was given in, on the input it was given (checked
 //! unchanged).
 
-use super::args::{parse_range, parse_share};
 use super::Cli;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
-use scanmesh::rundir::{fingerprint, RunDir};
+use scanmesh::rundir::RunDir;
 use scanmesh::store::{Job, TileSet};
 use std::path::PathBuf;
 
@@ -22,10 +21,10 @@ pub struct RunJobArgs {
     #[arg(long, requires = "tile_set")]
     stage: Option<String>,
     /// Tiles FIRST-LAST of --stage (0-based, inclusive).
-    #[arg(long, value_parser = parse_range, group = "tile_set")]
+    #[arg(long, value_parser = TileSet::parse_range, group = "tile_set")]
     tiles: Option<TileSet>,
     /// Share INDEX/COUNT of --stage's tiles, for array jobs.
-    #[arg(long, value_parser = parse_share, group = "tile_set")]
+    #[arg(long, value_parser = TileSet::parse_share, group = "tile_set")]
     share: Option<TileSet>,
     /// Do what comes before this tile stage, then stop.
     #[arg(long, conflicts_with = "stage")]
@@ -38,46 +37,11 @@ pub struct RunJobArgs {
     quiet: bool,
 }
 
-impl RunJobArgs {
-    fn job(&self) -> Job {
-        match (&self.stage, self.tiles.or(self.share), &self.until) {
-            (Some(stage), Some(tiles), _) => Job::Tiles {
-                stage: stage.clone(),
-                tiles,
-            },
-            (_, _, Some(stage)) => Job::Until(stage.clone()),
-            _ => Job::Whole,
-        }
-    }
-}
-
 pub fn run(a: RunJobArgs) -> Result<()> {
-    if !a.dir.is_dir() {
-        bail!("{}: no such run directory", a.dir.display());
-    }
-    let run = RunDir::at(&a.dir)?;
-    let Some(id) = run.identity()? else {
-        bail!(
-            "{}: not a run directory (start the run with --run-dir first)",
-            a.dir.display()
-        );
-    };
-    if id.scanmesh_version != env!("CARGO_PKG_VERSION") {
-        bail!(
-            "{}: the run was started by scanmesh {}, this is {}",
-            a.dir.display(),
-            id.scanmesh_version,
-            env!("CARGO_PKG_VERSION")
-        );
-    }
+    let (run, id) = RunDir::recorded(&a.dir, env!("CARGO_PKG_VERSION"))?;
     std::env::set_current_dir(&id.cwd)
         .with_context(|| format!("the run's directory {}", id.cwd.display()))?;
-    if fingerprint(&id.input.path)? != id.input {
-        bail!(
-            "{}: the input changed since the run started; start it again with --restart",
-            id.input.path.display()
-        );
-    }
+    id.check_input()?;
     let mut args = vec!["scanmesh".to_string()];
     args.extend(id.args.iter().cloned());
     args.extend(["--run-dir".into(), run.dir().to_string_lossy().into_owned()]);
@@ -93,7 +57,7 @@ pub fn run(a: RunJobArgs) -> Result<()> {
     let Some(run) = command.args_mut().run_dir_mut() else {
         bail!("{}: the recorded command keeps no run", a.dir.display());
     };
-    run.job = a.job();
+    run.job = Job::of(a.stage.as_deref(), a.tiles.or(a.share), a.until.as_deref());
     // Refused here, before the job is logged as started: --threads from
     // the script, --mem from the recorded command, against this node.
     if let Some(common) = command.args().common() {

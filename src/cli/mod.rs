@@ -12,8 +12,6 @@ mod cmd_neighbors;
 mod cmd_normals;
 mod cmd_outliers;
 mod cmd_reconstruct;
-mod cmd_reconstruct_delaunay;
-mod cmd_reconstruct_projection;
 mod cmd_render;
 mod cmd_run_job;
 mod cmd_status;
@@ -28,15 +26,17 @@ mod stdout;
 pub use stdout::closed as stdout_closed;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
 use command::CommandArgs;
+use scanmesh::io::keep::Unselected;
 use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
-use scanmesh::memory::{cores, too_many_threads, too_much_memory};
+use scanmesh::memory::{cores, too_many_threads, too_much_memory, within_promise};
 use scanmesh::mesh::MeshAudit;
-use scanmesh::pipeline::{KernelCost, MemoryBudget, NoProgress, Prepared, Progress, RunSettings};
-use scanmesh::rundir::{open_input, Session};
-use scanmesh::runlog::SharedRunLog;
+use scanmesh::pipeline::{reclaimed_note, KernelCost, MemoryBudget, NoProgress, Prepared};
+use scanmesh::pipeline::{Progress, RunSettings};
+use scanmesh::rundir::{open_input, Scheduler, Session};
+use scanmesh::runlog::{SharedRunLog, StageLines};
 use scanmesh::store::{Job, PointStore};
 use scanmesh::summary::Summary;
 use std::fmt::Display;
@@ -79,6 +79,7 @@ macro_rules! commands {
                 }
             }
 
+            /// Runs the command in this process.
             fn dispatch(self) -> Result<()> {
                 match self {
                     $(Command::$variant(a) => a.run(),)*
@@ -203,25 +204,6 @@ pub struct RunDirArgs {
     session: Option<Session>,
 }
 
-/// `--emit`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Scheduler {
-    /// A shell script running each tile stage with GNU parallel.
-    Parallel,
-    /// A bash script submitting the jobs with sbatch: single jobs and
-    /// array jobs chained by `afterok` dependencies.
-    Slurm,
-}
-
-impl From<Scheduler> for scanmesh::rundir::Scheduler {
-    fn from(s: Scheduler) -> Self {
-        match s {
-            Scheduler::Parallel => Self::Parallel,
-            Scheduler::Slurm => Self::Slurm,
-        }
-    }
-}
-
 /// Which points of the input to process (`--classes`, `--returns`),
 /// taken by every command that reads a point file.
 #[derive(Args, Clone, Debug, Default)]
@@ -234,54 +216,32 @@ pub struct SelectArgs {
     classes: Option<Vec<u8>>,
     /// Process only these returns of each pulse: first (return number
     /// 1), last (return number = number of returns, LAS/LAZ) or all.
-    #[arg(long, value_enum, default_value_t = ReturnsArg::All)]
-    returns: ReturnsArg,
-}
-
-/// `--unselected`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum Unselected {
-    /// Per-point outputs hold the selected points only.
-    #[default]
-    Drop,
-    /// Per-point outputs hold every input point, the unselected flagged.
-    Keep,
-}
-
-/// `--returns`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum ReturnsArg {
-    /// Every return.
-    #[default]
-    All,
-    /// Return number 1.
-    First,
-    /// Return number equal to the pulse's number of returns.
-    Last,
+    #[arg(long, value_enum, default_value_t = Returns::All)]
+    returns: Returns,
 }
 
 impl SelectArgs {
+    /// How to read the input: these points, and invalid records skipped
+    /// (`--skip-invalid`) or refused.
+    pub fn read(&self, skip_invalid: bool) -> ReadOptions {
+        let policy = match skip_invalid {
+            true => InvalidPolicy::Skip,
+            false => InvalidPolicy::Reject,
+        };
+        ReadOptions {
+            policy,
+            select: self.selection(),
+            ..ReadOptions::default()
+        }
+    }
+
     /// The selection the flags give.
     pub fn selection(&self) -> Selection {
         Selection {
             classes: self.classes.clone(),
-            returns: match self.returns {
-                ReturnsArg::All => Returns::All,
-                ReturnsArg::First => Returns::First,
-                ReturnsArg::Last => Returns::Last,
-            },
+            returns: self.returns,
         }
     }
-}
-
-/// Which neighbourhood a per-point computation uses (`neighbors --neighbours`,
-/// `normals --neighbours`, `reconstruct --neighbours`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum HoodKind {
-    /// Paper 3's topological neighbours: mean reverse shift over an R*-tree.
-    Topological,
-    /// The plain k nearest neighbours.
-    Knn,
 }
 
 /// Validated common options: the library's run settings, and what the
@@ -301,15 +261,19 @@ pub struct Settings {
     pub log: SharedRunLog,
     /// Progress bars (none with `--quiet`), every stage timed into `log`.
     progress: Box<dyn Progress>,
+    /// When the command began (its summary line's seconds).
+    t0: Instant,
 }
 
 /// Bars on a terminal, nothing otherwise or when `quiet`; stage timings
 /// instead when `SCANMESH_TIMINGS` asks for them.
 fn shown(quiet: bool) -> Box<dyn Progress> {
-    progress::timings().unwrap_or_else(|| match quiet {
-        true => Box::new(NoProgress),
-        false => progress::bars(),
-    })
+    match std::env::var_os("SCANMESH_TIMINGS") {
+        // Asked for by name: whatever `--quiet` says.
+        Some(_) => Box::new(StageLines::new(|line| eprintln!("{line}"))),
+        None if quiet => Box::new(NoProgress),
+        None => progress::bars(),
+    }
 }
 
 /// What of `--mem` and `--threads` this machine cannot keep, each naming
@@ -320,6 +284,16 @@ fn beyond_this_machine(mem: u64, threads: usize) -> impl Iterator<Item = String>
     threads.into_iter().chain(mem)
 }
 
+/// `--mem` and `--threads` as numbers (the threads by default all cores).
+fn mem_and_threads(mem: &str, threads: Option<usize>) -> Result<(u64, usize)> {
+    let bytes = scanmesh::units::parse_size(mem).with_context(|| format!("--mem {mem}"))?;
+    match threads {
+        Some(0) => bail!("--threads must be at least 1"),
+        Some(t) => Ok((bytes, t)),
+        None => Ok((bytes, cores())),
+    }
+}
+
 impl CommonArgs {
     /// `--mem` and `--threads` as numbers, refused beyond this machine.
     /// With `--emit` the jobs run where the script sends them (a compute
@@ -327,13 +301,7 @@ impl CommonArgs {
     /// here: [`CommonArgs::check_against_this_machine`] warns, and each
     /// job refuses them where it runs.
     fn mem_and_threads(&self, emit: bool) -> Result<(u64, usize)> {
-        let mem = scanmesh::units::parse_size(&self.mem)
-            .with_context(|| format!("--mem {}", self.mem))?;
-        let threads = match self.threads {
-            Some(0) => bail!("--threads must be at least 1"),
-            Some(t) => t,
-            None => cores(),
-        };
+        let (mem, threads) = mem_and_threads(&self.mem, self.threads)?;
         if !emit {
             if let Some(why) = beyond_this_machine(mem, threads).next() {
                 bail!(why);
@@ -359,7 +327,8 @@ impl CommonArgs {
         self.settings_in(&RunDirArgs::default())
     }
 
-    /// The settings of a command run in `run`'s directory, if it names one.
+    /// The settings of a command run in `run`'s directory, if it names one;
+    /// rayon's pool sized to their threads (once per process).
     fn settings_in(&self, run: &RunDirArgs) -> Result<Settings> {
         let (mem, threads) = self.mem_and_threads(run.emit.is_some())?;
         if self.tile_points == Some(0) {
@@ -370,21 +339,16 @@ impl CommonArgs {
             .as_deref()
             .map(|s| scanmesh::units::parse_size(s).with_context(|| format!("--scratch {s}")))
             .transpose()?;
-        let policy = match self.skip_invalid {
-            true => InvalidPolicy::Skip,
-            false => InvalidPolicy::Reject,
+        let read = ReadOptions {
+            scans: self.scans.clone(),
+            ..self.select.read(self.skip_invalid)
         };
-        let select = self.select.selection();
-        Ok(Settings {
-            keep_unselected: self.unselected == Unselected::Keep && !select.is_all(),
+        let settings = Settings {
+            keep_unselected: self.unselected == Unselected::Keep && !read.select.is_all(),
             lib: RunSettings {
                 budget: MemoryBudget::new(mem, threads),
                 tile_points: self.tile_points,
-                read: ReadOptions {
-                    policy,
-                    scans: self.scans.clone(),
-                    select,
-                },
+                read,
                 scratch_dir: self.scratch_dir.clone(),
                 scratch_limit,
             },
@@ -392,7 +356,13 @@ impl CommonArgs {
             run: run.session.clone(),
             log: self.log.clone(),
             progress: Box::new(self.log.timed(shown(self.quiet))),
-        })
+            t0: Instant::now(),
+        };
+        // Only fails when a pool exists already, which is then kept.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global();
+        Ok(settings)
     }
 }
 
@@ -448,18 +418,13 @@ impl Settings {
     }
 
     fn say_reclaimed(&self, removed: &[PathBuf]) {
-        if !removed.is_empty() && !self.quiet {
-            let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
-            eprintln!(
-                "removed {} scratch entries that killed runs left: {}",
-                removed.len(),
-                names.join(", ")
-            );
+        if let Some(note) = reclaimed_note(removed).filter(|_| !self.quiet) {
+            eprintln!("{note}");
         }
     }
 
     /// The summary says how many input records the store lacks.
-    fn say_skipped(&self, store: &PointStore) {
+    pub fn say_skipped(&self, store: &PointStore) {
         let m = store.manifest();
         self.log
             .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
@@ -500,25 +465,16 @@ impl Settings {
         }
     }
 
-    /// Sizes rayon's pool once per process.
-    fn init_threads(&self) {
-        // Only fails when a pool exists already, which is then kept.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .num_threads(self.lib.budget.threads)
-            .build_global();
+    /// The closing line of `report`, for this command, which wrote `output`.
+    pub fn closing<'a, R>(&self, report: &'a R, output: &'a Path) -> Summary<'a, R> {
+        Summary::since(report, self.t0, output)
     }
 }
 
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    let report = cli.command.args().common().and_then(|c| c.report.clone());
-    // Begun when the command line was parsed: the run's cost counts from there.
-    let log = cli
-        .command
-        .args()
-        .common()
-        .map(|c| c.log.clone())
-        .unwrap_or_default();
+    let common = cli.command.args().common().cloned();
+    let report = common.as_ref().and_then(|c| c.report.clone());
     if let Some(path) = &report {
         place::check_output(path)?;
     }
@@ -529,17 +485,10 @@ pub fn run() -> Result<()> {
         .args()
         .run_dir()
         .is_some_and(|r| r.emit.is_some());
-    let checked = cli
-        .command
-        .args()
-        .common()
+    let checked = common
+        .as_ref()
         .map_or(Ok(()), |c| c.check_against_this_machine(emit));
-    let promised = cli
-        .command
-        .args()
-        .common()
-        .and_then(|c| c.mem_and_threads(emit).ok())
-        .map(|(mem, _)| mem);
+    let promised = common.as_ref().and_then(|c| c.mem_and_threads(emit).ok());
     let outcome = checked
         .and_then(|()| match cli.command {
             Command::RunJob(a) => cmd_run_job::run(a),
@@ -547,64 +496,13 @@ pub fn run() -> Result<()> {
             command => run_in_dir::run_in_dir(command, std::env::args().skip(1).collect()),
         })
         .map_err(hints::with_flag_hints)
-        .and_then(|()| within_the_promise(promised));
+        // `--mem` promises the peak RSS: a run that went over it fails,
+        // though its outputs are whole.
+        .and_then(|()| Ok(promised.map_or(Ok(()), |(mem, _)| within_promise(mem))?));
     if let Some(path) = &report {
+        // Begun when the command line was parsed: the run's cost counts from there.
+        let log = common.map(|c| c.log).unwrap_or_default();
         report::write(&log, path, &outcome)?;
     }
     outcome
-}
-
-/// `--mem` promises the peak RSS: a run that went over it fails, though
-/// its outputs are whole (the plan, not the data, was wrong), so that a
-/// budget bench or a cluster's memory limit learns it from the exit code.
-fn within_the_promise(mem: Option<u64>) -> Result<()> {
-    let (Some(mem), Some(peak)) = (mem, scanmesh::memory::peak_rss_bytes()) else {
-        return Ok(());
-    };
-    if peak > mem {
-        anyhow::bail!(
-            "the run's peak memory {} went over --mem {}: its outputs are complete, but its memory plan failed (please report it with the command line)",
-            scanmesh::units::human_bytes(peak),
-            scanmesh::units::human_bytes(mem)
-        );
-    }
-    Ok(())
-}
-
-/// Runs one command in this process.
-fn dispatch(command: Command) -> Result<()> {
-    command.dispatch()
-}
-
-/// Refuses to overwrite an input with an output.
-pub fn check_distinct(input: &std::path::Path, output: &std::path::Path) -> Result<()> {
-    if let (Ok(a), Ok(b)) = (input.canonicalize(), output.canonicalize()) {
-        if a == b {
-            bail!("{}: output would overwrite the input", output.display());
-        }
-    }
-    Ok(())
-}
-
-/// The closing line of `report`, for a run that began at `t0`, peaked at
-/// this process's peak so far and wrote `output`.
-pub fn closing<'a, R>(report: &'a R, t0: Instant, output: &'a Path) -> Summary<'a, R> {
-    let peak = scanmesh::memory::peak_rss_bytes();
-    Summary::new(report, t0.elapsed().as_secs_f64(), peak, output)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::within_the_promise;
-
-    /// A peak over `--mem` fails the run, naming both; under it, or with
-    /// no promise, it passes.
-    #[test]
-    fn a_peak_over_the_promise_fails_the_run() {
-        let over = within_the_promise(Some(1024)).expect_err("this process holds more than 1 KiB");
-        let said = over.to_string();
-        assert!(said.contains("went over --mem 1.00KiB"), "{said}");
-        assert!(within_the_promise(Some(u64::MAX)).is_ok());
-        assert!(within_the_promise(None).is_ok());
-    }
 }

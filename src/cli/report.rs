@@ -4,7 +4,7 @@
 //! by its `CommonArgs` into `Settings`), and the report written when the
 //! flag asks for it, with the outcome in words.
 
-use scanmesh::runlog::SharedRunLog;
+use scanmesh::runlog::{outcome_words, SharedRunLog};
 use std::fmt::Display;
 use std::io::Write;
 use std::path::Path;
@@ -19,16 +19,7 @@ pub fn summary(log: &SharedRunLog, line: impl Display) {
 
 /// Writes the report of the run `log` holds to `path`, `outcome` its result.
 pub fn write(log: &SharedRunLog, path: &Path, outcome: &anyhow::Result<()>) -> anyhow::Result<()> {
-    let outcome = match outcome {
-        Ok(()) => "ok".to_string(),
-        Err(e) => format!(
-            "error: {}",
-            e.chain()
-                .map(|c| c.to_string())
-                .collect::<Vec<_>>()
-                .join(": ")
-        ),
-    };
+    let outcome = outcome_words(outcome.as_ref().map(|_| ()).map_err(|e| e.as_ref() as _));
     let args: Vec<String> = std::env::args().collect();
     log.with(|log| log.write_json(path, env!("CARGO_PKG_VERSION"), &args, &outcome))
         .map_err(|e| anyhow::anyhow!("--report {e}"))

@@ -7,7 +7,7 @@
 
 use super::Command;
 use anyhow::{anyhow, Context, Result};
-use scanmesh::rundir::{job_script, ProcessRecord, RunDir, RunIdentity, Session};
+use scanmesh::rundir::{job_script, this_binary, RunDir, RunIdentity, Session};
 use scanmesh::store::Job;
 
 /// Options that vary between the processes of one run without changing
@@ -47,10 +47,10 @@ pub fn stable_args(args: &[String]) -> Vec<String> {
 /// or says there is nothing left to do.
 pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
     let (Some(common), Some(run_args)) = (command.args().common(), command.args().run_dir()) else {
-        return super::dispatch(command);
+        return command.dispatch();
     };
     let Some(dir) = run_args.run_dir.clone() else {
-        return super::dispatch(command);
+        return command.dispatch();
     };
     let (input, output) = command
         .args()
@@ -71,7 +71,7 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             let stages = command.args().tile_stages()?;
             let budget = common.settings_in(run_args)?.lib.budget;
             let binary = this_binary();
-            let script = job_script(kind.into(), &run, &stages, run_args.tasks, budget, &binary);
+            let script = job_script(kind, &run, &stages, run_args.tasks, budget, &binary);
             return super::stdout::write(format_args!("{script}"));
         }
         if let Some(summary) = run.finished(&output, &input)? {
@@ -89,41 +89,17 @@ pub fn run_in_dir(mut command: Command, args: Vec<String>) -> Result<()> {
             return Ok(());
         }
     }
-    // `status` tells this process apart from a dead one by its record,
-    // removed when this function returns.
-    let _record = ProcessRecord::record(run.dir());
-    let session = Session::new(run, job);
+    // This process's record, removed when this function returns.
+    let (session, _record) = Session::start(run, job);
     if let Some(r) = command.args_mut().run_dir_mut() {
         r.session = Some(session.clone());
     }
-    session.log_start();
-    let outcome = super::dispatch(command);
+    let outcome = command.dispatch();
     for line in session.log_damaged_tiles() {
         eprintln!("{line}");
     }
-    match outcome {
-        Err(_) if session.log_stopped() => Ok(()),
-        Ok(()) => Ok(session.log_done(&output, log.with(|l| l.last_summary().map(String::from)))?),
-        Err(e) => {
-            session.log_failed(&e);
-            Err(e)
-        }
-    }
-}
-
-/// The absolute path of this binary, which the jobs run unless `SCANMESH`
-/// says otherwise.
-fn this_binary() -> String {
-    let Ok(exe) = std::env::current_exe() else {
-        return "scanmesh".to_string();
-    };
-    let text = exe.to_string_lossy().into_owned();
-    // Linux names a binary replaced since it started (a rebuild) so; the
-    // path itself then holds the new one.
-    match text.strip_suffix(" (deleted)") {
-        Some(path) if !exe.exists() => path.to_string(),
-        _ => text,
-    }
+    let summary = log.with(|l| l.last_summary().map(String::from));
+    session.finish(outcome, &output, summary)
 }
 
 #[cfg(test)]

@@ -7,16 +7,9 @@
 use std::io::{ErrorKind, Write};
 
 /// Standard output was closed by its reader.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
+#[error("standard output was closed by its reader")]
 pub struct Closed;
-
-impl std::fmt::Display for Closed {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("standard output was closed by its reader")
-    }
-}
-
-impl std::error::Error for Closed {}
 
 /// Writes `args` to standard output.
 pub fn write(args: std::fmt::Arguments) -> anyhow::Result<()> {

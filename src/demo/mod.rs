@@ -21,7 +21,7 @@ use crate::io::{read_mesh_from, IoError};
 use crate::pipeline::WorkspaceError;
 use crate::recon::implicit::reconstruct::ReconError;
 use crate::recon::projection::ProjectionError;
-use crate::store::StoreError;
+use crate::store::{Causes, StoreError};
 use crate::synth::{generate, mean_spacing_hint, Scan, Shape, SynthError, TriMesh};
 
 pub use run::{normals_line, picture, DemoCheck, DemoMesh, DemoMethod, DemoSample, NEXT_STEPS};
@@ -52,6 +52,17 @@ pub enum DemoError {
     /// The mesh written has nothing finite to draw.
     #[error("the demo mesh has nothing to draw")]
     NothingToDraw,
+}
+
+impl DemoError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            DemoError::Workspace(w) => w.causes(),
+            DemoError::Store(e) => e.causes(),
+            _ => Causes::default(),
+        }
+    }
 }
 
 /// The embedded dragon mesh, read straight from the binary.

@@ -22,10 +22,11 @@ use std::path::Path;
 pub const NEXT_STEPS: &str = "demo: next, on a scan of your own: `scanmesh info scan.las`, then `scanmesh reconstruct scan.las -o mesh.ply` (open surface) or `--closed`, `scanmesh render --mesh mesh.ply -o mesh.png`; `scanmesh --help` lists every command";
 
 /// How the demo reconstructs the sample.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum DemoMethod {
     /// Signed distance + marching cubes (paper 1), closed: the dragon is a
     /// closed object, and the watertight mode is its best mesh.
+    #[value(help = "Signed distance + marching cubes (paper 1)")]
     Implicit,
     /// Local-projection triangulation of the points (paper 2).
     Projection,

@@ -40,7 +40,7 @@ mod summary;
 pub use bad_parameter::BadFeatureParameter;
 pub use curvature::{compute_curvature, CurvatureReport};
 
-use crate::normals::NormalParams;
+use crate::normals::{NormalParams, Orientation};
 use crate::pipeline::PipelineError;
 use crate::store::{ColumnSpec, Item, StoreError};
 use serde::{Deserialize, Serialize};
@@ -173,6 +173,36 @@ impl HoodChoice {
     }
 }
 
+/// A fit's neighbourhood by kind (the CLI's `--neighbours`), its settings
+/// given beside it ([`CurvatureParams::fit`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FitHood {
+    /// [`HoodChoice::Radius`], or [`HoodChoice::Auto`] without a radius.
+    #[value(help = None::<&str>)]
+    Radius,
+    /// [`HoodChoice::Knn`].
+    #[value(help = None::<&str>)]
+    Knn,
+    /// [`HoodChoice::Topological`].
+    #[value(help = None::<&str>)]
+    Topological,
+}
+
+/// How a fit's normals get their sign when the store has none (the CLI's
+/// `--orient` of `curvature` and `features`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FitOrientation {
+    /// [`Orientation::SpanningTree`], the project's default.
+    #[value(
+        name = "mst",
+        help = "Minimum spanning tree (paper 1), the project's default"
+    )]
+    SpanningTree,
+    /// [`Orientation::SixSources`] with the default `tau`.
+    #[value(name = "sources", help = "Paper 5's six sources")]
+    SixSources,
+}
+
 /// Parameters of the curvature pass.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct CurvatureParams {
@@ -183,6 +213,42 @@ pub struct CurvatureParams {
 }
 
 impl CurvatureParams {
+    /// The fit to a neighbourhood of kind `hood` (`radius`: its radius in
+    /// mean spacings, else the noise-adaptive default; `k` and
+    /// `max_iterations` for the kinds that take them), its normals signed
+    /// by `orient` when the store has none; a neighbourhood that cannot be
+    /// is refused.
+    pub fn fit(
+        hood: FitHood,
+        radius: Option<f64>,
+        k: usize,
+        max_iterations: usize,
+        orient: FitOrientation,
+    ) -> Result<Self, FeaturesError> {
+        let hood = match hood {
+            FitHood::Radius => match radius {
+                Some(spacings) => HoodChoice::Radius { spacings },
+                None => HoodChoice::Auto,
+            },
+            FitHood::Knn => HoodChoice::Knn { k },
+            FitHood::Topological => HoodChoice::Topological { k, max_iterations },
+        };
+        hood.validate()?;
+        let orientation = match orient {
+            FitOrientation::SpanningTree => Orientation::SpanningTree,
+            FitOrientation::SixSources => Orientation::SixSources {
+                tau: crate::normals::sources::DEFAULT_TAU,
+            },
+        };
+        Ok(CurvatureParams {
+            hood,
+            normals: NormalParams {
+                orientation,
+                ..NormalParams::default()
+            },
+        })
+    }
+
     /// Refuses an unusable neighbourhood, or normal parameters that cannot
     /// give normals.
     pub fn validate(&self) -> Result<(), FeaturesError> {

@@ -16,6 +16,12 @@ pub enum IoError {
         #[source]
         source: std::io::Error,
     },
+    /// An output names the input itself: writing it would destroy the input.
+    #[error("{path}: output would overwrite the input")]
+    OverwritesInput {
+        /// The output asked for.
+        path: PathBuf,
+    },
     /// The file name's extension is none scanmesh reads or writes.
     #[error(
         "{path}: unknown format (expected .ply, .xyz/.txt/.csv, .las, .laz, .pcd or .e57; text, PLY and PCD optionally .gz)"

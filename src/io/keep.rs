@@ -20,6 +20,17 @@ use super::{
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 
+/// What a per-point output holds of the points a selection leaves out
+/// (the CLI's `--unselected`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Unselected {
+    /// Per-point outputs hold the selected points only.
+    #[default]
+    Drop,
+    /// Per-point outputs hold every input point, the unselected flagged.
+    Keep,
+}
+
 /// The flag of a row a selection left out, with `--unselected keep`, in
 /// every per-point output: nothing was computed for it (NaN values).
 pub const UNSELECTED: u8 = 128;

@@ -41,7 +41,7 @@ pub use attributes::{
 pub use error::IoError;
 pub use las_file::LasSource;
 pub use obj::read_obj_mesh;
-pub use open::{open_reader, open_stream_reader, read_mesh_any, read_mesh_from};
+pub use open::{open_reader, open_stream_reader, read_all_xyz, read_mesh_any, read_mesh_from};
 pub use output::{mesh_format, not_held, output_spec, Carried, MeshFormat};
 pub use ply::read_mesh;
 pub use reasons::{E57Reason, E57Step, LasReason, ScanProblem, Trailing, UnwritableReason};

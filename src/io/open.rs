@@ -1,5 +1,6 @@
 //! Choosing a reader for a file: by content first (gzip, `ply`, `LASF`
-//! magic), by name only for text formats, which have no magic.
+//! magic), by name only for text formats, which have no magic; reading a
+//! whole mesh, or a reader's points whole.
 
 use super::e57::{is_e57_magic, E57Reader};
 use super::las::LasReader;
@@ -9,7 +10,9 @@ use super::ply::{is_ply_magic, read_ply_mesh, PlyPointReader};
 use super::select;
 use super::source::{open_input, open_stream, Opened};
 use super::xyz::XyzReader;
-use super::{format_from_name, Format, InvalidPolicy, IoError, PointReader, ReadOptions};
+use super::{
+    format_from_name, Format, InvalidPolicy, IoError, PointChunk, PointReader, ReadOptions,
+};
 use glam::DVec3;
 use std::path::Path;
 
@@ -150,6 +153,17 @@ fn streamed_format(
             path: path.to_path_buf(),
         }),
     }
+}
+
+/// Every point `reader` has left, its coordinates only, read in chunks (a
+/// picture's points, a distance reference: inputs held whole by design).
+pub fn read_all_xyz(reader: &mut dyn PointReader) -> Result<Vec<DVec3>, IoError> {
+    let mut chunk = PointChunk::default();
+    let mut points = Vec::new();
+    while reader.read_chunk(&mut chunk, 1 << 16)? > 0 {
+        points.extend_from_slice(&chunk.xyz);
+    }
+    Ok(points)
 }
 
 /// Reads a whole triangle mesh: PLY (by its magic, gzip allowed) or OBJ (by a

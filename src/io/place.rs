@@ -1,6 +1,7 @@
 //! Where outputs and scratch files go: checked before any input is read, so
-//! a missing or read-only directory, or a volume too small for the run, is
-//! reported as what it is (and where), not as a failure to read the input.
+//! a missing or read-only directory, a volume too small for the run, or an
+//! output that is the input itself, is reported as what it is (and where),
+//! not as a failure to read the input.
 
 use super::{IoError, UnwritableReason};
 use std::path::{Path, PathBuf};
@@ -45,6 +46,19 @@ pub fn check_output(output: &Path) -> Result<(), IoError> {
         });
     }
     check_writable_dir(&directory_of(output), "output")
+}
+
+/// Refuses an `output` that is the `input` itself (the same file by any
+/// path), before anything is read or written.
+pub fn check_distinct(input: &Path, output: &Path) -> Result<(), IoError> {
+    if let (Ok(a), Ok(b)) = (input.canonicalize(), output.canonicalize()) {
+        if a == b {
+            return Err(IoError::OverwritesInput {
+                path: output.to_path_buf(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Bytes available to this user on the file system holding `dir`.

@@ -56,8 +56,10 @@ impl LeftOut {
     }
 }
 
-/// Which returns of a multi-return pulse to keep.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// Which returns of a multi-return pulse to keep (the CLI's `--returns`).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Returns {
     /// Every return.
@@ -66,6 +68,7 @@ pub enum Returns {
     /// Return number 1.
     First,
     /// Return number equal to the pulse's number of returns (LAS/LAZ).
+    #[value(help = "Return number equal to the pulse's number of returns")]
     Last,
 }
 

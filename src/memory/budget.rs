@@ -50,6 +50,28 @@ impl MemoryBudget {
     }
 }
 
+/// A run whose peak RSS went over its memory promise: its outputs are
+/// whole, but its plan failed (the plan, not the data, was wrong).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the run's peak memory {} went over --mem {}: its outputs are complete, but its memory plan failed (please report it with the command line)", crate::units::human_bytes(*peak), crate::units::human_bytes(*promise))]
+pub struct PeakOver {
+    /// The process's peak RSS, in bytes.
+    pub peak: u64,
+    /// The promise, in bytes.
+    pub promise: u64,
+}
+
+/// Checks this process's peak RSS so far against the promise of `promise`
+/// bytes (kept when the platform does not tell the peak), so a budget
+/// bench or a cluster's memory limit learns a broken promise from the
+/// exit code.
+pub fn within_promise(promise: u64) -> Result<(), PeakOver> {
+    match peak_rss_bytes() {
+        Some(peak) if peak > promise => Err(PeakOver { peak, promise }),
+        _ => Ok(()),
+    }
+}
+
 /// This process's peak resident set size so far (Linux `VmHWM`), if known.
 pub fn peak_rss_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -143,6 +165,16 @@ fn limit_value(text: &str) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A peak over the promise fails the run, naming both; under it, it
+    /// passes.
+    #[test]
+    fn a_peak_over_the_promise_fails_the_run() {
+        let over = within_promise(1024).expect_err("this process holds more than 1 KiB");
+        let said = over.to_string();
+        assert!(said.contains("went over --mem 1.00KiB"), "{said}");
+        assert!(within_promise(u64::MAX).is_ok());
+    }
 
     #[test]
     fn tiles_shrink_with_budget_and_threads() {

@@ -9,7 +9,9 @@ mod machine;
 pub mod plan;
 mod plan_table;
 
-pub use budget::{peak_rss_bytes, MachineMemory, MemoryBudget, BASE_BYTES};
+pub use budget::{
+    peak_rss_bytes, within_promise, MachineMemory, MemoryBudget, PeakOver, BASE_BYTES,
+};
 pub use disk::DiskPlan;
 pub use machine::{cores, too_many_threads, too_much_memory, BeyondMachine, MAX_THREADS_PER_CORE};
 pub use plan::{BudgetError, KernelCost, MemoryPlan};

@@ -77,6 +77,14 @@ pub enum MeshError {
         /// The whole audit of the mesh written.
         audit: Box<MeshAudit>,
     },
+    /// A selection of points was given for a reference that is a mesh.
+    #[error(
+        "{path}: --classes and --returns select points of a point file; this reference is a mesh"
+    )]
+    SelectionOfAMesh {
+        /// The reference.
+        path: PathBuf,
+    },
     /// The output file could not be written.
     #[error(transparent)]
     Io(#[from] IoError),

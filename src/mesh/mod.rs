@@ -1,6 +1,7 @@
 //! Triangle meshes: the plain [`Mesh`] type and its validation, quality and
 //! topology metrics (`quality`), smallest angles ([`angles`]),
 //! self-intersecting pairs (`self_intersect`), distances to a reference ([`distance`]),
+//! all of them for a mesh file and a reference file ([`evaluate`]),
 //! streaming PLY/OBJ output (`write`), the audit of every mesh written
 //! (`audit`: its topology and volumes in bounded memory, and what a run
 //! promised of it) and procedural shapes for tests and benches ([`shapes`]).
@@ -16,6 +17,7 @@ pub(crate) mod audit;
 pub(crate) mod audit_mesh;
 pub mod distance;
 pub(crate) mod error;
+pub mod evaluate;
 pub(crate) mod fans;
 pub(crate) mod paged;
 pub(crate) mod pieces;

@@ -80,12 +80,20 @@ impl IdWidth {
 }
 
 /// Output format of `scanmesh neighbors`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum OutputFormat {
     /// The binary CSR layout above.
     #[default]
+    #[value(
+        name = "bin",
+        help = "Binary CSR: header, u64 offsets, u32/u64 neighbour ids"
+    )]
     Csr,
     /// One text line per point.
+    #[value(
+        name = "txt",
+        help = "One line per point: its id, then its neighbours' ids"
+    )]
     Text,
 }
 

@@ -38,7 +38,7 @@ pub use stats::{HoodStats, Summary};
 use crate::io::IoError;
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
-use crate::spatial::KnnBackend;
+use crate::spatial::{HoodKind, KnnBackend};
 use crate::store::{PointStore, StoreError};
 use csr::WindowLists;
 use spill::{Spill, Windows};
@@ -80,6 +80,15 @@ impl Default for NeighbourParams {
 }
 
 impl NeighbourParams {
+    /// `k` neighbours of kind `kind` (topological: at most
+    /// `max_iterations` reverse shifts per point), default backend.
+    pub fn of(kind: HoodKind, k: usize, max_iterations: usize) -> Self {
+        match kind {
+            HoodKind::Topological => Self::topological(k, max_iterations),
+            HoodKind::Knn => Self::knn(k),
+        }
+    }
+
     /// The exact `k` nearest neighbours, default backend.
     pub fn knn(k: usize) -> Self {
         NeighbourParams {

@@ -10,24 +10,38 @@ use glam::DVec3;
 
 /// The orientation asked for, by kind (its settings apart, in
 /// [`OrientationChoice`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum OrientationKind {
     /// [`Orientation::Auto`].
     #[default]
+    #[value(help = "From what the scan knows: stations, up (aerial), else the spanning tree")]
     Auto,
     /// [`Orientation::SpanningTree`].
+    #[value(
+        name = "mst",
+        help = "Minimum spanning tree over the Riemannian graph (paper 1)"
+    )]
     SpanningTree,
     /// [`Orientation::Aerial`].
+    #[value(help = "Up (+z), the spanning tree where a surface turns past vertical (aerial)")]
     Aerial,
     /// [`Orientation::Stations`].
+    #[value(help = "Toward each point's own scan station (E57 scan poses)")]
     Stations,
     /// [`Orientation::Viewpoint`].
+    #[value(help = "Toward --viewpoint")]
     Viewpoint,
     /// [`Orientation::SixSources`].
+    #[value(
+        name = "sources",
+        help = "Six sources at the extreme points along +-X, +-Y, +-Z (paper 5)"
+    )]
     SixSources,
     /// [`Orientation::SingleSource`].
+    #[value(help = "One source, the point farthest along --source-direction (terrain)")]
     SingleSource,
     /// [`Orientation::None`].
+    #[value(help = "Unoriented (canonical PCA sign)")]
     None,
 }
 

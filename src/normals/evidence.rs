@@ -21,15 +21,28 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 /// What a scan was taken with, as a hint to [`Orientation::Auto`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 pub enum Sensor {
     /// Judge from the data (see [`resolve`]).
     #[default]
+    #[value(help = "Judge from the data")]
     Auto,
     /// Airborne lidar: normals face up, the tree repairs the rest.
+    #[value(help = "Airborne lidar")]
     Aerial,
     /// Ground-based or an object: toward the stations the input gives,
     /// else the spanning tree (never "up").
+    #[value(help = "Ground-based scanner, or an object")]
     Terrestrial,
 }
 

@@ -28,7 +28,7 @@ pub(crate) mod unionfind;
 
 use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
-use crate::spatial::KnnBackend;
+use crate::spatial::{HoodKind, KnnBackend};
 use crate::store::sampling::{SamplingHistograms, SamplingStats};
 use crate::store::{Column, PointStore, Provenance, StoreError, FLAGS, NORMALS};
 use glam::DVec3;
@@ -107,9 +107,10 @@ pub use evidence::{Evidence, EvidenceCheck, Sensor};
 pub use output::normals_output;
 
 /// Cost of a Riemannian-graph edge for the spanning tree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum EdgeCost {
     /// The paper's `1 - |n_i . n_j|`.
+    #[value(help = "The paper's 1 - |ni.nj|")]
     Paper,
     /// Deviation (the default): the paper's cost plus the mean tangent-plane
     /// offset `(|d . n_i| + |d . n_j|) / 2|d|` of the edge `d = x_j - x_i`.
@@ -119,6 +120,10 @@ pub enum EdgeCost {
     /// an edge runs along the normals, so its offset is near 1 and the tree
     /// goes round instead. Within a sheet the offset is near 0.
     #[default]
+    #[value(
+        name = "offset",
+        help = "Paper cost plus the edge's tangent-plane offset"
+    )]
     TangentOffset,
 }
 
@@ -139,6 +144,15 @@ pub enum NormalHood {
 }
 
 impl NormalHood {
+    /// The neighbourhood of kind `kind` (topological: at most
+    /// `max_iterations` reverse shifts per point).
+    pub fn of(kind: HoodKind, max_iterations: usize) -> Self {
+        match kind {
+            HoodKind::Knn => NormalHood::Knn,
+            HoodKind::Topological => NormalHood::Topological { max_iterations },
+        }
+    }
+
     /// The mean reverse shift's parameters for `k` neighbours per query
     /// (`None` for kNN).
     pub(crate) fn topo_params(&self, k: usize) -> Option<TopoParams> {

@@ -16,7 +16,7 @@ pub use codec::Codec;
 pub use kernel::{KernelError, TileFault, TileKernel};
 pub use options::RunOptions;
 pub use run::{run_tiles, RunStats};
-pub use workspace::{reclaim, Prepared, RunSettings, WorkspaceError};
+pub use workspace::{reclaim, reclaimed_note, Prepared, RunSettings, WorkspaceError};
 // What a kernel is handed: a tile's points and declared columns. Public so
 // that a kernel can live outside the crate.
 pub use crate::tiling::{MissingColumns, TileColumn, TilePoints, Values};

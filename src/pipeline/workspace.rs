@@ -3,16 +3,18 @@
 //! read, the scratch directory and its limit, and the checks made before
 //! any input is read (the output and scratch directories take files, the
 //! disk plan fits the free space less what is kept free, a selection is
-//! not given for a store). The CLI maps its flags onto [`RunSettings`];
+//! not given for a store); a store built once for repeated runs
+//! ([`RunSettings::build_store_dir`]). The CLI maps its flags onto [`RunSettings`];
 //! a library caller gets the same `--mem` promise the same way.
 
 use super::{KernelCost, MemoryBudget, MemoryPlan, PipelineError, Progress, RunOptions};
 use crate::io::{place, IoError, ReadOptions};
 use crate::memory::{BudgetError, DiskPlan};
-use crate::store::build::{scratch_store_dir_in, MAX_POINTS};
+use crate::store::build::{build_store, scratch_store_dir_in, MAX_POINTS};
+use crate::store::spacing::ensure_spacing;
 use crate::store::{
-    is_store, open_input, store_bytes_per_point, BuildOptions, PointStore, StoreError, TileTarget,
-    Workspace,
+    is_store, open_input, store_bytes_per_point, BuildOptions, Causes, PointStore, StoreError,
+    TileTarget, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -85,9 +87,36 @@ pub enum WorkspaceError {
         /// What the plan needs, in bytes.
         needed: u64,
     },
+    /// A store is to be built in a directory that holds something.
+    #[error("{}: exists and is not empty", path.display())]
+    NotEmpty {
+        /// The directory.
+        path: PathBuf,
+    },
+    /// A directory cannot be listed.
+    #[error(transparent)]
+    List(#[from] std::io::Error),
     /// The disk plan does not fit the free space.
     #[error("not enough free space (--scratch-dir puts the scratch files elsewhere): {0}")]
     NoSpace(IoError),
+}
+
+impl WorkspaceError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            WorkspaceError::Budget(b) => Causes {
+                budget: Some(b),
+                input: None,
+            },
+            WorkspaceError::Store(e) | WorkspaceError::Reading { source: e, .. } => e.causes(),
+            WorkspaceError::Io(e) => Causes {
+                budget: None,
+                input: Some(e),
+            },
+            _ => Causes::default(),
+        }
+    }
 }
 
 impl RunSettings {
@@ -157,6 +186,40 @@ impl RunSettings {
         let ws = open_input(input, &scratch, &build, self.read.clone(), progress)
             .map_err(|e| reading(input, e))?;
         Ok((self.prepare(ws, cost)?, reclaimed))
+    }
+
+    /// Builds a store at `dir` (which must not exist, or be empty) from the
+    /// input file, with tiles sized for `cost` within the promise, and its
+    /// spacing estimate, for repeated runs; a build that fails or is
+    /// interrupted leaves no directory behind (a store without its manifest
+    /// is no store).
+    pub fn build_store_dir(
+        &self,
+        input: &Path,
+        dir: &Path,
+        cost: KernelCost,
+        progress: &dyn Progress,
+    ) -> Result<PointStore, WorkspaceError> {
+        if dir.exists() && std::fs::read_dir(dir)?.next().is_some() {
+            return Err(WorkspaceError::NotEmpty {
+                path: dir.to_path_buf(),
+            });
+        }
+        place::check_writable_dir(&place::directory_of(dir), "output")?;
+        let building = crate::io::cleanup::register(dir);
+        let mut reader = crate::io::open_reader(input, self.read.clone())?;
+        self.check_floor(&cost)?;
+        let opts = self.build_options(cost);
+        let mut store = match build_store(reader.as_mut(), dir, &opts, progress) {
+            Ok(store) => store,
+            Err(e) => {
+                let _ = std::fs::remove_dir_all(dir);
+                return Err(e.into());
+            }
+        };
+        ensure_spacing(&mut store)?;
+        drop(building);
+        Ok(store)
     }
 
     /// Checks, before any input is read, that the output and scratch
@@ -250,6 +313,15 @@ fn reading(input: &Path, source: StoreError) -> WorkspaceError {
         path: input.to_path_buf(),
         source,
     }
+}
+
+/// What a caller says of the scratch entries [`reclaim`] removed, if any.
+pub fn reclaimed_note(removed: &[PathBuf]) -> Option<String> {
+    let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+    (!removed.is_empty()).then(|| {
+        let (n, names) = (removed.len(), names.join(", "));
+        format!("removed {n} scratch entries that killed runs left: {names}")
+    })
 }
 
 /// Removes what killed runs left in `dirs` (their scratch stores and

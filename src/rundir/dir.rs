@@ -44,6 +44,31 @@ pub struct RunDir {
 }
 
 impl RunDir {
+    /// The run recorded in the directory `dir` (named as the caller
+    /// spelled it, for the errors), for a job of it by scanmesh `version`:
+    /// refused when it is no run directory, or another version started it.
+    pub fn recorded(dir: &Path, version: &str) -> Result<(Self, RunIdentity), RunDirError> {
+        if !dir.is_dir() {
+            return Err(RunDirError::NoSuchDir {
+                dir: dir.to_path_buf(),
+            });
+        }
+        let run = RunDir::at(dir)?;
+        let Some(id) = run.identity()? else {
+            return Err(RunDirError::NotARun {
+                dir: dir.to_path_buf(),
+            });
+        };
+        if id.scanmesh_version != version {
+            return Err(RunDirError::OtherVersion {
+                dir: dir.to_path_buf(),
+                started: id.scanmesh_version,
+                this: version.to_string(),
+            });
+        }
+        Ok((run, id))
+    }
+
     /// The run directory `dir`, made when it does not exist yet.
     pub fn create(dir: &Path) -> Result<Self, RunDirError> {
         std::fs::create_dir_all(dir).map_err(|source| RunDirError::Create {

@@ -23,6 +23,18 @@ pub struct RunIdentity {
 }
 
 impl RunIdentity {
+    /// Refuses the run when its input changed since it started (a
+    /// relative path is read from the current directory: the run's `cwd`
+    /// for a job).
+    pub fn check_input(&self) -> Result<(), RunDirError> {
+        if fingerprint(&self.input.path)? != self.input {
+            return Err(RunDirError::InputChanged {
+                path: self.input.path.clone(),
+            });
+        }
+        Ok(())
+    }
+
     /// The identity of a run of this scanmesh on `input`, by the command
     /// line `args`, started in `cwd`.
     pub fn new(args: Vec<String>, cwd: PathBuf, input: &Path) -> Result<Self, RunDirError> {

@@ -35,13 +35,13 @@ pub use dir::{RunDir, MARKER_FILE};
 pub use identity::{fingerprint, Difference, Done, Fingerprint, RunIdentity};
 pub use liveness::ProcessRecord;
 pub use processes::{Processes, Running};
-pub use script::{job_script, Scheduler};
+pub use script::{job_script, this_binary, Scheduler};
 pub use session::{open_input, Session};
 pub use status::{OutputState, RunStatus, StageTiles, StoreSize};
 
 use crate::io::IoError;
 use crate::pipeline::WorkspaceError;
-use crate::store::StoreError;
+use crate::store::{Causes, StoreError};
 use std::path::{Path, PathBuf};
 
 /// Why a run directory cannot be used, or a file in it read or written.
@@ -145,6 +145,34 @@ pub enum RunDirError {
         /// The run directory.
         dir: PathBuf,
     },
+    /// A job was given a directory that does not exist.
+    #[error("{}: no such run directory", dir.display())]
+    NoSuchDir {
+        /// The directory, as the caller named it.
+        dir: PathBuf,
+    },
+    /// A job was given a directory no run was started in.
+    #[error("{}: not a run directory (start the run with --run-dir first)", dir.display())]
+    NotARun {
+        /// The directory, as the caller named it.
+        dir: PathBuf,
+    },
+    /// A job was given a run another version of scanmesh started.
+    #[error("{}: the run was started by scanmesh {started}, this is {this}", dir.display())]
+    OtherVersion {
+        /// The directory, as the caller named it.
+        dir: PathBuf,
+        /// The version that started the run.
+        started: String,
+        /// This version.
+        this: String,
+    },
+    /// The input changed since the run started.
+    #[error("{}: the input changed since the run started; start it again with --restart", path.display())]
+    InputChanged {
+        /// The input, as the run recorded it.
+        path: PathBuf,
+    },
     /// The store cannot be opened, or its tile files read.
     #[error(transparent)]
     Store(#[from] StoreError),
@@ -154,6 +182,17 @@ pub enum RunDirError {
     /// A small file cannot be written in place.
     #[error(transparent)]
     Io(#[from] IoError),
+}
+
+impl RunDirError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            RunDirError::Workspace(w) => w.causes(),
+            RunDirError::Store(e) => e.causes(),
+            _ => Causes::default(),
+        }
+    }
 }
 
 /// `path` made absolute.

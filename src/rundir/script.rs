@@ -14,14 +14,30 @@ use super::{RunDir, StageId};
 use crate::memory::MemoryBudget;
 use std::fmt::Write;
 
-/// The scheduler a job script is for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The scheduler a job script is for (the CLI's `--emit`, its variants'
+/// text the values' help).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Scheduler {
     /// A shell script running each tile stage with GNU parallel.
     Parallel,
     /// A bash script submitting the jobs with sbatch: single jobs and
     /// array jobs chained by `afterok` dependencies.
     Slurm,
+}
+
+/// The absolute path of this process's binary, which the jobs run unless
+/// `SCANMESH` says otherwise (`scanmesh` when it cannot be told).
+pub fn this_binary() -> String {
+    let Ok(exe) = std::env::current_exe() else {
+        return "scanmesh".to_string();
+    };
+    let text = exe.to_string_lossy().into_owned();
+    // Linux names a binary replaced since it started (a rebuild) so; the
+    // path itself then holds the new one.
+    match text.strip_suffix(" (deleted)") {
+        Some(path) if !exe.exists() => path.to_string(),
+        _ => text,
+    }
 }
 
 /// The job script for `stages` of the run in `run`, each tile stage as

@@ -4,11 +4,13 @@
 //! checkpoints its tile stages keep their tiles in, which say after the
 //! run where the job stopped and which tile files were found damaged, and
 //! the log lines that say what the job did (`status` reads them back:
-//! `processes`).
+//! `processes`), and a global stage's result kept for a resumed run
+//! ([`Session::kept_or`]).
 
-use super::{RunDir, RunDirError};
+use super::{ProcessRecord, RunDir, RunDirError};
 use crate::pipeline::{KernelCost, Prepared, Progress, RunSettings, WorkspaceError};
-use crate::store::{ingest_kept, is_store, Checkpoints, Job, PointStore, Workspace};
+use crate::store::{ingest_kept, is_store, Checkpoints, Job, PointStore, StageId, Workspace};
+use serde::{de::DeserializeOwned, Serialize};
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
@@ -31,6 +33,35 @@ impl Session {
     /// The run directory.
     pub fn run(&self) -> &RunDir {
         &self.run
+    }
+
+    /// The result of the global stage `stage`: the one this run kept, while
+    /// `valid` says what it left in the store is still there (a resumed
+    /// run), else `compute`'s, kept for the next resume.
+    pub fn kept_or<T, E>(
+        session: Option<&Self>,
+        stage: StageId,
+        valid: bool,
+        compute: impl FnOnce() -> Result<T, E>,
+    ) -> Result<T, E>
+    where
+        T: Serialize + DeserializeOwned,
+        E: From<RunDirError>,
+    {
+        let kept = match session {
+            Some(s) => s.run.stage::<T>(stage)?,
+            None => None,
+        };
+        match kept {
+            Some(result) if valid => Ok(result),
+            _ => {
+                let result = compute()?;
+                if let Some(s) = session {
+                    s.run.keep_stage(stage, &result)?;
+                }
+                Ok(result)
+            }
+        }
     }
 
     /// What this process does of the run.
@@ -119,6 +150,38 @@ impl Session {
             },
         )?;
         Ok(reclaimed)
+    }
+
+    /// Starts the job `job` in `run`: logged, and recorded as this
+    /// process's (the record, removed when dropped, tells `status` this
+    /// process apart from a dead one).
+    pub fn start(run: RunDir, job: Job) -> (Self, ProcessRecord) {
+        let record = ProcessRecord::record(run.dir());
+        let session = Session::new(run, job);
+        session.log_start();
+        (session, record)
+    }
+
+    /// Logs how the job ended, and returns how the caller's run ends:
+    /// stopped as asked (its error, because it did, is then no failure),
+    /// done (the `output` and its `summary` recorded), or failed.
+    pub fn finish<E>(
+        &self,
+        outcome: Result<(), E>,
+        output: &Path,
+        summary: Option<String>,
+    ) -> Result<(), E>
+    where
+        E: Display + From<RunDirError>,
+    {
+        match outcome {
+            Err(_) if self.log_stopped() => Ok(()),
+            Ok(()) => Ok(self.log_done(output, summary)?),
+            Err(e) => {
+                self.log_failed(&e);
+                Err(e)
+            }
+        }
     }
 
     /// Logs that the job starts.

@@ -68,17 +68,30 @@ pub trait KnnIndex: Sync {
     }
 }
 
+/// Which neighbourhood a per-point computation uses, by kind (the CLI's
+/// `--neighbours` of `neighbors`, `normals` and `reconstruct`); the
+/// computation's parameters say how many and how far.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum HoodKind {
+    /// Paper 3's topological neighbours: mean reverse shift over an R*-tree.
+    Topological,
+    /// The plain k nearest neighbours.
+    Knn,
+}
+
 /// Which kNN structure to build. The grid is the default: on 1M-point
 /// surfaces it answered k = 12 queries in about 5,400 instructions against
 /// the kd-tree's 9,100 (callgrind), and the normals pipeline ran faster and
 /// in less memory with it (benches/knn.rs, benches/normals.rs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum KnnBackend {
     /// Uniform grid with a search that widens until the k-th distance lies
     /// inside the searched block.
     #[default]
+    #[value(help = None::<&str>)]
     Grid,
     /// kiddo's immutable kd-tree, asked for extra neighbours to settle ties.
+    #[value(name = "kdtree", help = None::<&str>)]
     KdTree,
 }
 

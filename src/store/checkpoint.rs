@@ -3,7 +3,7 @@
 //! that dies (a kill, a reboot, a full disk) redoes only the tiles that
 //! were in flight, and tile jobs on a cluster can share the work. Also the
 //! [`Job`] this process was started for (all of it, up to a stage, or some
-//! tiles of one stage).
+//! tiles of one stage, [`TileSet`], as its text reads).
 //!
 //! A tile file appears whole or not at all: it is written under a
 //! temporary name, forced to disk and renamed. It starts with a magic, the
@@ -39,6 +39,30 @@ pub enum Job {
     },
 }
 
+impl Job {
+    /// The job of `tiles` of the tile stage `stage` when both are given,
+    /// else everything before the tile stage `until` when given, else the
+    /// whole run (`run-job`'s `--stage`, `--tiles` or `--share`, `--until`).
+    pub fn of(stage: Option<&str>, tiles: Option<TileSet>, until: Option<&str>) -> Self {
+        match (stage, tiles, until) {
+            (Some(stage), Some(tiles), _) => Job::Tiles {
+                stage: stage.to_string(),
+                tiles,
+            },
+            (_, _, Some(stage)) => Job::Until(stage.to_string()),
+            _ => Job::Whole,
+        }
+    }
+}
+
+/// The number `part` of a tile set's `text`.
+fn number(text: &str, part: &str) -> Result<usize, TileSetError> {
+    part.trim().parse().map_err(|why| TileSetError::Number {
+        text: text.into(),
+        why,
+    })
+}
+
 /// Some tiles of a stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TileSet {
@@ -59,7 +83,64 @@ pub enum TileSet {
     },
 }
 
+/// Why a tile set's text (`run-job --tiles FIRST-LAST`, `--share
+/// INDEX/COUNT`, as `--emit`'s scripts write them) names none; the text
+/// comes first.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TileSetError {
+    /// A number that is not one.
+    #[error("{text}: {why}")]
+    Number {
+        /// The text given.
+        text: String,
+        /// Why its number is none.
+        why: std::num::ParseIntError,
+    },
+    /// A range whose last tile comes before its first.
+    #[error("{text}: the last tile comes before the first")]
+    Backwards {
+        /// The text given.
+        text: String,
+    },
+    /// A share without its `/`.
+    #[error("{text}: expected INDEX/COUNT")]
+    NotAShare {
+        /// The text given.
+        text: String,
+    },
+    /// A share past the count.
+    #[error("{text}: INDEX must be below COUNT")]
+    PastCount {
+        /// The text given.
+        text: String,
+    },
+}
+
 impl TileSet {
+    /// `FIRST-LAST` (or one tile).
+    pub fn parse_range(text: &str) -> Result<Self, TileSetError> {
+        let (a, b) = text.split_once('-').unwrap_or((text, text));
+        let first = number(text, a)?;
+        let last = number(text, b)?;
+        if last < first {
+            return Err(TileSetError::Backwards { text: text.into() });
+        }
+        Ok(TileSet::Range { first, last })
+    }
+
+    /// `INDEX/COUNT`.
+    pub fn parse_share(text: &str) -> Result<Self, TileSetError> {
+        let Some((a, b)) = text.split_once('/') else {
+            return Err(TileSetError::NotAShare { text: text.into() });
+        };
+        let (index, count) = (number(text, a)?, number(text, b)?);
+        if count == 0 || index >= count {
+            return Err(TileSetError::PastCount { text: text.into() });
+        }
+        Ok(TileSet::Share { index, count })
+    }
+
     /// The tiles of `0..n` in this set.
     pub(crate) fn tiles(&self, n: usize) -> std::ops::Range<usize> {
         match *self {
@@ -244,6 +325,26 @@ fn payload(bytes: &[u8]) -> Option<&[u8]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tile_sets_read_as_the_scripts_write_them() {
+        let range = TileSet::parse_range;
+        assert_eq!(range("3-5"), Ok(TileSet::Range { first: 3, last: 5 }));
+        assert_eq!(range(" 7 "), Ok(TileSet::Range { first: 7, last: 7 }));
+        let backwards = range("5-3").expect_err("backwards");
+        assert_eq!(
+            backwards.to_string(),
+            "5-3: the last tile comes before the first"
+        );
+        let word = range("x-2").expect_err("a word");
+        assert_eq!(word.to_string(), "x-2: invalid digit found in string");
+        let share = TileSet::parse_share;
+        assert_eq!(share("1/4"), Ok(TileSet::Share { index: 1, count: 4 }));
+        let past = share("4/4").expect_err("past the count");
+        assert_eq!(past.to_string(), "4/4: INDEX must be below COUNT");
+        let bare = share("4").expect_err("no slash");
+        assert_eq!(bare.to_string(), "4: expected INDEX/COUNT");
+    }
 
     #[test]
     fn saved_tiles_load_and_damaged_ones_are_dropped() {

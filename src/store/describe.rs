@@ -7,7 +7,7 @@
 use super::{is_store, PointStore, StoreError};
 use crate::io::e57::is_e57_magic;
 use crate::io::inspect::{inspect, inspect_scans, Inspection, ScanInspection};
-use crate::io::{open_reader, Format, LasSource, ReadOptions};
+use crate::io::{open_reader, Format, LasSource, ReadOptions, Selection};
 use crate::progress::Progress;
 use serde_json::{json, Value};
 use std::fmt;
@@ -25,8 +25,15 @@ impl Description {
     }
 }
 
-/// The description of the store in `dir`, from its manifest.
-pub fn describe_store(dir: &Path) -> Result<Description, StoreError> {
+/// The description of the store in `dir`, from its manifest; a selection
+/// of points (`select`, not all) is refused: a store holds the points it
+/// was built from.
+pub fn describe_store(dir: &Path, select: &Selection) -> Result<Description, StoreError> {
+    if !select.is_all() {
+        return Err(StoreError::SelectionOfAStore {
+            path: dir.to_path_buf(),
+        });
+    }
     let store = PointStore::open_shared(dir)?;
     let m = &store.manifest();
     let largest = m.tiles.iter().map(|t| t.count).max().unwrap_or(0);

@@ -42,7 +42,7 @@ pub(crate) mod test_store;
 
 pub use attributes::column_file as attribute_file;
 pub use build::{build_store, BuildOptions, TileTarget};
-pub use checkpoint::{Checkpoints, Job, TileSet};
+pub use checkpoint::{Checkpoints, Job, TileSet, TileSetError};
 pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use damage::{ColumnName, DamagedPart};
@@ -135,6 +135,12 @@ pub enum StoreError {
         /// Which part of it (a tile, a range of input points).
         what: DamagedPart,
     },
+    /// A selection of points was given for a store.
+    #[error("{}: --classes and --returns select points of a point file; a store holds the points it was built from", path.display())]
+    SelectionOfAStore {
+        /// The store.
+        path: PathBuf,
+    },
     /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
     Busy {
@@ -143,7 +149,35 @@ pub enum StoreError {
     },
 }
 
+/// What a run's error comes down to where a setting may fix it: a memory
+/// budget no plan fits, or the input (a record that is not a point). An
+/// error that wraps others says it of its own (`causes`: the store's, a
+/// run's workspace, a run directory, the demo), so a caller need not know
+/// which wraps which.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Causes<'a> {
+    /// The budget's error, when it comes down to one.
+    pub budget: Option<&'a crate::memory::BudgetError>,
+    /// The input's error, when it comes down to one.
+    pub input: Option<&'a crate::io::IoError>,
+}
+
 impl StoreError {
+    /// What this error comes down to ([`Causes`]).
+    pub fn causes(&self) -> Causes<'_> {
+        match self {
+            StoreError::Budget(b) => Causes {
+                budget: Some(b),
+                input: None,
+            },
+            StoreError::Input(e) => Causes {
+                budget: None,
+                input: Some(e),
+            },
+            _ => Causes::default(),
+        }
+    }
+
     pub(crate) fn os(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         StoreError::Os {
             path: path.into(),

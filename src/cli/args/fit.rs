@@ -1,10 +1,9 @@
 //! The curvature fit's argument group (`curvature`, `features`) and its
 //! mapping onto [`CurvatureParams`].
 
-use anyhow::{bail, Result};
-use clap::{Args, ValueEnum};
-use scanmesh::features::{CurvatureParams, HoodChoice};
-use scanmesh::normals::{NormalParams, Orientation};
+use anyhow::{anyhow, Result};
+use clap::Args;
+use scanmesh::features::{CurvatureParams, FitHood, FitOrientation};
 
 /// The curvature fit's options (shared with `features`).
 #[derive(Args, Clone)]
@@ -27,53 +26,14 @@ pub struct FitArgs {
     max_iterations: usize,
     /// How normals get their sign when the input has none computed:
     /// paper 5's six sources, or the spanning tree (paper 1).
-    #[arg(long, value_enum, default_value_t = FitOrient::Mst)]
-    orient: FitOrient,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum FitHood {
-    Radius,
-    Knn,
-    Topological,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum FitOrient {
-    /// Minimum spanning tree (paper 1), the project's default.
-    Mst,
-    /// Paper 5's six sources.
-    Sources,
+    #[arg(long, value_enum, default_value_t = FitOrientation::SpanningTree)]
+    orient: FitOrientation,
 }
 
 impl FitArgs {
     pub fn params(&self) -> Result<CurvatureParams> {
-        let hood = match self.neighbours {
-            FitHood::Radius => match self.radius {
-                Some(spacings) => HoodChoice::Radius { spacings },
-                None => HoodChoice::Auto,
-            },
-            FitHood::Knn => HoodChoice::Knn { k: self.k },
-            FitHood::Topological => HoodChoice::Topological {
-                k: self.k,
-                max_iterations: self.max_iterations,
-            },
-        };
-        if let Err(e) = hood.validate() {
-            bail!("{e}");
-        }
-        let orientation = match self.orient {
-            FitOrient::Mst => Orientation::SpanningTree,
-            FitOrient::Sources => Orientation::SixSources {
-                tau: scanmesh::normals::sources::DEFAULT_TAU,
-            },
-        };
-        Ok(CurvatureParams {
-            hood,
-            normals: NormalParams {
-                orientation,
-                ..NormalParams::default()
-            },
-        })
+        let (hood, k, iterations) = (self.neighbours, self.k, self.max_iterations);
+        CurvatureParams::fit(hood, self.radius, k, iterations, self.orient)
+            .map_err(|e| anyhow!("{e}"))
     }
 }

@@ -4,14 +4,10 @@
 
 mod fit;
 mod orient;
-mod planned;
 mod recon;
 mod thresholds;
-mod tiles;
 
 pub use fit::FitArgs;
-pub use orient::{HoodArgs, Knn, OrientArgs};
-pub use planned::Planned;
+pub use orient::{HoodArgs, OrientArgs};
 pub use recon::ReconArgs;
 pub use thresholds::Thresholds;
-pub use tiles::{parse_range, parse_share};

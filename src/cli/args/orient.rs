@@ -2,15 +2,15 @@
 //! (`normals`, `reconstruct`), the kNN structure, and how normals get
 //! their sign (`normals`).
 
-use crate::cli::HoodKind;
 use anyhow::{anyhow, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use glam::DVec3;
+use scanmesh::geom::{parse_xyz, XyzTextError};
 use scanmesh::normals::{
     BadNormalParameter, EdgeCost, NormalHood, NormalsError, Orientation, OrientationChoice,
     OrientationKind, Sensor,
 };
-use scanmesh::spatial::KnnBackend;
+use scanmesh::spatial::HoodKind;
 
 /// The tangent planes' neighbourhood (shared with `reconstruct`).
 #[derive(Args)]
@@ -28,28 +28,7 @@ pub struct HoodArgs {
 
 impl HoodArgs {
     pub fn hood(&self) -> NormalHood {
-        match self.neighbours {
-            HoodKind::Knn => NormalHood::Knn,
-            HoodKind::Topological => NormalHood::Topological {
-                max_iterations: self.max_iterations,
-            },
-        }
-    }
-}
-
-/// `--knn`.
-#[derive(Clone, Copy, ValueEnum)]
-pub enum Knn {
-    Grid,
-    Kdtree,
-}
-
-impl From<Knn> for KnnBackend {
-    fn from(k: Knn) -> Self {
-        match k {
-            Knn::Grid => KnnBackend::Grid,
-            Knn::Kdtree => KnnBackend::KdTree,
-        }
+        NormalHood::of(self.neighbours, self.max_iterations)
     }
 }
 
@@ -60,18 +39,18 @@ pub struct OrientArgs {
     /// station when the input names them (E57 poses), up for aerial data
     /// (a LAS/LAZ wider than tall, or --sensor aerial) with the spanning
     /// tree past vertical, else the spanning tree.
-    #[arg(long, value_enum, default_value_t = Orient::Auto)]
-    orient: Orient,
+    #[arg(long, value_enum, default_value_t = OrientationKind::Auto)]
+    orient: OrientationKind,
     /// What took the scan, a hint to --orient auto: `aerial` (normals face
     /// up), `terrestrial` (never taken for aerial), `auto` (judge from the
     /// data).
-    #[arg(long, value_enum, default_value_t = SensorArg::Auto)]
-    sensor: SensorArg,
+    #[arg(long, value_enum, default_value_t = Sensor::Auto)]
+    sensor: Sensor,
     /// Spanning-tree edge cost: `offset` (default) adds the tangent-plane
     /// offset to the paper's `1 - |ni.nj|` so the tree does not cross thin parts
     /// (for --orient sources|single-source: subtracts it from `w`).
-    #[arg(long, value_enum, default_value_t = Cost::Offset)]
-    cost: Cost,
+    #[arg(long, value_enum, default_value_t = EdgeCost::TangentOffset)]
+    cost: EdgeCost,
     /// Scanner position x,y,z (implies --orient viewpoint).
     #[arg(long, value_parser = parse_point)]
     viewpoint: Option<DVec3>,
@@ -83,54 +62,11 @@ pub struct OrientArgs {
     source_direction: DVec3,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Cost {
-    /// The paper's 1 - |ni.nj|.
-    Paper,
-    /// Paper cost plus the edge's tangent-plane offset.
-    Offset,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum SensorArg {
-    /// Judge from the data.
-    Auto,
-    /// Airborne lidar.
-    Aerial,
-    /// Ground-based scanner, or an object.
-    Terrestrial,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Orient {
-    /// From what the scan knows: stations, up (aerial), else the spanning tree.
-    Auto,
-    /// Minimum spanning tree over the Riemannian graph (paper 1).
-    Mst,
-    /// Up (+z), the spanning tree where a surface turns past vertical (aerial).
-    Aerial,
-    /// Toward each point's own scan station (E57 scan poses).
-    Stations,
-    /// Toward --viewpoint.
-    Viewpoint,
-    /// Six sources at the extreme points along +-X, +-Y, +-Z (paper 5).
-    Sources,
-    /// One source, the point farthest along --source-direction (terrain).
-    SingleSource,
-    /// Unoriented (canonical PCA sign).
-    None,
-}
-
 fn parse_point(s: &str) -> Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("expected x,y,z: {e}"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
-        _ => Err("expected three finite numbers x,y,z".into()),
-    }
+    parse_xyz(s).map_err(|e| match e {
+        XyzTextError::Number(e) => format!("expected x,y,z: {e}"),
+        e => e.to_string(),
+    })
 }
 
 impl OrientArgs {
@@ -138,21 +74,8 @@ impl OrientArgs {
     /// the flags that do not go together.
     pub fn orientation(&self) -> Result<(Orientation, EdgeCost)> {
         let choice = OrientationChoice {
-            kind: match self.orient {
-                Orient::Auto => OrientationKind::Auto,
-                Orient::Mst => OrientationKind::SpanningTree,
-                Orient::Aerial => OrientationKind::Aerial,
-                Orient::Stations => OrientationKind::Stations,
-                Orient::Viewpoint => OrientationKind::Viewpoint,
-                Orient::Sources => OrientationKind::SixSources,
-                Orient::SingleSource => OrientationKind::SingleSource,
-                Orient::None => OrientationKind::None,
-            },
-            sensor: match self.sensor {
-                SensorArg::Auto => Sensor::Auto,
-                SensorArg::Aerial => Sensor::Aerial,
-                SensorArg::Terrestrial => Sensor::Terrestrial,
-            },
+            kind: self.orient,
+            sensor: self.sensor,
             viewpoint: self.viewpoint,
             tau: self.tau,
             direction: self.source_direction,
@@ -174,10 +97,6 @@ impl OrientArgs {
             },
             e => e.into(),
         })?;
-        let cost = match self.cost {
-            Cost::Paper => EdgeCost::Paper,
-            Cost::Offset => EdgeCost::TangentOffset,
-        };
-        Ok((orientation, cost))
+        Ok((orientation, self.cost))
     }
 }

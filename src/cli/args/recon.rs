@@ -3,7 +3,7 @@
 
 use super::HoodArgs;
 use anyhow::{bail, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use scanmesh::recon::delaunay::reconstruct::DelaunayParams;
 use scanmesh::recon::implicit::field::Field;
 use scanmesh::recon::implicit::reconstruct::{ImplicitParams, ReconError};
@@ -31,17 +31,13 @@ pub struct ReconArgs {
     /// spacings and moves each vertex onto that surface; `sample` is
     /// paper 1's plane through the nearest sample (keeps sharp edges
     /// sharpest, follows the noise), vertices linearly interpolated.
-    #[arg(long, value_enum, default_value_t = Plane::Mls)]
-    plane: Plane,
-    /// Flat blocks (--method implicit): where the triangles of a block of
-    /// 4 x 4 x 4 cells form one flat disk, they are replaced by a
-    /// triangulation of its rim if no vertex left out lies farther than
-    /// this from the new triangles, in mean spacings (default 0: every
-    /// marching-cubes triangle kept). 0.1 halves the triangles of flat
-    /// ground, walls and roofs and smooths their noise; on a surface
-    /// curved everywhere (a statue) it costs accuracy (the 1M noisy
-    /// dragon: 18 % fewer triangles, mean distance 0.0503 -> 0.0515
-    /// spacings).
+    #[arg(long, value_enum, default_value_t = Field::Mls)]
+    plane: Field,
+    /// Flat blocks (--method implicit): a block of 4 x 4 x 4 cells whose
+    /// triangles form one flat disk is triangulated from its rim alone if
+    /// no vertex left out lies farther than this, in mean spacings
+    /// (default 0: all kept). 0.1 halves flat ground, walls and roofs; a
+    /// surface curved everywhere loses some accuracy (README).
     #[arg(long, value_name = "SPACINGS")]
     flat_tolerance: Option<f64>,
     /// Sampling-hole radius of paper 4 (--method delaunay), absolute:
@@ -67,14 +63,6 @@ pub struct ReconArgs {
     /// --method projection: longest edge, in local spacings.
     #[arg(long, default_value_t = ProjectionParams::default().max_edge)]
     max_edge: f64,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Plane {
-    /// Moving least squares over the local spacing (issue 19).
-    Mls,
-    /// Paper 1's definition: the nearest sample's tangent plane.
-    Sample,
 }
 
 impl ReconArgs {
@@ -112,10 +100,7 @@ impl ReconArgs {
             closed: self.closed,
             min_piece: self.min_piece,
             flat_tolerance: self.flat_tolerance,
-            field: match self.plane {
-                Plane::Mls => Field::Mls,
-                Plane::Sample => Field::Paper1,
-            },
+            field: self.plane,
             ..ImplicitParams::default()
         };
         params.normals.k = self.k;

@@ -10,14 +10,19 @@ use crate::tiling::TilePoints;
 use glam::DVec3;
 
 /// Which signed distance the corners and vertices take.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Field {
     /// The moving-least-squares average of nearby planes (`super::mls`),
     /// vertices moved onto its zero set along their lattice edges.
     #[default]
+    #[value(help = "Moving least squares over the local spacing (issue 19)")]
     Mls,
     /// Paper 1 section 2.5: the nearest sample's plane (with `--closed`,
     /// `CLOSED_PLANES` averaged), vertices linearly interpolated.
+    #[value(
+        name = "sample",
+        help = "Paper 1's definition: the nearest sample's tangent plane"
+    )]
     Paper1,
 }
 
