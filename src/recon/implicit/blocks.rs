@@ -13,7 +13,7 @@
 //! loop's vertices lie on the block's faces and are kept, so a block's
 //! neighbours, re-triangulated or not, meet it along the same edges (no
 //! crack, no transition cells), and a tile owns whole blocks
-//! ([`super::cubes::owns`]), so what a block becomes depends on its own
+//! (`cubes::owns`), so what a block becomes depends on its own
 //! triangles only: tiled == untiled and 1 == 2 threads hold as before.
 //! The evaluations of the field are not fewer; only the mesh is smaller.
 //!
