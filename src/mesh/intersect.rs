@@ -121,7 +121,7 @@ fn inside2(p: Coord<f64>, t: &[Coord<f64>; 3]) -> bool {
 }
 
 /// Closed segments `ab` and `cd` meet, in 2-D.
-fn segments_meet2(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>, d: Coord<f64>) -> bool {
+pub(crate) fn segments_meet2(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>, d: Coord<f64>) -> bool {
     let (d1, d2) = (orient2(a, b, c), orient2(a, b, d));
     let (d3, d4) = (orient2(c, d, a), orient2(c, d, b));
     if d1 * d2 < 0 && d3 * d4 < 0 {

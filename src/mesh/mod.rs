@@ -37,7 +37,7 @@ pub(crate) mod intersect;
 mod nearest;
 mod sampling;
 mod topology;
-mod union_find;
+pub(crate) mod union_find;
 
 /// Unnamed scratch beside a mesh output per triangle while it is written,
 /// for the disk plan: the writer's face spool (13 B, `write`) and the

@@ -36,6 +36,8 @@
 use super::lattice::edge_from_key;
 use super::polygonize::CubeVertex;
 use crate::mesh::closest::closest_point_on_triangle;
+use crate::mesh::intersect::segments_meet2;
+use crate::mesh::union_find::DisjointSets;
 use crate::pipeline::KernelError;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -334,21 +336,12 @@ fn boundary_loop(vertices: usize, triangles: &[[usize; 3]]) -> Option<Vec<usize>
 }
 
 fn connected(vertices: usize, triangles: &[[usize; 3]]) -> bool {
-    let mut parent: Vec<usize> = (0..vertices).collect();
-    fn root(parent: &mut [usize], mut v: usize) -> usize {
-        while parent[v] != v {
-            parent[v] = parent[parent[v]];
-            v = parent[v];
-        }
-        v
-    }
+    let mut sets = DisjointSets::<u32>::new(vertices);
     for t in triangles {
-        for e in [(t[0], t[1]), (t[1], t[2])] {
-            let (a, b) = (root(&mut parent, e.0), root(&mut parent, e.1));
-            parent[a.max(b)] = a.min(b);
-        }
+        sets.union(t[0], t[1]);
+        sets.union(t[1], t[2]);
     }
-    (0..vertices).all(|v| root(&mut parent, v) == root(&mut parent, 0))
+    (0..vertices).all(|v| sets.find(v) == sets.find(0))
 }
 
 /// The area-weighted mean normal, `None` for a disk of no area.
@@ -390,31 +383,12 @@ fn simple_ccw(p: &[DVec2]) -> bool {
                 if orient2d(coord(s), coord(q), coord(r)) == 0.0 && (r - q).dot(s - q) > 0.0 {
                     return false;
                 }
-            } else if segments_meet(a, b, c, d) {
+            } else if segments_meet2(coord(a), coord(b), coord(c), coord(d)) {
                 return false;
             }
         }
     }
     true
-}
-
-/// Whether closed segments `ab` and `cd` share a point.
-fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
-    let o = |p: DVec2, q: DVec2, r: DVec2| orient2d(coord(p), coord(q), coord(r));
-    let (d1, d2) = (o(a, b, c), o(a, b, d));
-    let (d3, d4) = (o(c, d, a), o(c, d, b));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    let on = |p: DVec2, q: DVec2, r: DVec2| {
-        r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
-    };
-    (d1 == 0.0 && on(a, b, c))
-        || (d2 == 0.0 && on(a, b, d))
-        || (d3 == 0.0 && on(c, d, a))
-        || (d4 == 0.0 && on(c, d, b))
 }
 
 /// Ear clipping of the simple counter-clockwise polygon `flat` (vertex ids
