@@ -171,7 +171,8 @@ impl ImplicitKernel {
         nbr: &mut Vec<crate::spatial::Neighbour>,
     ) -> Valued {
         let p = self.lattice.corner(c);
-        self.field.corner(samples, tile, p, self.limit, nbr).known()
+        let (corner, fit) = self.field.corner(samples, tile, p, self.limit, nbr);
+        corner.known(fit)
     }
 }
 

@@ -82,7 +82,7 @@ impl<'a> CornerCursor<'a> {
             *at = seek(self.corners, *at, key);
             match self.corners.get(*at) {
                 Some(&(k, Some(known))) if k == key => {
-                    on_data |= matches!(known, Known::OnData(_));
+                    on_data |= matches!(known, Known::OnData(..));
                     away |= matches!(known, Known::Winding(_));
                     *value = known.value();
                 }

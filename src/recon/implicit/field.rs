@@ -4,7 +4,7 @@
 //! both fields, so `mls` can build on what `sdf` defines (the samples, a
 //! corner's value) without `sdf` needing `mls` back.
 
-use super::sdf::{signed_distance, Corner, Samples};
+use super::sdf::{signed_distance, Corner, Fit, Samples};
 use crate::spatial::Neighbour;
 use crate::tiling::TilePoints;
 use glam::DVec3;
@@ -27,7 +27,8 @@ pub enum Field {
 }
 
 impl Field {
-    /// The field's value at lattice corner `p` (see [`signed_distance`]).
+    /// The field's value at lattice corner `p` (see [`signed_distance`]),
+    /// with the sphere it fitted there (none for paper 1's planes).
     pub(crate) fn corner(
         self,
         s: &Samples,
@@ -35,10 +36,10 @@ impl Field {
         p: DVec3,
         limit: f64,
         nbr: &mut Vec<Neighbour>,
-    ) -> Corner {
+    ) -> (Corner, Fit) {
         match self {
             Field::Mls => super::mls::mls_corner(s, tile, p, limit, nbr),
-            Field::Paper1 => signed_distance(s, tile, p, limit, nbr),
+            Field::Paper1 => (signed_distance(s, tile, p, limit, nbr), Fit::default()),
         }
     }
 }

@@ -307,7 +307,7 @@ mod tests {
                     } else {
                         r - 1.0
                     };
-                    Some(Known::OnData(f))
+                    Some(Known::OnData(f, Default::default()))
                 })
                 .collect())
         }

@@ -26,7 +26,7 @@ use super::follow::{Walk, FOLLOW_STEPS};
 use super::lattice::{edge_from_key, Lattice};
 use super::polygonize::{polygonize_cube, CubeVertex};
 use super::refine::{refine_vertices, CornerValue};
-use super::sdf::{Corner, Known, Samples};
+use super::sdf::{Corner, Fit, Known, Samples};
 use crate::geom::Aabb;
 use crate::normals::{FLAG_DEGENERATE, FLAG_UNORIENTED};
 use crate::pipeline::{KernelError, TileKernel};
@@ -229,12 +229,7 @@ impl TileKernel for ImplicitKernel {
         out.away = parts.iter().map(|p| p.1).sum();
         out.triangles = parts.into_iter().flat_map(|p| p.0).collect();
         if self.field == Field::Mls {
-            let refined =
-                refine_vertices(&self.lattice, &samples, tile, &corners, &mut out.triangles)?;
-            // A shortfall asks for a reload by the one margin rule.
-            if let Err(short) = refined {
-                KernelError::unless_short(short, tile.margin)?;
-            }
+            refine_vertices(&self.lattice, &corners, &mut out.triangles)?;
         }
         if self.flat_tolerance > 0.0 {
             let before = out.triangles.len();
@@ -324,21 +319,21 @@ impl ImplicitKernel {
         tile: &TilePoints,
         keys: &[u64],
     ) -> Result<Vec<Option<Known>>, KernelError> {
-        let evaluated: Vec<Corner> = keys
+        let evaluated: Vec<(Corner, Fit)> = keys
             .par_iter()
             .map_init(Vec::new, |nbr, &key| {
                 let p = self.lattice.corner(corner_of(key));
                 self.field.corner(samples, tile, p, self.limit, nbr)
             })
             .collect();
-        let short = evaluated.iter().fold(0.0f64, |m, c| match c {
-            Corner::Short(s) => m.max(*s),
+        let short = evaluated.iter().fold(0.0f64, |m, c| match c.0 {
+            Corner::Short(s) => m.max(s),
             Corner::Value(_) | Corner::Beyond(_) => m,
         });
         KernelError::unless_short(short, tile.margin)?;
         Ok(evaluated
             .into_iter()
-            .map(|v| v.known().unwrap_or(None))
+            .map(|(corner, fit)| corner.known(fit).unwrap_or(None))
             .collect())
     }
 }

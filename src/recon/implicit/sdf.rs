@@ -35,22 +35,36 @@ pub(crate) enum Corner {
 }
 
 impl Corner {
-    /// The value as the kernel keeps it, or the loaded region's shortfall.
-    pub(crate) fn known(self) -> Result<Option<Known>, f64> {
+    /// The value as the kernel keeps it, with the sphere the field fitted
+    /// there, or the loaded region's shortfall.
+    pub(crate) fn known(self, fit: Fit) -> Result<Option<Known>, f64> {
         match self {
-            Corner::Value(f) => Ok(f.map(Known::OnData)),
-            Corner::Beyond(f) => Ok(Some(Known::Beyond(f))),
+            Corner::Value(f) => Ok(f.map(|f| Known::OnData(f, fit))),
+            Corner::Beyond(f) => Ok(Some(Known::Beyond(f, fit))),
             Corner::Short(s) => Err(s),
         }
     }
+}
+
+/// The sphere the field fitted at a corner, normalised to a distance: at
+/// `corner + d` it gives `value + gradient . d + quadratic |d|^2`
+/// ([`super::mls`]). Kept so a cut edge's root is found from the spheres at
+/// its two ends, with no evaluation of its own ([`super::refine`]). The
+/// default, a zero gradient, is no sphere (paper 1's field, which places
+/// vertices by linear interpolation). f32: the sphere is used within a
+/// cell of its corner, where its 7 digits lie far below any scan's noise.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Fit {
+    pub gradient: [f32; 3],
+    pub quadratic: f32,
 }
 
 /// A corner's value as the kernel keeps it, and whether its projection
 /// lies on the data ([`Corner::Beyond`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Known {
-    OnData(f64),
-    Beyond(f64),
+    OnData(f64, Fit),
+    Beyond(f64, Fit),
     /// Away from the samples with `--closed`: the winding number's sign
     /// as a value ([`super::closed`]); the field's root is not sought on
     /// an edge that ends here.
@@ -60,7 +74,15 @@ pub(crate) enum Known {
 impl Known {
     pub(crate) fn value(self) -> f64 {
         match self {
-            Known::OnData(f) | Known::Beyond(f) | Known::Winding(f) => f,
+            Known::OnData(f, _) | Known::Beyond(f, _) | Known::Winding(f) => f,
+        }
+    }
+
+    /// The sphere fitted at the corner, if the field fitted one.
+    pub(crate) fn fit(self) -> Option<Fit> {
+        match self {
+            Known::OnData(_, fit) | Known::Beyond(_, fit) => Some(fit),
+            Known::Winding(_) => None,
         }
     }
 }
