@@ -91,7 +91,7 @@ impl Walk<'_> {
             let need = difference(&corners, &values, |e| e.0);
             let got = evaluate(&need)?;
             let new: Vec<CornerValue> = need.into_iter().zip(got).collect();
-            values = merge(&values, &new, |e| e.0);
+            merge_into(&mut values, &new, |e| e.0);
             let last = depth == self.steps;
             let steps: Vec<Vec<Step>> = frontier
                 .par_chunks(CUBES_PER_TASK)
@@ -105,7 +105,7 @@ impl Walk<'_> {
             next.par_sort_unstable();
             next.dedup();
             let next = difference(&next, &seen, |&k| k);
-            seen = merge(&seen, &next, |&k| k);
+            merge_into(&mut seen, &next, |&k| k);
             let near: Vec<bool> = next
                 .par_iter()
                 .map(|&k| self.in_band(&holds, corner_of(k)))
@@ -208,22 +208,25 @@ fn difference<T>(keys: &[u64], set: &[T], key_of: impl Fn(&T) -> u64) -> Vec<u64
         .collect()
 }
 
-/// Sorted union of two lists sorted by `key_of`, with no key in both.
-fn merge<T: Copy>(a: &[T], b: &[T], key_of: impl Fn(&T) -> u64) -> Vec<T> {
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        if key_of(&a[i]) < key_of(&b[j]) {
-            out.push(a[i]);
-            i += 1;
+/// Merges `b` into `a`, both sorted by `key_of` with no key in both, in
+/// place from the back: the walk's corner values grow by a frontier's at
+/// each step, and a new vector per step was most of its allocations.
+fn merge_into<T: Copy>(a: &mut Vec<T>, b: &[T], key_of: impl Fn(&T) -> u64) {
+    let (mut i, mut j) = (a.len(), b.len());
+    let Some(&fill) = b.first() else {
+        return;
+    };
+    a.resize(i + j, fill);
+    while j > 0 {
+        let to = i + j - 1;
+        if i > 0 && key_of(&a[i - 1]) > key_of(&b[j - 1]) {
+            a[to] = a[i - 1];
+            i -= 1;
         } else {
-            out.push(b[j]);
-            j += 1;
+            a[to] = b[j - 1];
+            j -= 1;
         }
     }
-    out.extend_from_slice(&a[i..]);
-    out.extend_from_slice(&b[j..]);
-    out
 }
 
 /// Offsets at Chebyshev distance exactly `r`.
@@ -263,6 +266,26 @@ mod tests {
             for c in face {
                 assert_eq!(CORNERS[c][axis], side, "{offset:?} {c}");
             }
+        }
+    }
+
+    #[test]
+    fn merging_in_place_is_the_sorted_union() {
+        let mut rng = crate::rng::Rng::new(7);
+        for _ in 0..50 {
+            let mut all: Vec<u64> = (0..rng.below(40)).map(|_| rng.below(1000)).collect();
+            all.sort_unstable();
+            all.dedup();
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            for &k in &all {
+                if rng.below(2) == 0 {
+                    a.push(k);
+                } else {
+                    b.push(k);
+                }
+            }
+            merge_into(&mut a, &b, |&k| k);
+            assert_eq!(a, all);
         }
     }
 
