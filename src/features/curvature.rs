@@ -396,7 +396,12 @@ impl Seam for CurvatureSeam<'_> {
         Ok(())
     }
 
-    fn finish(self, run: RunStats, _: &dyn Progress) -> Result<CurvatureReport, FeaturesError> {
+    fn finish(
+        self,
+        run: RunStats,
+        _: RunOptions,
+        _: &dyn Progress,
+    ) -> Result<CurvatureReport, FeaturesError> {
         let (store, stats) = (self.store, &self.stats);
         let meta = CurvatureMeta {
             hood: self.hood.0,

@@ -383,6 +383,7 @@ impl Seam for NeighboursSeam {
     fn finish(
         self,
         run: RunStats,
+        _: RunOptions,
         progress: &dyn Progress,
     ) -> Result<NeighboursReport, NeighboursError> {
         let (mut writer, mut report) = (self.writer, self.report);

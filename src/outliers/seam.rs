@@ -5,7 +5,7 @@
 
 use super::kernel::{Sums, TileScores};
 use super::{OutlierParams, OutlierReport, OutliersError, FEWER_THAN_K, OUTLIER};
-use crate::pipeline::{PipelineError, RunStats, Seam};
+use crate::pipeline::{PipelineError, RunOptions, RunStats, Seam};
 use crate::progress::Progress;
 use crate::store::{Column, PointStore};
 
@@ -31,7 +31,12 @@ impl Seam for ScoreSeam<'_> {
         Ok(())
     }
 
-    fn finish(self, run: RunStats, _: &dyn Progress) -> Result<OutlierReport, OutliersError> {
+    fn finish(
+        self,
+        run: RunStats,
+        _: RunOptions,
+        _: &dyn Progress,
+    ) -> Result<OutlierReport, OutliersError> {
         let (sums, params) = (&self.sums, &self.params);
         let mean = sums.score.mean();
         let n = sums.score.count() as f64;

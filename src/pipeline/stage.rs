@@ -8,7 +8,8 @@
 //! result in tile order, `finish` once all are in) and its report.
 //! [`run_stage`] runs one: validate, prepare the kernel, create the
 //! columns, the tiles through [`run_tiles`] (whose scheduling it leaves as
-//! it is), the seam's finish, the columns sealed.
+//! it is), the seam's finish, the report's record in the manifest, the
+//! columns sealed.
 
 use super::{run_tiles, KernelCost, PipelineError, RunOptions, RunStats, TileKernel};
 use crate::progress::Progress;
@@ -78,6 +79,14 @@ pub trait Stage {
         progress: &dyn Progress,
     ) -> Result<Self::Kernel, Self::Error>;
 
+    /// What the store's manifest keeps of a finished run's report, recorded
+    /// before the columns are sealed (none by default; the normals' sampling
+    /// statistics).
+    fn record(&self, store: &mut PointStore, report: &Self::Report) -> Result<(), Self::Error> {
+        let _ = (store, report);
+        Ok(())
+    }
+
     /// The seam of a run of `kernel` over `store`, writing `columns`.
     fn seam<'s>(
         &'s self,
@@ -100,8 +109,14 @@ pub trait Seam {
     /// the thread that runs the stage.
     fn accept(&mut self, tile: usize, out: Self::Tile) -> Result<(), PipelineError>;
     /// Every tile is in (`run` says how they ran): the global part of the
-    /// stage, and its report.
-    fn finish(self, run: RunStats, progress: &dyn Progress) -> Result<Self::Report, Self::Error>;
+    /// stage, under the run's options (its threads, its memory plan), and
+    /// its report.
+    fn finish(
+        self,
+        run: RunStats,
+        opts: RunOptions,
+        progress: &dyn Progress,
+    ) -> Result<Self::Report, Self::Error>;
 }
 
 /// The columns a stage writes ([`Stage::WRITES`]), made for its run.
@@ -143,7 +158,8 @@ impl StageColumns {
 /// Runs `stage` over every tile of `store`: its parameters validated, its
 /// kernel prepared, the columns it writes created, the tiles run by
 /// [`run_tiles`] with each result handed to its seam in tile order, the
-/// seam finished, the columns sealed with its provenance. In a tile job
+/// seam finished, what the manifest keeps of its report recorded
+/// ([`Stage::record`]), the columns sealed with its provenance. In a tile job
 /// the result is [`PipelineError::Stopped`], as [`run_tiles`]'s is.
 pub fn run_stage<S: Stage>(
     store: &mut PointStore,
@@ -160,8 +176,9 @@ pub fn run_stage<S: Stage>(
         let store = &*store;
         let mut seam = stage.seam(store, &kernel, &columns)?;
         let run = run_tiles(store, &kernel, opts, progress, |t, out| seam.accept(t, out))?;
-        seam.finish(run, progress)?
+        seam.finish(run, opts, progress)?
     };
+    stage.record(store, &report)?;
     columns.seal(store, stage.provenance())?;
     Ok(report)
 }
