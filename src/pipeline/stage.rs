@@ -182,3 +182,212 @@ pub fn run_stage<S: Stage>(
     columns.seal(store, stage.provenance())?;
     Ok(report)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::KernelError;
+    use crate::progress::NoProgress;
+    use crate::store::{Item, StageId};
+    use crate::tiling::TilePoints;
+    use glam::DVec3;
+
+    const MARK: ColumnSpec = ColumnSpec::new("mark.u8", Item::U8);
+
+    /// Refused when `fail` is set.
+    #[derive(Debug)]
+    struct Params {
+        fail: bool,
+        fail_finish: bool,
+    }
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("refused")]
+    struct Refused;
+
+    impl StageParams for Params {
+        type Error = PipelineError;
+        fn validate(&self) -> Result<(), PipelineError> {
+            match self.fail {
+                true => Err(PipelineError::seam(Refused)),
+                false => Ok(()),
+            }
+        }
+        fn cost(&self) -> KernelCost {
+            KernelCost {
+                bytes_per_point: 64,
+                global_per_point: 0,
+                contracts_boundaries: false,
+                resident_per_point: 0.0,
+                window_bytes_per_point: 0,
+                scratch_per_point: 1,
+                output_per_point: 0,
+                beside_output_per_point: 0,
+                parallel_in_tile: false,
+                margin_spacings: 0.0,
+                resident_bytes: 0,
+            }
+        }
+    }
+
+    /// Each tile's core points.
+    struct Count;
+
+    impl TileKernel for Count {
+        type Output = u64;
+        fn name(&self) -> &'static str {
+            Marks::ID.name()
+        }
+        fn margin(&self) -> f64 {
+            0.0
+        }
+        fn run(&self, tile: &TilePoints) -> Result<u64, KernelError> {
+            Ok(tile.n_core as u64)
+        }
+    }
+
+    /// Marks every point with its tile's number; reports the tiles in the
+    /// order the seam took them and the points they held.
+    struct Marks(Params);
+
+    struct MarkSeam<'s> {
+        store: &'s PointStore,
+        column: &'s Column,
+        seen: Vec<(usize, u64)>,
+        fail: bool,
+    }
+
+    impl Seam for MarkSeam<'_> {
+        type Tile = u64;
+        type Report = Vec<(usize, u64)>;
+        type Error = PipelineError;
+        fn accept(&mut self, tile: usize, out: u64) -> Result<(), PipelineError> {
+            let start = self.store.tiles()[tile].start;
+            self.column
+                .write_bytes(start, &vec![tile as u8; out as usize])?;
+            self.seen.push((tile, out));
+            Ok(())
+        }
+        fn finish(
+            self,
+            _: RunStats,
+            _: RunOptions,
+            _: &dyn Progress,
+        ) -> Result<Self::Report, PipelineError> {
+            match self.fail {
+                true => Err(PipelineError::seam(Refused)),
+                false => Ok(self.seen),
+            }
+        }
+    }
+
+    impl Stage for Marks {
+        const ID: StageId = StageId::OutlierScores;
+        const READS: &'static [ColumnSpec] = &[];
+        const WRITES: &'static [ColumnSpec] = &[MARK];
+        type Params = Params;
+        type Kernel = Count;
+        type Seam<'s> = MarkSeam<'s>;
+        type Report = Vec<(usize, u64)>;
+        type Error = PipelineError;
+        fn params(&self) -> &Params {
+            &self.0
+        }
+        fn provenance(&self) -> Provenance {
+            Provenance::of("marks", &self.0)
+        }
+        fn kernel(
+            &self,
+            _: &mut PointStore,
+            _: RunOptions,
+            _: &dyn Progress,
+        ) -> Result<Count, PipelineError> {
+            Ok(Count)
+        }
+        fn seam<'s>(
+            &'s self,
+            store: &'s PointStore,
+            _: &Count,
+            columns: &'s StageColumns,
+        ) -> Result<MarkSeam<'s>, PipelineError> {
+            Ok(MarkSeam {
+                store,
+                column: columns.get(&MARK)?,
+                seen: Vec::new(),
+                fail: self.0.fail_finish,
+            })
+        }
+    }
+
+    fn store(dir: &std::path::Path) -> PointStore {
+        let pts: Vec<DVec3> = (0..3000)
+            .map(|i| DVec3::new(i as f64 * 0.01, (i % 5) as f64 * 0.01, 0.0))
+            .collect();
+        crate::store::test_store::store_of(pts, 400, dir)
+    }
+
+    fn marks(fail: bool, fail_finish: bool) -> Marks {
+        Marks(Params { fail, fail_finish })
+    }
+
+    #[test]
+    fn the_seam_takes_every_tile_in_order_and_the_columns_are_sealed() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut store = store(dir.path());
+        let stage = marks(false, false);
+        let seen = run_stage(&mut store, &stage, RunOptions::new(2), &NoProgress).expect("run");
+        let tiles = store.tiles().to_vec();
+        assert!(tiles.len() > 1);
+        let order: Vec<usize> = seen.iter().map(|s| s.0).collect();
+        assert_eq!(order, (0..tiles.len()).collect::<Vec<_>>());
+        assert!(seen.iter().zip(&tiles).all(|(s, t)| s.1 == t.count));
+        assert_eq!(store.provenance(&MARK), Some(&stage.provenance()));
+        let column = Column::open(&store.dir().join(MARK.name), 1, false).expect("open");
+        let mut bytes = Vec::new();
+        column
+            .read_u8(tiles[1].start, tiles[1].count, &mut bytes)
+            .expect("read");
+        assert!(bytes.iter().all(|&b| b == 1));
+    }
+
+    #[test]
+    fn refused_parameters_touch_nothing() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut store = store(dir.path());
+        let err = run_stage(
+            &mut store,
+            &marks(true, false),
+            RunOptions::new(1),
+            &NoProgress,
+        );
+        assert!(matches!(err, Err(PipelineError::Seam(_))));
+        assert!(!store.has_column(&MARK));
+    }
+
+    #[test]
+    fn a_failed_finish_leaves_the_columns_unsealed() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut store = store(dir.path());
+        let err = run_stage(
+            &mut store,
+            &marks(false, true),
+            RunOptions::new(1),
+            &NoProgress,
+        );
+        assert!(err.is_err());
+        assert!(store.has_column(&MARK));
+        assert_eq!(store.provenance(&MARK), None);
+    }
+
+    #[test]
+    fn a_column_not_declared_is_missing() {
+        let columns = StageColumns {
+            columns: Vec::new(),
+        };
+        let err = columns.get(&MARK).err().map(|e| e.to_string());
+        assert_eq!(
+            err.as_deref(),
+            Some("store has no `mark.u8` column (run the pass that computes it first)")
+        );
+    }
+}
