@@ -12,12 +12,13 @@
 //!
 //! Out of core like every stage, and the example of the stage contract
 //! ([`OutliersStage`], a [`Stage`]): a tile kernel scores its core points
-//! ([`ScoreKernel`]), the seam ([`ScoreSeam`]) writes the scores to a store column and adds up
-//! order-free sums ([`crate::stats::ExactSum`]), so the threshold, and with
-//! it every flag, is the same for any tiling and thread count; a second
-//! pass over the column flags the outliers. The output is the store's
-//! point export with the score and the flags as named fields, in any
-//! format the output table gives ([`crate::io::output_spec`]).
+//! ([`ScoreKernel`]), the seam ([`ScoreSeam`]) writes the scores to a
+//! store column and adds up order-free sums ([`crate::stats::ExactSum`]),
+//! so the threshold, and with it every flag, is the same for any tiling
+//! and thread count; a second pass over the column flags the outliers
+//! when the seam finishes. The output is the store's point export with
+//! the score and the flags as named fields, in any format the output
+//! table gives ([`crate::io::output_spec`]).
 //!
 //! Deviation: a point of a cloud with fewer than `k + 1` points has fewer
 //! than `k` neighbours; its score is over those it has, flagged
