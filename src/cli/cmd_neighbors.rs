@@ -4,13 +4,9 @@
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use scanmesh::io::place;
-use scanmesh::io::AtomicFile;
-use scanmesh::neighbours::{
-    compute_neighbours, NeighbourParams, NeighboursReport, OutputFormat, OutputOptions,
-};
+use scanmesh::neighbours::{compute_neighbours, NeighbourParams, OutputFormat, OutputOptions};
 use scanmesh::spatial::HoodKind;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::Neighbours]));
 #[derive(Args)]
@@ -80,19 +76,10 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
     .with_context(|| format!("writing {}", a.output.display()))?;
     let line = s.closing(&report, &a.output);
     if let Some(path) = &a.summary {
-        write_summary(path, &report, line.secs)
+        report
+            .write_summary(path, line.secs)
             .with_context(|| format!("writing {}", path.display()))?;
     }
     s.summary(line);
-    Ok(())
-}
-
-/// Writes the `--summary` document, whole or not at all.
-fn write_summary(path: &Path, report: &NeighboursReport, secs: f64) -> Result<()> {
-    let mut file = AtomicFile::create(path)?;
-    let text = serde_json::to_string_pretty(&report.summary(&report.params, secs))?;
-    file.file().write_all(text.as_bytes())?;
-    file.file().write_all(b"\n")?;
-    file.commit()?;
     Ok(())
 }

@@ -15,12 +15,15 @@ use super::{
     CurvatureHood, CurvatureParams, FeaturesError, HoodChoice, CURVATURE, CURVATURE_FLAGS,
     CURVATURE_META_FILE, FLAG_UNORIENTED,
 };
+use crate::memory::KernelCost;
 use crate::normals::{
     ensure_normals, FLAG_DEGENERATE as N_DEGENERATE, FLAG_UNORIENTED as N_UNORIENTED,
 };
-use crate::pipeline::{run_tiles, KernelError, Progress, RunOptions, RunStats, TileKernel};
+use crate::pipeline::{run_stage, KernelError, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{Seam, Stage, StageColumns, StageParams, TileKernel};
 use crate::spatial::Neighbour;
-use crate::store::{spacing::ensure_spacing, ColumnSpec, PointStore, Provenance, FLAGS, NORMALS};
+use crate::store::{spacing::ensure_spacing, Column, ColumnSpec, PointStore, Provenance, StageId};
+use crate::store::{FLAGS, NORMALS};
 use crate::tiling::TilePoints;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -30,18 +33,23 @@ use serde::{Deserialize, Serialize};
 pub const VALUES: usize = 5;
 
 /// One tile's curvature of its core points.
-pub(crate) struct CurvatureTile {
+pub struct CurvatureTile {
     /// `k1, k2, H, K, residual` per core point.
-    pub values: Vec<f32>,
-    pub flags: Vec<u8>,
-    pub stats: CurvatureStats,
+    pub(crate) values: Vec<f32>,
+    /// Flags per core point.
+    pub(crate) flags: Vec<u8>,
+    pub(crate) stats: CurvatureStats,
 }
 
-pub(crate) struct CurvatureKernel {
-    pub hood: CurvatureHood,
-    pub margin: f64,
+/// The curvature's tile kernel: each core point's quadric and curvatures.
+pub struct CurvatureKernel {
+    pub(crate) hood: CurvatureHood,
+    pub(crate) margin: f64,
     /// Mean spacing `d` (the statistics' scale).
-    pub spacing: f64,
+    pub(crate) spacing: f64,
+    /// Whether preparing the kernel computed the normals first (the store
+    /// had none): reported, not read by the kernel.
+    pub(crate) computed_normals: bool,
 }
 
 /// The oriented normal of loaded point `i`, if the normals pass gave one.
@@ -109,7 +117,7 @@ impl TileKernel for CurvatureKernel {
     type Output = CurvatureTile;
 
     fn name(&self) -> &'static str {
-        "features: curvature"
+        CurvatureStage::ID.name()
     }
 
     fn margin(&self) -> f64 {
@@ -117,7 +125,7 @@ impl TileKernel for CurvatureKernel {
     }
 
     fn reads(&self) -> &[ColumnSpec] {
-        &[NORMALS, FLAGS]
+        CurvatureStage::READS
     }
 
     fn run(&self, tile: &TilePoints) -> Result<CurvatureTile, KernelError> {
@@ -264,73 +272,168 @@ pub struct CurvatureReport {
     pub computed_normals: bool,
 }
 
+/// The curvature stage ([`Stage`]): its parameters, run by [`run_stage`]
+/// (or [`compute_curvature`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CurvatureStage {
+    /// The fit and the normals it needs.
+    pub params: CurvatureParams,
+}
+
+impl StageParams for CurvatureParams {
+    type Error = FeaturesError;
+
+    fn validate(&self) -> Result<(), FeaturesError> {
+        CurvatureParams::validate(self)
+    }
+
+    fn cost(&self) -> KernelCost {
+        CurvatureParams::cost(self)
+    }
+}
+
+impl Stage for CurvatureStage {
+    const ID: StageId = StageId::Curvature;
+    const READS: &'static [ColumnSpec] = &[NORMALS, FLAGS];
+    const WRITES: &'static [ColumnSpec] = &[CURVATURE, CURVATURE_FLAGS];
+    type Params = CurvatureParams;
+    type Kernel = CurvatureKernel;
+    type Seam<'s> = CurvatureSeam<'s>;
+    type Report = CurvatureReport;
+    type Error = FeaturesError;
+
+    fn params(&self) -> &CurvatureParams {
+        &self.params
+    }
+
+    fn provenance(&self) -> Provenance {
+        provenance(&self.params)
+    }
+
+    /// The normals when the store has none of these parameters, the mean
+    /// spacing `d`, and the neighbourhood resolved for it.
+    fn kernel(
+        &self,
+        store: &mut PointStore,
+        opts: RunOptions,
+        progress: &dyn Progress,
+    ) -> Result<CurvatureKernel, FeaturesError> {
+        let params = &self.params;
+        let computed_normals = ensure_normals(store, &params.normals, opts, progress)?.is_some();
+        let estimate = ensure_spacing(store)?;
+        let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(FeaturesError::BadParameter(
+                super::BadFeatureParameter::Coincident {
+                    store: store.dir().to_path_buf(),
+                    spacing: d,
+                },
+            ));
+        }
+        // The tangent-plane noise in nearest-neighbour distances, when the
+        // normals pass measured it (exact sums: the same for any tiling).
+        let noise_ratio = store
+            .manifest()
+            .sampling
+            .filter(|s| s.mean_nn > 0.0)
+            .map_or(0.0, |s| s.noise / s.mean_nn);
+        let hood = params.hood.resolve(d, noise_ratio);
+        Ok(CurvatureKernel {
+            hood,
+            margin: match hood {
+                CurvatureHood::Radius(r) => r * 1.0001 + 1e-12,
+                CurvatureHood::Knn(k) => 3.0 * estimate * (k as f64).sqrt(),
+                CurvatureHood::Topological { k, .. } => 6.0 * estimate * (k as f64).sqrt(),
+            },
+            spacing: d,
+            computed_normals,
+        })
+    }
+
+    fn seam<'s>(
+        &'s self,
+        store: &'s PointStore,
+        kernel: &CurvatureKernel,
+        columns: &'s StageColumns,
+    ) -> Result<CurvatureSeam<'s>, FeaturesError> {
+        Ok(CurvatureSeam {
+            store,
+            values: columns.get(&CURVATURE)?,
+            flags: columns.get(&CURVATURE_FLAGS)?,
+            stats: CurvatureStats::new(kernel.spacing),
+            spacing: kernel.spacing,
+            hood: (self.params.hood, kernel.hood),
+            computed_normals: kernel.computed_normals,
+        })
+    }
+}
+
+/// The curvature's seam: each tile's values and flags into their columns
+/// and its statistics merged, in tile order; at the end the metadata saved
+/// beside the columns ([`CurvatureMeta`]) and the report.
+pub struct CurvatureSeam<'s> {
+    store: &'s PointStore,
+    values: &'s Column,
+    flags: &'s Column,
+    stats: CurvatureStats,
+    /// The mean spacing `d`.
+    spacing: f64,
+    /// The neighbourhood as chosen and as resolved for the spacing.
+    hood: (HoodChoice, CurvatureHood),
+    computed_normals: bool,
+}
+
+impl Seam for CurvatureSeam<'_> {
+    type Tile = CurvatureTile;
+    type Report = CurvatureReport;
+    type Error = FeaturesError;
+
+    fn accept(&mut self, tile: usize, out: CurvatureTile) -> Result<(), PipelineError> {
+        let start = self.store.tiles()[tile].start;
+        self.values.write_f32(start, &out.values)?;
+        self.flags.write_bytes(start, &out.flags)?;
+        self.stats.merge(&out.stats);
+        Ok(())
+    }
+
+    fn finish(
+        self,
+        run: RunStats,
+        _: RunOptions,
+        _: &dyn Progress,
+    ) -> Result<CurvatureReport, FeaturesError> {
+        let (store, stats) = (self.store, &self.stats);
+        let meta = CurvatureMeta {
+            hood: self.hood.0,
+            spacing: self.spacing,
+            resolved: self.hood.1,
+            points: store.len(),
+            flagged: stats.flagged,
+            rms: stats.rms(),
+            median_residual: stats.residual.quantile(0.5),
+            max_error: stats.max_error,
+            dominant_percentiles: (0..=100)
+                .map(|p| stats.dominant.quantile(p as f64 / 100.0))
+                .collect(),
+        };
+        meta.save(store)?;
+        Ok(CurvatureReport {
+            meta,
+            tiles: store.tiles().len(),
+            run,
+            computed_normals: self.computed_normals,
+        })
+    }
+}
+
 /// Computes the curvature of every point of `store` into its columns,
-/// computing normals first if the store has none.
+/// computing normals first if the store has none: [`run_stage`] of
+/// [`CurvatureStage`].
 pub fn compute_curvature(
     store: &mut PointStore,
     params: &CurvatureParams,
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<CurvatureReport, FeaturesError> {
-    params.validate()?;
-    let computed_normals = ensure_normals(store, &params.normals, opts, progress)?.is_some();
-    let estimate = ensure_spacing(store)?;
-    let d = super::spacing::mean_spacing(store, estimate, opts, progress)?;
-    if !(d > 0.0 && d.is_finite()) {
-        return Err(FeaturesError::BadParameter(
-            super::BadFeatureParameter::Coincident {
-                store: store.dir().to_path_buf(),
-                spacing: d,
-            },
-        ));
-    }
-    // The tangent-plane noise in nearest-neighbour distances, when the
-    // normals pass measured it (exact sums: the same for any tiling).
-    let noise_ratio = store
-        .manifest()
-        .sampling
-        .filter(|s| s.mean_nn > 0.0)
-        .map_or(0.0, |s| s.noise / s.mean_nn);
-    let hood = params.hood.resolve(d, noise_ratio);
-    let kernel = CurvatureKernel {
-        hood,
-        margin: match hood {
-            CurvatureHood::Radius(r) => r * 1.0001 + 1e-12,
-            CurvatureHood::Knn(k) => 3.0 * estimate * (k as f64).sqrt(),
-            CurvatureHood::Topological { k, .. } => 6.0 * estimate * (k as f64).sqrt(),
-        },
-        spacing: d,
-    };
-    let values = store.create_column(&CURVATURE)?;
-    let flags = store.create_column(&CURVATURE_FLAGS)?;
-    let mut stats = CurvatureStats::new(d);
-    let run = run_tiles(store, &kernel, opts, progress, |t, out: CurvatureTile| {
-        let start = store.tiles()[t].start;
-        values.write_f32(start, &out.values)?;
-        flags.write_bytes(start, &out.flags)?;
-        stats.merge(&out.stats);
-        Ok(())
-    })?;
-    store.finish_column(&CURVATURE_FLAGS, &flags, provenance(params))?;
-    store.finish_column(&CURVATURE, &values, provenance(params))?;
-    let meta = CurvatureMeta {
-        hood: params.hood,
-        spacing: d,
-        resolved: hood,
-        points: store.len(),
-        flagged: stats.flagged,
-        rms: stats.rms(),
-        median_residual: stats.residual.quantile(0.5),
-        max_error: stats.max_error,
-        dominant_percentiles: (0..=100)
-            .map(|p| stats.dominant.quantile(p as f64 / 100.0))
-            .collect(),
-    };
-    meta.save(store)?;
-    Ok(CurvatureReport {
-        meta,
-        tiles: store.tiles().len(),
-        run,
-        computed_normals,
-    })
+    run_stage(store, &CurvatureStage { params: *params }, opts, progress)
 }

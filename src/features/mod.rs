@@ -38,7 +38,7 @@ pub(crate) mod stats;
 mod summary;
 
 pub use bad_parameter::BadFeatureParameter;
-pub use curvature::{compute_curvature, CurvatureReport};
+pub use curvature::{compute_curvature, CurvatureReport, CurvatureStage};
 
 use crate::normals::{NormalParams, Orientation};
 use crate::pipeline::PipelineError;

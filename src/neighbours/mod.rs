@@ -36,10 +36,11 @@ pub use spill::ScratchFault;
 pub use stats::{HoodStats, Summary};
 
 use crate::io::IoError;
-use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_stage, KernelCost, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{Seam, Stage, StageColumns, StageParams};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::{HoodKind, KnnBackend};
-use crate::store::{PointStore, StoreError};
+use crate::store::{ColumnSpec, PointStore, Provenance, StageId, StoreError};
 use csr::WindowLists;
 use spill::{Spill, Windows};
 use std::path::Path;
@@ -259,10 +260,152 @@ impl NeighboursReport {
             seconds,
         }
     }
+
+    /// Writes the `--summary` document of a run that took `seconds` to
+    /// `path` (pretty JSON and an end of line), whole or not at all.
+    pub fn write_summary(&self, path: &Path, seconds: f64) -> Result<(), IoError> {
+        let summary = self.summary(&self.params, seconds);
+        let mut text = serde_json::to_string_pretty(&summary)
+            .map_err(|e| IoError::os(path, std::io::Error::other(e)))?;
+        text.push('\n');
+        let mut file = crate::io::AtomicFile::create(path)?;
+        std::io::Write::write_all(file.file(), text.as_bytes())
+            .map_err(|e| IoError::os(path, e))?;
+        file.commit()
+    }
+}
+
+/// The neighbours stage ([`Stage`]): every point's list, written to a file
+/// in input order; run by [`run_stage`] (or [`compute_neighbours`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NeighboursStage<'a> {
+    /// Which neighbourhood every point gets.
+    pub params: NeighbourParams,
+    /// The output file.
+    pub output: &'a Path,
+    /// How the lists are written.
+    pub out: OutputOptions,
+}
+
+impl StageParams for NeighbourParams {
+    type Error = NeighboursError;
+
+    fn validate(&self) -> Result<(), NeighboursError> {
+        NeighbourParams::validate(self)
+    }
+
+    fn cost(&self) -> KernelCost {
+        NeighbourParams::cost(self)
+    }
+}
+
+impl Stage for NeighboursStage<'_> {
+    const ID: StageId = StageId::Neighbours;
+    const READS: &'static [ColumnSpec] = &[];
+    const WRITES: &'static [ColumnSpec] = &[];
+    type Params = NeighbourParams;
+    type Kernel = NeighboursKernel;
+    type Seam<'s>
+        = NeighboursSeam
+    where
+        Self: 's;
+    type Report = NeighboursReport;
+    type Error = NeighboursError;
+
+    fn params(&self) -> &NeighbourParams {
+        &self.params
+    }
+
+    /// Writes no column: what its columns would record.
+    fn provenance(&self) -> Provenance {
+        Provenance::of(Self::ID.name(), &self.params)
+    }
+
+    fn kernel(
+        &self,
+        store: &mut PointStore,
+        _: RunOptions,
+        _: &dyn Progress,
+    ) -> Result<NeighboursKernel, NeighboursError> {
+        let spacing = crate::store::spacing::ensure_spacing(store)?;
+        Ok(NeighboursKernel {
+            params: self.params,
+            initial_margin: self.params.initial_margin(spacing).max(f64::MIN_POSITIVE),
+        })
+    }
+
+    /// Opens the output (an unwritable one fails before the tiles) and the
+    /// scratch file of the lists.
+    fn seam<'s>(
+        &'s self,
+        store: &'s PointStore,
+        _: &NeighboursKernel,
+        _: &'s StageColumns,
+    ) -> Result<NeighboursSeam, NeighboursError> {
+        let writer = csr::ListWriter::create(self.output, self.out.format, store.len())?;
+        let windows = Windows::new(store.len(), self.out.window_points);
+        let spill = Spill::create(store.dir(), windows, IdWidth::for_points(store.len()))?;
+        let report = NeighboursReport {
+            points: store.len(),
+            tiles: store.tiles().len(),
+            params: self.params,
+            ..NeighboursReport::default()
+        };
+        Ok(NeighboursSeam {
+            writer,
+            windows,
+            spill,
+            report,
+        })
+    }
+}
+
+/// The neighbours' seam: each tile's lists spilled, sorted by id, to a
+/// scratch file; at the end the file written window by window in input
+/// order and renamed into place.
+pub struct NeighboursSeam {
+    writer: csr::ListWriter,
+    windows: Windows,
+    spill: Spill,
+    report: NeighboursReport,
+}
+
+impl Seam for NeighboursSeam {
+    type Tile = NeighboursTile;
+    type Report = NeighboursReport;
+    type Error = NeighboursError;
+
+    fn accept(&mut self, _: usize, tile: NeighboursTile) -> Result<(), PipelineError> {
+        self.report.stats.merge(&tile.stats);
+        Ok(self.spill.push_tile(&tile)?)
+    }
+
+    fn finish(
+        self,
+        run: RunStats,
+        _: RunOptions,
+        progress: &dyn Progress,
+    ) -> Result<NeighboursReport, NeighboursError> {
+        let (mut writer, mut report) = (self.writer, self.report);
+        report.run = run;
+        report.neighbours = report.stats.total();
+        let mut reader = self.spill.finish()?;
+        let mut lists = WindowLists::default();
+        progress.begin("write", report.points);
+        for w in 0..self.windows.count() {
+            reader.read_window(w, &mut lists)?;
+            writer.write_window(&lists)?;
+            progress.advance(lists.len() as u64);
+        }
+        progress.end();
+        writer.commit()?;
+        Ok(report)
+    }
 }
 
 /// Computes every point's neighbourhood and writes the lists to `output` in
-/// input order. Nothing appears at `output` unless the run succeeds.
+/// input order: [`run_stage`] of [`NeighboursStage`]. Nothing appears at
+/// `output` unless the run succeeds.
 pub fn compute_neighbours(
     store: &mut PointStore,
     params: &NeighbourParams,
@@ -271,36 +414,10 @@ pub fn compute_neighbours(
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<NeighboursReport, NeighboursError> {
-    params.validate()?;
-    // Opened first, so an unwritable output fails before the long work.
-    let mut writer = csr::ListWriter::create(output, out.format, store.len())?;
-    let spacing = crate::store::spacing::ensure_spacing(store)?;
-    let kernel = NeighboursKernel {
+    let stage = NeighboursStage {
         params: *params,
-        initial_margin: params.initial_margin(spacing).max(f64::MIN_POSITIVE),
+        output,
+        out: *out,
     };
-    let windows = Windows::new(store.len(), out.window_points);
-    let mut spill = Spill::create(store.dir(), windows, IdWidth::for_points(store.len()))?;
-    let mut report = NeighboursReport {
-        points: store.len(),
-        tiles: store.tiles().len(),
-        params: *params,
-        ..NeighboursReport::default()
-    };
-    report.run = run_tiles(store, &kernel, opts, progress, |_, tile: NeighboursTile| {
-        report.stats.merge(&tile.stats);
-        Ok(spill.push_tile(&tile)?)
-    })?;
-    report.neighbours = report.stats.total();
-    let mut reader = spill.finish()?;
-    let mut lists = WindowLists::default();
-    progress.begin("write", store.len());
-    for w in 0..windows.count() {
-        reader.read_window(w, &mut lists)?;
-        writer.write_window(&lists)?;
-        progress.advance(lists.len() as u64);
-    }
-    progress.end();
-    writer.commit()?;
-    Ok(report)
+    run_stage(store, &stage, opts, progress)
 }

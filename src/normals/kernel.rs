@@ -52,15 +52,20 @@ impl NormalsTile {
     }
 }
 
+/// The normals' tile kernel: the core points' normals and flags, the
+/// tile's spanning forest, its sampling histograms.
 pub struct NormalsKernel {
-    pub params: NormalParams,
+    pub(crate) params: NormalParams,
     /// Store origin, for the viewpoint (given in absolute coordinates).
-    pub origin: DVec3,
-    pub initial_margin: f64,
+    pub(crate) origin: DVec3,
+    pub(crate) initial_margin: f64,
+    /// The store's spacing estimate, the margin's unit (and the
+    /// orientation's, after the tiles).
+    pub(crate) spacing: f64,
     /// Scale of the sampling histograms (the same for every tile).
-    pub histogram_scale: f64,
+    pub(crate) histogram_scale: f64,
     /// The store's stations (relative), for [`Orientation::Stations`].
-    pub stations: super::evidence::StationTable,
+    pub(crate) stations: super::evidence::StationTable,
 }
 
 /// A fitted (and, toward a viewpoint, oriented) unit normal.

@@ -23,17 +23,16 @@ mod output;
 pub mod pca;
 pub(crate) mod runs;
 pub mod sources;
+mod stage;
 mod summary;
 pub(crate) mod unionfind;
 
-use crate::pipeline::{run_tiles, KernelCost, PipelineError, Progress, RunOptions, RunStats};
+use crate::pipeline::{run_stage, KernelCost, PipelineError, Progress, RunOptions, RunStats};
 use crate::spatial::topological::TopoParams;
 use crate::spatial::{HoodKind, KnnBackend};
-use crate::store::sampling::{SamplingHistograms, SamplingStats};
-use crate::store::{Column, PointStore, Provenance, StoreError, FLAGS, NORMALS};
+use crate::store::sampling::SamplingStats;
+use crate::store::{PointStore, Provenance, StoreError, FLAGS, NORMALS};
 use glam::DVec3;
-use kernel::{NormalsKernel, NormalsTile};
-use runs::EdgeRuns;
 
 /// Bytes per point of an input-order output window of positions, normals
 /// and flags (the record and its share of the reorder buffers).
@@ -105,6 +104,7 @@ pub use bad_parameter::BadNormalParameter;
 pub use choice::{OrientationChoice, OrientationKind};
 pub use evidence::{Evidence, EvidenceCheck, Sensor};
 pub use output::normals_output;
+pub use stage::{NormalsSeam, NormalsStage};
 
 /// Cost of a Riemannian-graph edge for the spanning tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -384,34 +384,15 @@ pub(crate) fn initial_margin(spacing: f64, k: usize) -> f64 {
     4.0 * spacing * (k as f64).sqrt()
 }
 
-/// Computes oriented normals for every point of `store` into its columns.
+/// Computes oriented normals for every point of `store` into its columns:
+/// [`run_stage`] of [`NormalsStage`].
 pub fn compute_normals(
     store: &mut PointStore,
     params: &NormalParams,
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<NormalsReport, NormalsError> {
-    params.validate()?;
-    let resolved = NormalParams {
-        orientation: evidence::resolve(params.orientation, store)?,
-        ..*params
-    };
-    let spacing = crate::store::spacing::ensure_spacing(store)?;
-    let normals = store.create_column(&NORMALS)?;
-    let flags = store.create_column(&FLAGS)?;
-    let mut report = normals_into(store, &resolved, spacing, opts, progress, &normals, &flags)?;
-    report.oriented_by = OrientedBy::of(resolved.orientation);
-    let sensor = match params.orientation {
-        Orientation::Auto(sensor) => sensor,
-        _ => Sensor::Auto,
-    };
-    if let Some(e) = Evidence::of(store, sensor) {
-        report.evidence = Some(evidence::check(store, e, &normals, &flags)?);
-    }
-    store.set_sampling(report.sampling)?;
-    store.finish_column(&FLAGS, &flags, params.provenance())?;
-    store.finish_column(&NORMALS, &normals, params.provenance())?;
-    Ok(report)
+    run_stage(store, &NormalsStage { params: *params }, opts, progress)
 }
 
 /// Whether `store` holds normals computed with `params` (with their
@@ -434,103 +415,4 @@ pub(crate) fn ensure_normals(
         return Ok(None);
     }
     compute_normals(store, params, opts, progress).map(Some)
-}
-
-/// The kernel pass and, for the spanning tree, the global orientation
-/// (`params` resolved: no [`Orientation::Auto`]).
-fn normals_into(
-    store: &PointStore,
-    params: &NormalParams,
-    spacing: f64,
-    opts: RunOptions,
-    progress: &dyn Progress,
-    normals: &Column,
-    flags: &Column,
-) -> Result<NormalsReport, NormalsError> {
-    // The histograms' scale must not depend on the tiling (the spacing
-    // estimate does, through its sample), so it comes from the input bounds.
-    let extent = store.relative_bounds().extent().max_element();
-    let scale = if extent > 0.0 { extent / 4096.0 } else { 1.0 };
-    let kernel = NormalsKernel {
-        params: *params,
-        origin: store.origin(),
-        initial_margin: params.initial_margin(spacing),
-        histogram_scale: scale,
-        stations: evidence::StationTable::new(&store.manifest().stations, store.origin()),
-    };
-    let mut sampling = SamplingHistograms::new(scale);
-    let mut runs = EdgeRuns::create(&store.dir().join(".forest.edges"))?;
-    let by_tree = params.orientation.by_tree();
-    let anchoring = match params.orientation {
-        Orientation::Aerial => orient::anchors::Anchoring::new(DVec3::Z, store.len()),
-        _ => None,
-    };
-    let mut ids = Vec::new();
-    let mut isolated = by_tree
-        .then(|| orient::Isolated::create(store))
-        .transpose()?;
-    let mut report = NormalsReport {
-        points: store.len(),
-        tiles: store.tiles().len(),
-        ..NormalsReport::default()
-    };
-    report.run = run_tiles(store, &kernel, opts, progress, |t, out: NormalsTile| {
-        let start = store.tiles()[t].start;
-        let flat: Vec<f32> = out.normals.iter().flatten().copied().collect();
-        normals.write_f32(start, &flat)?;
-        flags.write_bytes(start, &out.flags)?;
-        report.degenerate += out
-            .flags
-            .iter()
-            .filter(|f| **f & FLAG_DEGENERATE != 0)
-            .count() as u64;
-        if let Some(isolated) = &isolated {
-            isolated.write(start, &out.nn_slots)?;
-        }
-        let tile = &store.tiles()[t];
-        let core = tile.start..tile.start + tile.count;
-        match &anchoring {
-            Some(a) => {
-                store.read_indices(tile.start, tile.count, &mut ids)?;
-                let forest = a.forest(out.forest, core.clone(), &ids, &flat, &out.flags);
-                runs.push_tile_run(&forest, core)?;
-            }
-            None => runs.push_tile_run(&out.forest, core)?,
-        }
-        sampling.merge(&out.sampling);
-        Ok(())
-    })?;
-    report.sampling = sampling.stats();
-    report.forest_edges = runs.edges();
-    if let Some(isolated) = &mut isolated {
-        isolated.settle(&sampling.nn, sampling.isolation_limit());
-        let b = store.relative_bounds();
-        let columns = orient::Columns {
-            normals,
-            flags,
-            isolated,
-            grid: orient::ColumnGrid::new([b.min.x, b.min.y], [b.max.x, b.max.y]),
-            sky: anchoring.is_some(),
-        };
-        let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
-            orient::orient_by_forest(store, runs, columns, progress)?
-        } else {
-            orient::orient_external(store, runs, columns, progress)?
-        };
-        report.unoriented = stats.unoriented;
-        report.components = stats.components;
-    }
-    // The exact mean over every point (independent of the tiling), unless
-    // all points are duplicates.
-    let nn = match report.sampling.mean_nn {
-        m if m > 0.0 && m.is_finite() => m,
-        _ => spacing,
-    };
-    if let Some(sp) = sources::SourceParams::for_normals(params, nn) {
-        let stats = sources::orient_store(store, &sp, spacing, opts, progress, normals, flags)?;
-        report.unoriented = stats.unoriented;
-        report.components = stats.components;
-        report.forest_edges = stats.forest_edges;
-    }
-    Ok(report)
 }

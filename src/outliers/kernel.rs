@@ -8,8 +8,8 @@ use crate::pipeline::{KernelError, TileKernel, TilePoints};
 use crate::spatial::{build_index, KnnBackend};
 use crate::stats::ExactSum;
 
-/// Scores per core point.
-pub(super) struct ScoreKernel {
+/// The outliers' tile kernel: scores per core point.
+pub struct ScoreKernel {
     pub(super) k: usize,
     /// First margin to load; the pipeline widens it when a tile asks.
     pub(super) margin: f64,
@@ -19,7 +19,7 @@ pub(super) struct ScoreKernel {
 }
 
 /// One tile's scores and flags in store order, and their sums.
-pub(super) struct TileScores {
+pub struct TileScores {
     pub(super) scores: Vec<f32>,
     pub(super) flags: Vec<u8>,
     pub(super) sums: Sums,
@@ -51,7 +51,7 @@ impl TileKernel for ScoreKernel {
     type Output = TileScores;
 
     fn name(&self) -> &'static str {
-        "outlier scores"
+        crate::store::StageId::OutlierScores.name()
     }
 
     fn margin(&self) -> f64 {

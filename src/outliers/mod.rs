@@ -10,13 +10,15 @@
 //! of this project covers it; it is the stage that shows how a capability
 //! plugs in (ARCHITECTURE.md, "Adding a stage").
 //!
-//! Out of core like every stage: a tile kernel scores its core points
-//! (`kernel`), the seam writes the scores to a store column and adds up
-//! order-free sums ([`crate::stats::ExactSum`]), so the threshold, and with
-//! it every flag, is the same for any tiling and thread count; a second
-//! pass over the column flags the outliers. The output is the store's
-//! point export with the score and the flags as named fields, in any
-//! format the output table gives ([`crate::io::output_spec`]).
+//! Out of core like every stage, and the example of the stage contract
+//! ([`OutliersStage`], a [`Stage`]): a tile kernel scores its core points
+//! ([`ScoreKernel`]), the seam ([`ScoreSeam`]) writes the scores to a
+//! store column and adds up order-free sums ([`crate::stats::ExactSum`]),
+//! so the threshold, and with it every flag, is the same for any tiling
+//! and thread count; a second pass over the column flags the outliers
+//! when the seam finishes. The output is the store's point export with
+//! the score and the flags as named fields, in any format the output
+//! table gives ([`crate::io::output_spec`]).
 //!
 //! Deviation: a point of a cloud with fewer than `k + 1` points has fewer
 //! than `k` neighbours; its score is over those it has, flagged
@@ -24,17 +26,21 @@
 //! average over what the search returns and judge it like the others).
 
 mod kernel;
+mod seam;
 mod summary;
 
+pub use kernel::{ScoreKernel, TileScores};
+pub use seam::ScoreSeam;
 pub use summary::OutliersWritten;
 
 use crate::io::{output_spec, Carried, IoError, ValueField, WriterSpec};
 use crate::memory::KernelCost;
-use crate::pipeline::{run_tiles, PipelineError, RunOptions, RunStats};
+use crate::pipeline::{run_stage, PipelineError, RunOptions, RunStats};
+use crate::pipeline::{Stage, StageColumns, StageParams};
 use crate::progress::Progress;
 use crate::store::spacing::ensure_spacing;
-use crate::store::{export_values, ColumnSpec, Item, PointStore, Provenance, StoreError};
-use kernel::{ScoreKernel, Sums};
+use crate::store::{export_values, ColumnSpec, Item, PointStore, Provenance, StageId, StoreError};
+use kernel::Sums;
 use std::path::Path;
 
 /// Per-point score: the mean distance to the `k` nearest (f32, input units).
@@ -161,65 +167,85 @@ pub struct OutlierReport {
     pub params: OutlierParams,
 }
 
+/// The outlier stage ([`Stage`]): the rule's parameters, run by
+/// [`run_stage`] (or [`compute_outliers`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutliersStage {
+    /// The rule.
+    pub params: OutlierParams,
+}
+
+impl StageParams for OutlierParams {
+    type Error = OutliersError;
+
+    fn validate(&self) -> Result<(), OutliersError> {
+        OutlierParams::validate(self)
+    }
+
+    fn cost(&self) -> KernelCost {
+        OutlierParams::cost(self)
+    }
+}
+
+impl Stage for OutliersStage {
+    const ID: StageId = StageId::OutlierScores;
+    const READS: &'static [ColumnSpec] = &[];
+    const WRITES: &'static [ColumnSpec] = &[OUTLIER_SCORE, OUTLIER_FLAGS];
+    type Params = OutlierParams;
+    type Kernel = ScoreKernel;
+    type Seam<'s> = ScoreSeam<'s>;
+    type Report = OutlierReport;
+    type Error = OutliersError;
+
+    fn params(&self) -> &OutlierParams {
+        &self.params
+    }
+
+    fn provenance(&self) -> Provenance {
+        Provenance::of("outliers", &self.params)
+    }
+
+    fn kernel(
+        &self,
+        store: &mut PointStore,
+        _: RunOptions,
+        _: &dyn Progress,
+    ) -> Result<ScoreKernel, OutliersError> {
+        let spacing = ensure_spacing(store)?;
+        let k = self.params.k;
+        Ok(ScoreKernel {
+            k,
+            margin: (2.0 * spacing * (k as f64).sqrt().max(2.0)).max(1e-9),
+            scale: sum_scale(store),
+            bytes_per_point: self.params.cost().bytes_per_point,
+        })
+    }
+
+    fn seam<'s>(
+        &'s self,
+        store: &'s PointStore,
+        kernel: &ScoreKernel,
+        columns: &'s StageColumns,
+    ) -> Result<ScoreSeam<'s>, OutliersError> {
+        Ok(ScoreSeam {
+            store,
+            scores: columns.get(&OUTLIER_SCORE)?,
+            flags: columns.get(&OUTLIER_FLAGS)?,
+            sums: Sums::new(kernel.scale),
+            params: self.params,
+        })
+    }
+}
+
 /// Scores every point of `store` and flags the outliers, in the columns
-/// [`OUTLIER_SCORE`] and [`OUTLIER_FLAGS`].
+/// [`OUTLIER_SCORE`] and [`OUTLIER_FLAGS`]: [`run_stage`] of [`OutliersStage`].
 pub fn compute_outliers(
     store: &mut PointStore,
     params: &OutlierParams,
     opts: RunOptions,
     progress: &dyn Progress,
 ) -> Result<OutlierReport, OutliersError> {
-    params.validate()?;
-    let spacing = ensure_spacing(store)?;
-    let kernel = ScoreKernel {
-        k: params.k,
-        margin: (2.0 * spacing * (params.k as f64).sqrt().max(2.0)).max(1e-9),
-        scale: sum_scale(store),
-        bytes_per_point: params.cost().bytes_per_point,
-    };
-    let scores = store.create_column(&OUTLIER_SCORE)?;
-    let flags = store.create_column(&OUTLIER_FLAGS)?;
-    let mut sums = Sums::new(kernel.scale);
-    let run = run_tiles(store, &kernel, opts, progress, |t, out| {
-        let start = store.tiles()[t].start;
-        scores.write_f32(start, &out.scores)?;
-        flags.write_bytes(start, &out.flags)?;
-        sums.merge(&out.sums);
-        Ok(())
-    })?;
-    let mean = sums.score.mean();
-    let n = sums.score.count() as f64;
-    // The sample variance, as PCL and Open3D take it.
-    let variance = (sums.square.mean() - mean * mean) * n / (n - 1.0).max(1.0);
-    let std_dev = variance.max(0.0).sqrt();
-    let threshold = mean + params.ratio * std_dev;
-    let (mut outliers, mut not_judged) = (0, 0);
-    let (mut s, mut f) = (Vec::new(), Vec::new());
-    for t in store.tiles() {
-        scores.read_f32(t.start, t.count, &mut s)?;
-        flags.read_u8(t.start, t.count, &mut f)?;
-        for (flag, score) in f.iter_mut().zip(&s) {
-            if *flag == 0 && f64::from(*score) > threshold {
-                *flag = OUTLIER;
-            }
-            outliers += u64::from(*flag == OUTLIER);
-            not_judged += u64::from(*flag == FEWER_THAN_K);
-        }
-        flags.write_bytes(t.start, &f)?;
-    }
-    let made_by = Provenance::of("outliers", params);
-    store.finish_column(&OUTLIER_SCORE, &scores, made_by.clone())?;
-    store.finish_column(&OUTLIER_FLAGS, &flags, made_by)?;
-    Ok(OutlierReport {
-        points: store.len(),
-        mean,
-        std_dev,
-        threshold,
-        outliers,
-        not_judged,
-        run,
-        params: *params,
-    })
+    run_stage(store, &OutliersStage { params: *params }, opts, progress)
 }
 
 /// The unit of the order-free sums: from the input's bounds, which no

@@ -1,12 +1,15 @@
 //! The shared tile pipeline: schedules tile jobs on worker threads, bounds the
 //! tiles in flight (and so the memory), reorders results into tile order and
-//! hands them to the kernel's seam policy. It knows nothing of geometry.
+//! hands them to the kernel's seam policy (`run_tiles`, the lower layer); a
+//! stage declared as a type (`stage`: `Stage`, `Seam`) runs over it with
+//! `run_stage`. It knows nothing of geometry.
 
 mod codec;
 mod kernel;
 mod options;
 mod run;
 mod shares;
+mod stage;
 mod workspace;
 
 #[cfg(test)]
@@ -16,6 +19,7 @@ pub use codec::Codec;
 pub use kernel::{KernelError, TileFault, TileKernel};
 pub use options::RunOptions;
 pub use run::{run_tiles, RunStats};
+pub use stage::{run_stage, Seam, Stage, StageColumns, StageParams};
 pub use workspace::{reclaim, reclaimed_note, Prepared, RunSettings, WorkspaceError};
 // What a kernel is handed: a tile's points and declared columns. Public so
 // that a kernel can live outside the crate.

@@ -1,13 +1,14 @@
-//! The stages a resumable run keeps results of, by a typed id. A stage's
-//! name is on disk (the directory of its finished tiles, the file of its
-//! global result in a run directory) and in the log, progress bars and
-//! `status`, so the names are today's exact strings: run directories made
-//! by earlier versions resume.
+//! The tile stages, by a typed id: those a resumable run keeps results of
+//! and those run through the stage contract (`pipeline::Stage::ID`). A
+//! stage's name is on disk (the directory of its finished tiles, the file
+//! of its global result in a run directory) and in the log, progress bars,
+//! errors and `status`, so the names are today's exact strings: run
+//! directories made by earlier versions resume.
 
 use super::Checkpoints;
 
-/// A stage whose results a run directory keeps (its tiles, or its global
-/// result).
+/// A tile stage: one whose results a run directory keeps (its tiles, or
+/// its global result), or one that runs as a `pipeline::Stage`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum StageId {
@@ -19,6 +20,10 @@ pub enum StageId {
     Neighbours,
     /// The implicit surface's marching-cubes tiles.
     MarchingCubes,
+    /// The outlier scores (`outliers`; no saved tiles).
+    OutlierScores,
+    /// The curvature of `curvature` and `features` (no saved tiles).
+    Curvature,
 }
 
 impl StageId {
@@ -29,6 +34,8 @@ impl StageId {
             StageId::OrientSources => "orient: six sources",
             StageId::Neighbours => "neighbours",
             StageId::MarchingCubes => "marching cubes",
+            StageId::OutlierScores => "outlier scores",
+            StageId::Curvature => "features: curvature",
         }
     }
 
@@ -55,5 +62,8 @@ mod tests {
         assert_eq!(StageId::MarchingCubes.slug(), "marching-cubes");
         assert_eq!(StageId::OrientSources.slug(), "orient--six-sources");
         assert_eq!(StageId::Neighbours.to_string(), "neighbours");
+        // Progress labels and errors as they were.
+        assert_eq!(StageId::OutlierScores.name(), "outlier scores");
+        assert_eq!(StageId::Curvature.name(), "features: curvature");
     }
 }
