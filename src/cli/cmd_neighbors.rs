@@ -8,7 +8,7 @@ use scanmesh::neighbours::{compute_neighbours, NeighbourParams, OutputFormat, Ou
 use scanmesh::spatial::HoodKind;
 use std::path::PathBuf;
 
-super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::Neighbours]));
+super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::NEIGHBOURS]));
 #[derive(Args)]
 pub struct NeighborsArgs {
     /// Input point file or store directory.

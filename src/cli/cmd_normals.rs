@@ -11,7 +11,7 @@ use scanmesh::spatial::KnnBackend;
 use scanmesh::store::{export_points_keeping, StageId, NORMALS};
 use std::path::PathBuf;
 
-super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::Normals]));
+super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::NORMALS]));
 #[derive(Args)]
 pub struct NormalsArgs {
     /// Input point file or store directory.
@@ -63,7 +63,7 @@ pub fn run(a: NormalsArgs) -> Result<()> {
     let store = &mut run.ws.store;
     // A resumed run keeps normals it finished (its store outlives it).
     let valid = store.has_column(&NORMALS);
-    let report = Session::kept_or(s.run.as_ref(), StageId::Normals, valid, || -> Result<_> {
+    let report = Session::kept_or(s.run.as_ref(), StageId::NORMALS, valid, || -> Result<_> {
         Ok(compute_normals(store, &params, run.opts, progress)?)
     })?;
     s.note(not_held(&a.output, spec.carry(store.attributes())));

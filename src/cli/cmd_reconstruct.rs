@@ -54,7 +54,7 @@ impl ReconstructArgs {
     /// The tile stages that can run as separate jobs (`--emit`).
     pub fn tile_stages(&self) -> Result<Vec<StageId>> {
         match self.method {
-            Method::Implicit => Ok(vec![StageId::Normals, StageId::MarchingCubes]),
+            Method::Implicit => Ok(vec![StageId::NORMALS, StageId::MARCHING_CUBES]),
             _ => bail!("--emit: only --method implicit runs its tiles as separate jobs yet"),
         }
     }

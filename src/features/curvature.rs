@@ -293,7 +293,7 @@ impl StageParams for CurvatureParams {
 }
 
 impl Stage for CurvatureStage {
-    const ID: StageId = StageId::Curvature;
+    const ID: StageId = StageId::CURVATURE;
     const READS: &'static [ColumnSpec] = &[NORMALS, FLAGS];
     const WRITES: &'static [ColumnSpec] = &[CURVATURE, CURVATURE_FLAGS];
     type Params = CurvatureParams;

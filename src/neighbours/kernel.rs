@@ -74,7 +74,7 @@ impl TileKernel for NeighboursKernel {
     type Output = NeighboursTile;
 
     fn name(&self) -> &'static str {
-        crate::store::StageId::Neighbours.name()
+        crate::store::StageId::NEIGHBOURS.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

@@ -300,7 +300,7 @@ impl StageParams for NeighbourParams {
 }
 
 impl Stage for NeighboursStage<'_> {
-    const ID: StageId = StageId::Neighbours;
+    const ID: StageId = StageId::NEIGHBOURS;
     const READS: &'static [ColumnSpec] = &[];
     const WRITES: &'static [ColumnSpec] = &[];
     type Params = NeighbourParams;

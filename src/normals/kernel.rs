@@ -118,7 +118,7 @@ impl TileKernel for NormalsKernel {
     type Output = NormalsTile;
 
     fn name(&self) -> &'static str {
-        crate::store::StageId::Normals.name()
+        crate::store::StageId::NORMALS.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

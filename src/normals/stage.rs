@@ -42,7 +42,7 @@ impl StageParams for NormalParams {
 }
 
 impl Stage for NormalsStage {
-    const ID: StageId = StageId::Normals;
+    const ID: StageId = StageId::NORMALS;
     const READS: &'static [ColumnSpec] = &[];
     const WRITES: &'static [ColumnSpec] = &[NORMALS, FLAGS];
     type Params = NormalParams;

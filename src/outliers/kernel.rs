@@ -51,7 +51,7 @@ impl TileKernel for ScoreKernel {
     type Output = TileScores;
 
     fn name(&self) -> &'static str {
-        crate::store::StageId::OutlierScores.name()
+        super::OUTLIER_SCORES.name()
     }
 
     fn margin(&self) -> f64 {

@@ -43,6 +43,8 @@ use crate::store::{export_values, ColumnSpec, Item, PointStore, Provenance, Stag
 use kernel::Sums;
 use std::path::Path;
 
+/// The stage's id: its name in progress bars, logs and errors.
+pub const OUTLIER_SCORES: StageId = StageId::new("outlier scores");
 /// Per-point score: the mean distance to the `k` nearest (f32, input units).
 pub const OUTLIER_SCORE: ColumnSpec = ColumnSpec::new("outlier_score.f32", Item::F32(1));
 /// Per-point flags: [`OUTLIER`], [`FEWER_THAN_K`].
@@ -188,7 +190,7 @@ impl StageParams for OutlierParams {
 }
 
 impl Stage for OutliersStage {
-    const ID: StageId = StageId::OutlierScores;
+    const ID: StageId = OUTLIER_SCORES;
     const READS: &'static [ColumnSpec] = &[];
     const WRITES: &'static [ColumnSpec] = &[OUTLIER_SCORE, OUTLIER_FLAGS];
     type Params = OutlierParams;

@@ -282,7 +282,7 @@ mod tests {
     }
 
     impl Stage for Marks {
-        const ID: StageId = StageId::OutlierScores;
+        const ID: StageId = StageId::new("marks");
         const READS: &'static [ColumnSpec] = &[];
         const WRITES: &'static [ColumnSpec] = &[MARK];
         type Params = Params;

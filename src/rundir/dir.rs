@@ -290,7 +290,7 @@ mod tests {
         std::fs::write(&input, b"0 0 0\n").expect("input");
         let id = RunIdentity::new(vec!["normals".into()], tmp.path().into(), &input).expect("id");
         run.begin(&id, false).expect("begin");
-        run.keep_stage(StageId::Normals, &42_u32).expect("keep");
+        run.keep_stage(StageId::NORMALS, &42_u32).expect("keep");
         std::fs::write(run.dir().join("mine.txt"), b"x").expect("user file");
         std::fs::write(run.dir().join(".log.txt.partial-7"), b"x").expect("temporary");
         let other = RunIdentity {
@@ -302,7 +302,7 @@ mod tests {
         run.begin(&other, true).expect("restart");
         assert!(run.dir().join("mine.txt").exists());
         assert!(!run.dir().join(".log.txt.partial-7").exists());
-        assert_eq!(run.stage::<u32>(StageId::Normals).expect("read"), None);
+        assert_eq!(run.stage::<u32>(StageId::NORMALS).expect("read"), None);
         assert!(run.is_marked());
     }
 }

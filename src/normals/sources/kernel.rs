@@ -28,7 +28,7 @@ impl TileKernel for SourcesKernel {
     type Output = Vec<Edge>;
 
     fn name(&self) -> &'static str {
-        crate::store::StageId::OrientSources.name()
+        crate::store::StageId::ORIENT_SOURCES.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {

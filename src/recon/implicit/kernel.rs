@@ -152,7 +152,7 @@ impl TileKernel for ImplicitKernel {
     type Output = ImplicitTile;
 
     fn name(&self) -> &'static str {
-        crate::store::StageId::MarchingCubes.name()
+        crate::store::StageId::MARCHING_CUBES.name()
     }
 
     fn codec(&self) -> Option<crate::pipeline::Codec<Self::Output>> {
