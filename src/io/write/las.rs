@@ -34,7 +34,7 @@ use crate::io::{
 };
 use byteorder::{ByteOrder, LittleEndian};
 use glam::DVec3;
-use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
+use laz::{LazItemRecordBuilder, LazVlr, ParLasZipCompressor};
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -171,9 +171,13 @@ enum Records {
 }
 
 /// The points' destination: the file, or LASzip's compressor over it.
+/// The compressor is LASzip's parallel one: each chunk of a written
+/// window (50,000 points) is compressed on its own thread, to the same
+/// bytes as one after the other, since LASzip compresses every chunk
+/// afresh.
 enum Out {
     Las(BufWriter<File>),
-    Laz(Box<LasZipCompressor<'static, BufWriter<File>>>),
+    Laz(Box<ParLasZipCompressor<BufWriter<File>>>),
 }
 
 pub(crate) struct LasWriter {
@@ -305,7 +309,7 @@ impl LasWriter {
         self.out = Some(match laz {
             None => Out::Las(out),
             Some(vlr) => Out::Laz(Box::new(
-                LasZipCompressor::new(out, vlr)
+                ParLasZipCompressor::new(out, vlr)
                     .map_err(|e| las_error(&path, las::Error::from(e)))?,
             )),
         });
@@ -581,7 +585,8 @@ impl PointWriter for LasWriter {
         let mut out = match out {
             Out::Las(w) => w,
             Out::Laz(mut z) => {
-                z.done().map_err(os)?;
+                z.done()
+                    .map_err(|e| las_error(&path, las::Error::from(e)))?;
                 z.into_inner()
             }
         };
