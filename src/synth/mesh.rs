@@ -127,8 +127,8 @@ pub struct MeshSampler<'a> {
     /// A guide table (Chen and Asau 1974): for each of as many equal
     /// slices of the total area as there are faces, the first face whose
     /// running sum passes the slice's start, so a draw searches a few
-    /// faces instead of bisecting all of them (the bisection's cache
-    /// misses were nine tenths of generating a point from the dragon).
+    /// faces instead of bisecting all of them (10M points of the dragon:
+    /// 25.1 -> 18.4 s, the same points).
     guide: Vec<u32>,
 }
 
