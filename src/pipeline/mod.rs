@@ -101,6 +101,16 @@ pub enum PipelineError {
         /// The stage ([`TileKernel::name`]).
         stage: &'static str,
     },
+    /// A stage's kernel does not answer to the stage's declarations (its
+    /// name is not the stage's id, or it reads other columns): a stage
+    /// defined wrongly, refused before any column is made.
+    #[error("stage `{stage}`: its kernel {what}")]
+    KernelNotTheStages {
+        /// The stage ([`crate::pipeline::Stage::ID`]).
+        stage: &'static str,
+        /// What differs.
+        what: &'static str,
+    },
     /// A saved tile result of a resumable run cannot be read back.
     #[error("tile {tile} of stage `{stage}`: its saved result does not decode ({source})")]
     Codec {

@@ -169,8 +169,14 @@ pub fn run_stage<S: Stage>(
 ) -> Result<S::Report, S::Error> {
     stage.params().validate()?;
     let kernel = stage.kernel(store, opts, progress)?;
-    debug_assert_eq!(kernel.name(), S::ID.name());
-    debug_assert_eq!(kernel.reads(), S::READS);
+    let id = S::ID.name();
+    let refuse = |what| Err(PipelineError::KernelNotTheStages { stage: id, what });
+    if kernel.name() != id {
+        refuse("calls itself by another name")?;
+    }
+    if kernel.reads() != S::READS {
+        refuse("reads other columns than the stage declares")?;
+    }
     let columns = StageColumns::create(store, S::WRITES)?;
     let report = {
         let store = &*store;
@@ -199,6 +205,8 @@ mod tests {
     struct Params {
         fail: bool,
         fail_finish: bool,
+        /// The kernel calls itself by another name than the stage's id.
+        misnamed: bool,
     }
 
     #[derive(Debug, thiserror::Error)]
@@ -230,13 +238,13 @@ mod tests {
         }
     }
 
-    /// Each tile's core points.
-    struct Count;
+    /// Each tile's core points, under the name it is given.
+    struct Count(&'static str);
 
     impl TileKernel for Count {
         type Output = u64;
         fn name(&self) -> &'static str {
-            Marks::ID.name()
+            self.0
         }
         fn margin(&self) -> f64 {
             0.0
@@ -302,7 +310,10 @@ mod tests {
             _: RunOptions,
             _: &dyn Progress,
         ) -> Result<Count, PipelineError> {
-            Ok(Count)
+            Ok(Count(match self.0.misnamed {
+                true => "not marks",
+                false => Marks::ID.name(),
+            }))
         }
         fn seam<'s>(
             &'s self,
@@ -327,7 +338,11 @@ mod tests {
     }
 
     fn marks(fail: bool, fail_finish: bool) -> Marks {
-        Marks(Params { fail, fail_finish })
+        Marks(Params {
+            fail,
+            fail_finish,
+            misnamed: false,
+        })
     }
 
     #[test]
@@ -377,6 +392,24 @@ mod tests {
         assert!(err.is_err());
         assert!(store.has_column(&MARK));
         assert_eq!(store.provenance(&MARK), None);
+    }
+
+    #[test]
+    fn a_kernel_that_is_not_the_stages_is_refused_before_any_column() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let mut store = store(dir.path());
+        let stage = Marks(Params {
+            fail: false,
+            fail_finish: false,
+            misnamed: true,
+        });
+        let err = run_stage(&mut store, &stage, RunOptions::new(1), &NoProgress);
+        let err = err.err().map(|e| e.to_string());
+        assert_eq!(
+            err.as_deref(),
+            Some("stage `marks`: its kernel calls itself by another name")
+        );
+        assert!(!store.has_column(&MARK));
     }
 
     #[test]
