@@ -96,6 +96,11 @@ pub(crate) struct Root {
     pub curvature: f64,
 }
 
+/// A fitted sphere's gradient, in f64.
+fn gradient(s: Fit) -> DVec3 {
+    Vec3::from_array(s.gradient).as_dvec3()
+}
+
 /// Steps of regula falsi (Illinois variant) on the blended spheres: each
 /// costs a few multiplications, so the root is found to rounding.
 const ROOT_STEPS: usize = 40;
@@ -114,27 +119,23 @@ pub(crate) fn edge_root(
     edge: f64,
     axis: usize,
 ) -> Root {
-    let sphere = |f: f64, s: Fit, d: f64| {
-        let g = Vec3::from_array(s.gradient).as_dvec3();
-        let q = f64::from(s.quadratic);
-        (f + g[axis] * d + q * d * d, g, q)
-    };
-    let blend = |t: f64| {
-        let (u0, g0, q0) = sphere(f0, s0, t * edge);
-        let (u1, g1, q1) = sphere(f1, s1, (t - 1.0) * edge);
-        let mut d0 = DVec3::ZERO;
-        d0[axis] = t * edge;
-        let mut d1 = DVec3::ZERO;
-        d1[axis] = (t - 1.0) * edge;
-        let normal = (1.0 - t) * (g0 + 2.0 * q0 * d0) + t * (g1 + 2.0 * q1 * d1);
-        let curvature = 2.0 * ((1.0 - t) * q0 + t * q1);
-        ((1.0 - t) * u0 + t * u1, normal, curvature)
+    let (g0, g1) = (gradient(s0), gradient(s1));
+    let (q0, q1) = (f64::from(s0.quadratic), f64::from(s1.quadratic));
+    // Offsets from each corner along the edge at `t`.
+    let offsets = |t: f64| (t * edge, (t - 1.0) * edge);
+    // The search needs the blended value only; the gradient and the
+    // curvature are read once, at the root.
+    let value = |t: f64| {
+        let (d0, d1) = offsets(t);
+        let u0 = f0 + g0[axis] * d0 + q0 * d0 * d0;
+        let u1 = f1 + g1[axis] * d1 + q1 * d1 * d1;
+        (1.0 - t) * u0 + t * u1
     };
     let (mut lo, mut flo, mut hi, mut fhi) = (0.0, f0, 1.0, f1);
     let mut t = (flo / (flo - fhi)).clamp(0.0, 1.0);
     let mut side = 0i8;
     for _ in 0..ROOT_STEPS {
-        let (v, _, _) = blend(t);
+        let v = value(t);
         if v == 0.0 || hi - lo <= f64::EPSILON {
             break;
         }
@@ -153,7 +154,14 @@ pub(crate) fn edge_root(
         }
         t = (lo + (hi - lo) * flo / (flo - fhi)).clamp(lo, hi);
     }
-    let (_, normal, curvature) = blend(t);
+    let (d0, d1) = offsets(t);
+    let along = |d: f64| {
+        let mut v = DVec3::ZERO;
+        v[axis] = d;
+        v
+    };
+    let normal = (1.0 - t) * (g0 + 2.0 * q0 * along(d0)) + t * (g1 + 2.0 * q1 * along(d1));
+    let curvature = 2.0 * ((1.0 - t) * q0 + t * q1);
     Root {
         t,
         normal,
