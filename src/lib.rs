@@ -64,7 +64,6 @@ pub mod neighbours;
 pub mod normals;
 pub mod outliers;
 pub mod pipeline;
-pub mod planned;
 pub(crate) mod progress;
 pub mod recon;
 pub mod render;
@@ -86,6 +85,6 @@ pub use io::{
 pub use memory::{MemoryBudget, MemoryPlan};
 pub use normals::{compute_normals, NormalParams, NormalsReport};
 pub use pipeline::{Prepared, RunOptions, RunSettings};
-pub use progress::{NoProgress, Progress};
+pub use progress::{bars, Bars, NoProgress, Progress};
 pub use recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
 pub use store::{build_store, export_points, BuildOptions, PointStore, Workspace};

@@ -13,7 +13,7 @@ use scanmesh::features::{
     compute_curvature, CurvatureParams, HoodChoice, CURVATURE, CURVATURE_FLAGS,
 };
 use scanmesh::pipeline::{NoProgress, RunOptions};
-use scanmesh::store::PointStore;
+use scanmesh::store::{PointStore, Rows};
 use scanmesh::synth::{generate, Rng, Shape};
 
 /// Curvature values and flags in input order.
@@ -54,7 +54,13 @@ fn run(points: &[DVec3], tile_points: u64, threads: usize, hood: HoodChoice) -> 
         let path = dir.join("c.ply");
         // A small window: several windows of the input-order writer.
         let spec = curvature_output(&path).expect("a PLY holds the curvature");
-        write_curvature(store, &path, &spec, 1000, None, &NoProgress).expect("write");
+        let rows = Rows {
+            output: &path,
+            window: 1000,
+            keep: None,
+            progress: &NoProgress,
+        };
+        write_curvature(store, &spec, &rows).expect("write");
         Out {
             report,
             values,

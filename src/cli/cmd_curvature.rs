@@ -1,14 +1,15 @@
 //! `scanmesh curvature`: per-point principal, mean and Gaussian curvature
 //! and the MLS residual (paper 5 section 2), in input order.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use scanmesh::features::compute_curvature;
 use scanmesh::features::export::{curvature_output, write_curvature};
-use scanmesh::io::place;
+use scanmesh::rundir::{Computing, Hear};
+use scanmesh::store::{PointStore, Rows};
 use std::path::PathBuf;
 
-super::command::command_args!(CurvatureArgs => run, run_dir);
+super::command::command_args!(CurvatureArgs => run, run_dir, plans |_c| scanmesh::features::CurvatureParams::default().cost());
 #[derive(Args)]
 pub struct CurvatureArgs {
     /// Input point file or store directory.
@@ -27,17 +28,15 @@ pub struct CurvatureArgs {
 }
 
 pub fn run(a: CurvatureArgs) -> Result<()> {
-    let s = a.common.settings_in(&a.run)?;
     let params = a.fit.params()?;
-    place::check_distinct(&a.input, &a.output)?;
     let spec = curvature_output(&a.output)?;
-    let progress = s.progress();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
-    let store = &mut run.ws.store;
-    let report = compute_curvature(store, &params, run.opts, progress)?;
-    let window = run.plan.window_points;
-    write_curvature(store, &a.output, &spec, window, s.keep(&a.input), progress)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    s.summary(s.closing(&report, &a.output));
-    Ok(())
+    let compute = |store: &mut PointStore, c: Computing| -> Result<_> {
+        Ok(compute_curvature(store, &params, c.opts, c.progress)?)
+    };
+    let write = |store: &PointStore, to: &Rows, _: &dyn Hear| -> Result<_> {
+        Ok(write_curvature(store, &spec, to)?)
+    };
+    let paths = (a.input.as_path(), a.output.as_path());
+    a.common
+        .per_point(&a.run, paths, params.cost(), compute, write, |r, _| r)
 }

@@ -8,7 +8,7 @@ use scanmesh::features::extract::extract_lines;
 use scanmesh::io::place;
 use std::path::PathBuf;
 
-super::command::command_args!(FeaturesArgs => run, run_dir);
+super::command::command_args!(FeaturesArgs => run, run_dir, plans |_c| scanmesh::features::params::FeatureParams::default().cost());
 #[derive(Args)]
 pub struct FeaturesArgs {
     /// Input point file or store directory.
@@ -40,7 +40,7 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     place::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
     let progress = s.progress();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
+    let mut run = s.job().open(&a.input, &a.output, params.cost())?;
     let store = &mut run.ws.store;
     let (graph, report) = extract_lines(store, &params, run.opts, progress)?;
     graph

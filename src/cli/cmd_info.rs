@@ -5,7 +5,6 @@ use super::stdout::outln;
 use anyhow::Result;
 use clap::Args;
 use scanmesh::memory::{MemoryBudget, PlanTable};
-use scanmesh::planned::Planned;
 use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
 use scanmesh::store::is_store;
 use std::path::PathBuf;
@@ -28,8 +27,8 @@ pub struct InfoArgs {
     #[arg(long)]
     plan: bool,
     /// The command whose plan to print (with --plan).
-    #[arg(long, value_enum, default_value_t = Planned::Normals)]
-    command: Planned,
+    #[arg(long, default_value = "normals", value_parser = super::plannable_names())]
+    command: String,
     /// Memory promise to plan for (with --plan).
     #[arg(long, default_value = "1GiB")]
     mem: String,
@@ -55,7 +54,11 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let read = a.select.read(a.skip_invalid);
         let (points, store) = points_to_plan(&a.input, read, progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
-        let cost = a.command.cost(a.closed);
+        let planned = super::plannable()
+            .into_iter()
+            .find(|(name, _)| *name == a.command);
+        let cost = planned.and_then(|(_, cost)| cost(a.closed));
+        let cost = cost.ok_or_else(|| anyhow::anyhow!("--command {}: not plannable", a.command))?;
         return outln!("{}", PlanTable::new(budget, points, store, cost)?);
     }
     let report = if is_store(&a.input) {

@@ -8,7 +8,7 @@ use scanmesh::neighbours::{compute_neighbours, NeighbourParams, OutputFormat, Ou
 use scanmesh::spatial::HoodKind;
 use std::path::PathBuf;
 
-super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::NEIGHBOURS]));
+super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::NEIGHBOURS]), plans |_c| NeighbourParams::default().cost());
 #[derive(Args)]
 pub struct NeighborsArgs {
     /// Input point file or store directory.
@@ -60,7 +60,7 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
         }
     }
     let progress = s.progress();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
+    let mut run = s.job().open(&a.input, &a.output, params.cost())?;
     let out = OutputOptions {
         format: a.format,
         window_points: run.plan.window_points,

@@ -1,17 +1,16 @@
 //! `scanmesh normals`: oriented normals for every point, in input order.
 
 use super::args::{HoodArgs, OrientArgs};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use scanmesh::io::not_held;
-use scanmesh::io::place;
 use scanmesh::normals::{compute_normals, normals_output, NormalParams};
-use scanmesh::rundir::Session;
+use scanmesh::rundir::{Computing, Hear, Said, Session};
 use scanmesh::spatial::KnnBackend;
-use scanmesh::store::{export_points_keeping, StageId, NORMALS};
+use scanmesh::store::{export_points_keeping, PointStore, Rows, StageId, NORMALS};
 use std::path::PathBuf;
 
-super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::NORMALS]));
+super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::NORMALS]), plans |_c| NormalParams::default().cost());
 #[derive(Args)]
 pub struct NormalsArgs {
     /// Input point file or store directory.
@@ -53,23 +52,23 @@ impl NormalsArgs {
 }
 
 pub fn run(a: NormalsArgs) -> Result<()> {
-    let s = a.common.settings_in(&a.run)?;
     let params = a.params()?;
     params.validate()?;
-    place::check_distinct(&a.input, &a.output)?;
     let mut spec = normals_output(&a.output, a.ascii)?;
-    let progress = s.progress();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
-    let store = &mut run.ws.store;
-    // A resumed run keeps normals it finished (its store outlives it).
-    let valid = store.has_column(&NORMALS);
-    let report = Session::kept_or(s.run.as_ref(), StageId::NORMALS, valid, || -> Result<_> {
-        Ok(compute_normals(store, &params, run.opts, progress)?)
-    })?;
-    s.note(not_held(&a.output, spec.carry(store.attributes())));
-    let window = run.plan.window_points;
-    export_points_keeping(store, &a.output, &spec, window, s.keep(&a.input), progress)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    s.summary(s.closing(&report, &a.output));
-    Ok(())
+    let compute = |store: &mut PointStore, c: Computing| -> Result<_> {
+        // A resumed run keeps normals it finished (its store outlives it).
+        let valid = store.has_column(&NORMALS);
+        Session::kept_or(c.session, StageId::NORMALS, valid, || -> Result<_> {
+            Ok(compute_normals(store, &params, c.opts, c.progress)?)
+        })
+    };
+    let write = |store: &PointStore, to: &Rows, hear: &dyn Hear| -> Result<_> {
+        if let Some(note) = not_held(to.output, spec.carry(store.attributes())) {
+            hear.hear(Said::Note(note));
+        }
+        Ok(export_points_keeping(store, &spec, to)?)
+    };
+    let paths = (a.input.as_path(), a.output.as_path());
+    a.common
+        .per_point(&a.run, paths, params.cost(), compute, write, |r, _| r)
 }

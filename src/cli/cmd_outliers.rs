@@ -1,15 +1,16 @@
 //! `scanmesh outliers`: statistical outlier scores (PCL's and Open3D's
 //! rule) for every point, in input order, with the outliers flagged.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use scanmesh::io::place;
 use scanmesh::outliers::{
     compute_outliers, outliers_output, write_outliers, OutlierParams, OutliersWritten, OUTLIER,
 };
+use scanmesh::rundir::{Computing, Hear};
+use scanmesh::store::{PointStore, Rows};
 use std::path::PathBuf;
 
-super::command::command_args!(OutliersArgs => run, run_dir);
+super::command::command_args!(OutliersArgs => run, run_dir, plans |_c| OutlierParams::default().cost());
 #[derive(Args)]
 pub struct OutliersArgs {
     /// Input point file or store directory.
@@ -39,29 +40,27 @@ pub struct OutliersArgs {
 }
 
 pub fn run(a: OutliersArgs) -> Result<()> {
-    let s = a.common.settings_in(&a.run)?;
     let params = OutlierParams {
         k: a.k,
         ratio: a.ratio,
     };
     params.validate()?;
-    place::check_distinct(&a.input, &a.output)?;
     let mut spec = outliers_output(&a.output)?;
     if a.drop {
         spec.drop_flagged = OUTLIER;
     }
-    let progress = s.progress();
-    let mut run = s.open_input(&a.input, &a.output, params.cost(), progress)?;
-    let store = &mut run.ws.store;
-    let report = compute_outliers(store, &params, run.opts, progress)?;
-    let window = run.plan.window_points;
-    let rows = write_outliers(store, &a.output, &spec, window, s.keep(&a.input), progress)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    let written = OutliersWritten {
-        report: &report,
+    let compute = |store: &mut PointStore, c: Computing| -> Result<_> {
+        Ok(compute_outliers(store, &params, c.opts, c.progress)?)
+    };
+    let write = |store: &PointStore, to: &Rows, _: &dyn Hear| -> Result<_> {
+        Ok(write_outliers(store, &spec, to)?)
+    };
+    let line = |report, rows| OutliersWritten {
+        report,
         rows,
         dropped: a.drop,
     };
-    s.summary(s.closing(&written, &a.output));
-    Ok(())
+    let paths = (a.input.as_path(), a.output.as_path());
+    a.common
+        .per_point(&a.run, paths, params.cost(), compute, write, line)
 }

@@ -8,12 +8,12 @@ use clap::{Args, ValueEnum};
 use scanmesh::io::mesh_format;
 use scanmesh::io::place;
 use scanmesh::recon::delaunay::reconstruct::{cost as delaunay_cost, reconstruct_delaunay};
-use scanmesh::recon::implicit::reconstruct::reconstruct_implicit;
+use scanmesh::recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
 use scanmesh::recon::projection::reconstruct_projection;
 use scanmesh::store::{spacing::ensure_spacing, StageId};
 use std::path::PathBuf;
 
-super::command::command_args!(ReconstructArgs => run, run_dir |a| a.tile_stages());
+super::command::command_args!(ReconstructArgs => run, run_dir |a| a.tile_stages(), plans |closed| ImplicitParams { closed, ..ImplicitParams::default() }.cost());
 #[derive(Args)]
 pub struct ReconstructArgs {
     /// Input point file or store directory.
@@ -69,7 +69,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     match a.method {
         Method::Delaunay => {
             let params = a.recon.delaunay()?;
-            let mut run = s.open_input(input, output, delaunay_cost(), progress)?;
+            let mut run = s.job().open(input, output, delaunay_cost())?;
             let store = &mut run.ws.store;
             let r = reconstruct_delaunay(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
@@ -78,7 +78,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Projection => {
             let params = a.recon.projection(&a.hood)?;
-            let mut run = s.open_input(input, output, params.cost(), progress)?;
+            let mut run = s.job().open(input, output, params.cost())?;
             let store = &mut run.ws.store;
             let r = reconstruct_projection(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
@@ -86,7 +86,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Implicit => {
             let params = a.recon.implicit(&a.hood)?;
-            let mut run = s.open_input(input, output, params.cost(), progress)?;
+            let mut run = s.job().open(input, output, params.cost())?;
             let store = &mut run.ws.store;
             if params.cell.is_some() {
                 // The run needs the spacing anyway; kept in the store's manifest.

@@ -3,6 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use scanmesh::normals::NormalParams;
+use scanmesh::rundir::{Hear, Said};
 use std::path::PathBuf;
 
 super::command::command_args!(TileArgs => run, common);
@@ -26,7 +27,7 @@ pub fn run(a: TileArgs) -> Result<()> {
     let store = s
         .lib
         .build_store_dir(&a.input, &a.output, cost, s.progress())?;
-    s.say_skipped(&store);
+    s.hear(Said::Opened(&store));
     s.summary(s.closing(store.manifest(), &a.output));
     Ok(())
 }

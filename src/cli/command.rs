@@ -7,6 +7,7 @@
 
 use super::{CommonArgs, RunDirArgs};
 use anyhow::{bail, Result};
+use scanmesh::memory::KernelCost;
 use scanmesh::rundir::StageId;
 use std::path::Path;
 
@@ -31,6 +32,15 @@ pub trait CommandArgs {
     fn paths(&self) -> Option<(&Path, &Path)> {
         None
     }
+    /// The cost of the command's stage with its default parameters
+    /// (`closed`: `reconstruct --closed`), if a run of it can be planned
+    /// before it runs (`info --plan --command`).
+    fn planned_cost(_closed: bool) -> Option<KernelCost>
+    where
+        Self: Sized,
+    {
+        None
+    }
     /// The tile stages whose tiles can run as separate jobs, in order.
     fn tile_stages(&self) -> Result<Vec<StageId>> {
         bail!("--emit: this command has no tile stages that run as separate jobs yet (normals, neighbors and reconstruct have)")
@@ -39,15 +49,20 @@ pub trait CommandArgs {
 
 /// `command_args!(Args => run)`: a command with none of the shared
 /// options; `, common`: with them; `, run_dir`: with them and a run
-/// directory (fields `common`, `run`, `input`, `output`); `, run_dir,
-/// stages |a| EXPR`: and tile stages.
+/// directory (fields `common`, `run`, `input`, `output`); `, run_dir
+/// |a| EXPR`: and tile stages; then `, plans |closed| EXPR`: the cost
+/// of its default parameters, for `info --plan`.
 macro_rules! command_args {
-    ($args:ty => $run:ident $(, $kind:ident $(|$a:ident| $stages:expr)?)?) => {
+    ($args:ty => $run:ident $(, $kind:ident $(|$a:ident| $stages:expr)?)?
+        $(, plans |$c:ident| $cost:expr)?) => {
         impl super::command::CommandArgs for $args {
             fn run(self) -> anyhow::Result<()> {
                 $run(self)
             }
             $($crate::cli::command::command_args!(@ $kind $(|$a| $stages)?);)?
+            $(fn planned_cost($c: bool) -> Option<scanmesh::memory::KernelCost> {
+                Some($cost)
+            })?
         }
     };
     (@ common) => {

@@ -18,7 +18,6 @@ mod cmd_status;
 mod cmd_tile;
 mod command;
 mod hints;
-mod progress;
 mod report;
 mod run_in_dir;
 mod stdout;
@@ -33,11 +32,11 @@ use scanmesh::io::place;
 use scanmesh::io::{InvalidPolicy, ReadOptions, Returns, Selection};
 use scanmesh::memory::{cores, too_many_threads, too_much_memory, within_promise};
 use scanmesh::mesh::MeshAudit;
-use scanmesh::pipeline::{reclaimed_note, KernelCost, MemoryBudget, NoProgress, Prepared};
+use scanmesh::pipeline::{reclaimed_note, KernelCost, MemoryBudget, NoProgress};
 use scanmesh::pipeline::{Progress, RunSettings};
-use scanmesh::rundir::{open_input, Scheduler, Session};
+use scanmesh::rundir::{Computing, Hear, PointRun, Said, Scheduler, Session};
 use scanmesh::runlog::{SharedRunLog, StageLines};
-use scanmesh::store::{Job, PointStore};
+use scanmesh::store::{Job, PointStore, Rows};
 use scanmesh::summary::Summary;
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -86,6 +85,15 @@ macro_rules! commands {
                 }
             }
         }
+
+        /// The commands a run of can be planned before it runs (`info
+        /// --plan --command`), by name, with their default cost.
+        fn plannable() -> Vec<(String, fn(bool) -> Option<KernelCost>)> {
+            let costs: Vec<fn(bool) -> Option<KernelCost>> =
+                vec![$(<$args as CommandArgs>::planned_cost,)*];
+            let names = [$(stringify!($variant),)*].map(kebab_case);
+            names.into_iter().zip(costs).filter(|(_, cost)| cost(false).is_some()).collect()
+        }
     };
 }
 
@@ -120,6 +128,24 @@ commands! {
     RunJob(cmd_run_job::RunJobArgs),
     /// Stages, tiles done, failures and time left of a run directory.
     Status(cmd_status::StatusArgs),
+}
+
+/// `RunJob` as clap names its subcommand: `run-job`.
+fn kebab_case(name: &str) -> String {
+    let dash = |i, c: char| (i > 0 && c.is_uppercase()).then_some('-');
+    let chars = name.char_indices();
+    chars
+        .flat_map(|(i, c)| dash(i, c).into_iter().chain(c.to_lowercase()))
+        .collect()
+}
+
+/// The names of the commands `info --plan --command` can plan.
+fn plannable_names() -> clap::builder::PossibleValuesParser {
+    plannable()
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect::<Vec<_>>()
+        .into()
 }
 
 /// Options every processing command takes.
@@ -272,7 +298,7 @@ fn shown(quiet: bool) -> Box<dyn Progress> {
         // Asked for by name: whatever `--quiet` says.
         Some(_) => Box::new(StageLines::new(|line| eprintln!("{line}"))),
         None if quiet => Box::new(NoProgress),
-        None => progress::bars(),
+        None => scanmesh::bars(),
     }
 }
 
@@ -366,6 +392,32 @@ impl CommonArgs {
     }
 }
 
+impl CommonArgs {
+    /// Runs a command that writes one row per input point in its
+    /// settings ([`PointRun`]), then prints the summary line of
+    /// `line(report, written)`.
+    pub fn per_point<R, W, L>(
+        &self,
+        run: &RunDirArgs,
+        (input, output): (&Path, &Path),
+        cost: KernelCost,
+        compute: impl FnOnce(&mut PointStore, Computing<'_>) -> Result<R>,
+        write: impl FnOnce(&PointStore, &Rows<'_>, &dyn Hear) -> Result<W>,
+        line: impl FnOnce(R, W) -> L,
+    ) -> Result<()>
+    where
+        for<'x> Summary<'x, L>: Display,
+    {
+        let s = self.settings_in(run)?;
+        let write = |store: &PointStore, rows: &Rows, hear: &dyn Hear| {
+            write(store, rows, hear).with_context(|| format!("writing {}", output.display()))
+        };
+        let (report, written) = s.job().run((input, output), cost, compute, write)?;
+        s.summary(s.closing(&line(report, written), output));
+        Ok(())
+    }
+}
+
 impl Settings {
     /// Refuses `--unselected keep` for a command whose output has no row
     /// per point (`what` says what it writes).
@@ -376,28 +428,15 @@ impl Settings {
         Ok(())
     }
 
-    /// The input and how to read it again beside the processed rows, for
-    /// a per-point output with `--unselected keep`.
-    pub fn keep<'a>(&'a self, input: &'a Path) -> Option<(&'a Path, &'a ReadOptions)> {
-        self.keep_unselected.then_some((input, &self.lib.read))
-    }
-
-    /// The store to work on (`input` itself when it is one, else a scratch
-    /// store beside `output` built from the input file, or the run
-    /// directory's), its memory plan, and run options that keep the tiles
-    /// in flight within it.
-    pub fn open_input(
-        &self,
-        input: &Path,
-        output: &Path,
-        cost: KernelCost,
-        progress: &dyn Progress,
-    ) -> Result<Prepared> {
-        let (prepared, reclaimed) =
-            open_input(&self.lib, self.run.as_ref(), input, output, cost, progress)?;
-        self.say_reclaimed(&reclaimed);
-        self.say_skipped(&prepared.ws.store);
-        Ok(prepared)
+    /// The library's run in these settings, heard by them.
+    pub fn job(&self) -> PointRun<'_> {
+        PointRun {
+            settings: &self.lib,
+            session: self.run.as_ref(),
+            keep_unselected: self.keep_unselected,
+            progress: self.progress(),
+            hear: self,
+        }
     }
 
     /// Refuses `--scratch` for a command that keeps no scratch of its own
@@ -421,13 +460,6 @@ impl Settings {
         if let Some(note) = reclaimed_note(removed).filter(|_| !self.quiet) {
             eprintln!("{note}");
         }
-    }
-
-    /// The summary says how many input records the store lacks.
-    pub fn say_skipped(&self, store: &PointStore) {
-        let m = store.manifest();
-        self.log
-            .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
     }
 
     /// Prints the closing `line` (kept for `--report`), saying whether the
@@ -468,6 +500,21 @@ impl Settings {
     /// The closing line of `report`, for this command, which wrote `output`.
     pub fn closing<'a, R>(&self, report: &'a R, output: &'a Path) -> Summary<'a, R> {
         Summary::since(report, self.t0, output)
+    }
+}
+
+impl Hear for Settings {
+    fn hear(&self, said: Said<'_>) {
+        match said {
+            Said::Reclaimed(files) => self.say_reclaimed(files),
+            // The summary says how many input records the store lacks.
+            Said::Opened(store) => {
+                let m = store.manifest();
+                self.log
+                    .with(|l| l.input_skipped(&m.source, m.skipped_invalid, m.left_out));
+            }
+            Said::Note(note) => self.note(Some(note)),
+        }
     }
 }
 

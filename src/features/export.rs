@@ -7,8 +7,7 @@
 
 use super::{FeaturesError, CURVATURE, CURVATURE_FLAGS};
 use crate::io::{output_spec, Carried, IoError, ValueField, WriterSpec};
-use crate::progress::Progress;
-use crate::store::{export_values, PointStore};
+use crate::store::{export_values, PointStore, Rows};
 use std::path::Path;
 
 /// The curvature's fields, in the column's order.
@@ -47,22 +46,19 @@ pub fn curvature_output(path: &Path) -> Result<WriterSpec, IoError> {
     output_spec(path, &carried, false)
 }
 
-/// Writes the store's points and curvature columns to `path` as `spec`
-/// says ([`curvature_output`]), in input order, holding about `window`
-/// points in memory; with `keep`, the input file `keep.0`'s points that
-/// its read `keep.1` did not select get their rows too, in input order:
-/// NaN values, flag [`crate::io::keep::UNSELECTED`]. Returns the rows
-/// written.
+/// Writes the store's points and curvature columns to `rows` as `spec`
+/// says ([`curvature_output`]), in input order; the points `rows.keep`
+/// asks for get their rows too: NaN values, flag
+/// [`crate::io::keep::UNSELECTED`]. Returns the rows written.
 pub fn write_curvature(
     store: &PointStore,
-    path: &Path,
     spec: &WriterSpec,
-    window: u64,
-    keep: Option<(&Path, &crate::io::ReadOptions)>,
-    progress: &dyn Progress,
+    rows: &Rows,
 ) -> Result<u64, FeaturesError> {
-    let columns = [CURVATURE, CURVATURE_FLAGS];
     Ok(export_values(
-        store, path, spec, columns, window, keep, progress,
+        store,
+        spec,
+        [CURVATURE, CURVATURE_FLAGS],
+        rows,
     )?)
 }

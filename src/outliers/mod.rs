@@ -39,7 +39,9 @@ use crate::pipeline::{run_stage, PipelineError, RunOptions, RunStats};
 use crate::pipeline::{Stage, StageColumns, StageParams};
 use crate::progress::Progress;
 use crate::store::spacing::ensure_spacing;
-use crate::store::{export_values, ColumnSpec, Item, PointStore, Provenance, StageId, StoreError};
+use crate::store::{
+    export_values, ColumnSpec, Item, PointStore, Provenance, Rows, StageId, StoreError,
+};
 use kernel::Sums;
 use std::path::Path;
 
@@ -277,20 +279,18 @@ pub fn outliers_output(path: &Path) -> Result<WriterSpec, IoError> {
     )
 }
 
-/// Writes the store's points with their scores and flags to `path` as
-/// `spec` says ([`outliers_output`]), in input order, holding about
-/// `window` points in memory; `keep` as [`crate::store::export_columns`].
-/// Returns the rows written.
+/// Writes the store's points with their scores and flags to `rows` as
+/// `spec` says ([`outliers_output`]), in input order. Returns the rows
+/// written.
 pub fn write_outliers(
     store: &PointStore,
-    path: &Path,
     spec: &WriterSpec,
-    window: u64,
-    keep: Option<(&Path, &crate::io::ReadOptions)>,
-    progress: &dyn Progress,
+    rows: &Rows,
 ) -> Result<u64, OutliersError> {
-    let columns = [OUTLIER_SCORE, OUTLIER_FLAGS];
     Ok(export_values(
-        store, path, spec, columns, window, keep, progress,
+        store,
+        spec,
+        [OUTLIER_SCORE, OUTLIER_FLAGS],
+        rows,
     )?)
 }

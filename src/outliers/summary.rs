@@ -7,19 +7,19 @@ use std::fmt;
 
 /// An outlier pass's report with what its output holds: the line says
 /// both.
-#[derive(Clone, Copy, Debug)]
-pub struct OutliersWritten<'a> {
+#[derive(Clone, Debug)]
+pub struct OutliersWritten {
     /// What the pass found.
-    pub report: &'a OutlierReport,
+    pub report: OutlierReport,
     /// Rows the output holds.
     pub rows: u64,
     /// Whether the outliers were left out of it (`--drop`).
     pub dropped: bool,
 }
 
-impl fmt::Display for Summary<'_, OutliersWritten<'_>> {
+impl fmt::Display for Summary<'_, OutliersWritten> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let r = self.report.report;
+        let r = &self.report.report;
         let p = &r.params;
         let share = 100.0 * r.outliers as f64 / r.points.max(1) as f64;
         let rule = match r.not_judged == r.points {

@@ -24,6 +24,7 @@
 mod dir;
 mod identity;
 mod liveness;
+mod per_point;
 mod processes;
 mod script;
 mod sealed;
@@ -34,6 +35,7 @@ pub use crate::store::StageId;
 pub use dir::{RunDir, MARKER_FILE};
 pub use identity::{fingerprint, Difference, Done, Fingerprint, RunIdentity};
 pub use liveness::ProcessRecord;
+pub use per_point::{Computing, Hear, PointRun, Said};
 pub use processes::{Processes, Running};
 pub use script::{job_script, this_binary, Scheduler};
 pub use session::{open_input, Session};

@@ -36,30 +36,53 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
 
+/// Where an input-order export writes and how it is paced.
+#[derive(Clone, Copy)]
+pub struct Rows<'a> {
+    /// The output file.
+    pub output: &'a Path,
+    /// Points per window (the memory plan's `window_points`).
+    pub window: u64,
+    /// The input file `keep.0` and its read `keep.1`, whose points the read
+    /// left out of the store are written between the others, flagged
+    /// ([`crate::io::keep`]); `None`: the store's points only.
+    pub keep: Option<(&'a Path, &'a crate::io::ReadOptions)>,
+    /// Progress bars, or none.
+    pub progress: &'a dyn Progress,
+}
+
 /// Writes `store` to `path` in input order; returns the points written.
 pub fn export_points(
     store: &PointStore,
     path: &Path,
     spec: &WriterSpec,
-    window_points: u64,
+    window: u64,
     progress: &dyn Progress,
 ) -> Result<u64, StoreError> {
-    export_points_keeping(store, path, spec, window_points, None, progress)
+    let rows = Rows {
+        output: path,
+        window,
+        keep: None,
+        progress,
+    };
+    export_points_keeping(store, spec, &rows)
 }
 
-/// [`export_points`], with the points of the input file `keep.0` that
-/// its read `keep.1` left out of the store written between them, flagged
-/// ([`crate::io::keep`]); returns the rows written.
+/// [`export_points`] to `rows`, with the points `rows.keep` asks for;
+/// returns the rows written.
 pub fn export_points_keeping(
     store: &PointStore,
-    path: &Path,
     spec: &WriterSpec,
-    window_points: u64,
-    keep: Option<(&Path, &crate::io::ReadOptions)>,
-    progress: &dyn Progress,
+    rows: &Rows,
 ) -> Result<u64, StoreError> {
     let computed = Computed::normals_for(spec);
-    export_columns(store, path, spec, &computed, window_points, keep, progress)
+    let Rows {
+        output,
+        window,
+        keep,
+        progress,
+    } = *rows;
+    export_columns(store, output, spec, &computed, window, keep, progress)
 }
 
 /// The store's computed columns an export writes beside the points: the
@@ -122,13 +145,16 @@ impl Computed {
 /// outliers' output. Returns the rows written.
 pub fn export_values(
     store: &PointStore,
-    path: &Path,
     spec: &WriterSpec,
     columns: [ColumnSpec; 2],
-    window_points: u64,
-    keep: Option<(&Path, &crate::io::ReadOptions)>,
-    progress: &dyn Progress,
+    rows: &Rows,
 ) -> Result<u64, StoreError> {
+    let Rows {
+        output,
+        window,
+        keep,
+        progress,
+    } = *rows;
     let unselected = match keep {
         Some(_) => store.manifest().left_out.unselected,
         None => 0,
@@ -143,7 +169,7 @@ pub fn export_values(
         values: Some(values),
         flags: Some(flags),
     };
-    export_columns(store, path, &spec, &computed, window_points, keep, progress)
+    export_columns(store, output, &spec, &computed, window, keep, progress)
 }
 
 /// Writes `store` to `path` in input order with the `computed` columns

@@ -47,7 +47,9 @@ pub use column::Column;
 pub use columns::{ColumnSpec, Item, Provenance, FLAGS, NORMALS};
 pub use damage::{ColumnName, DamagedPart};
 pub use exact::Coordinates;
-pub use export::{export_columns, export_points, export_points_keeping, export_values, Computed};
+pub use export::{
+    export_columns, export_points, export_points_keeping, export_values, Computed, Rows,
+};
 pub use footprint::store_bytes_per_point;
 pub use las_kept::LasKept;
 pub use manifest::{GridSpec, Manifest, Station, TileEntry};

@@ -1,10 +1,10 @@
-//! The terminal side of [`scanmesh::pipeline::Progress`]: one indicatif bar
-//! per stage with rate and ETA, on stderr, only when stderr is a terminal
-//! (`SCANMESH_TIMINGS`' lines are the library's `runlog::StageLines`).
+//! The terminal side of [`Progress`]: one indicatif bar per stage with rate
+//! and ETA, on stderr, only when stderr is a terminal (`SCANMESH_TIMINGS`'
+//! lines are the run log's `StageLines`).
 
+use super::{NoProgress, Progress};
+use crate::units::short_count;
 use indicatif::{ProgressBar, ProgressStyle};
-use scanmesh::pipeline::{NoProgress, Progress};
-use scanmesh::units::short_count;
 use std::io::IsTerminal;
 use std::sync::Mutex;
 
@@ -14,6 +14,7 @@ fn rate(state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write) {
     let _ = write!(w, "{}/s", short_count(state.per_sec()));
 }
 
+/// One bar at a time, the current stage's.
 pub struct Bars {
     bar: Mutex<Option<ProgressBar>>,
 }

@@ -1,5 +1,10 @@
 //! Progress reporting: the library reports stages and counts through this
-//! trait and never prints; the CLI implements it with indicatif.
+//! trait and never prints on its own; a caller picks where they go
+//! ([`bars`]: indicatif bars on a terminal, as the CLI shows them).
+
+mod bars;
+
+pub use bars::{bars, Bars};
 
 /// Receives progress of long-running stages. Implementations must be cheap:
 /// `advance` is called from worker threads, often.

@@ -1,0 +1,116 @@
+//! A run that writes one row per input point, end to end: the shell the
+//! per-point stages (normals, curvature, outliers) share, so a library
+//! caller runs them as the command line does. The store is opened within
+//! the memory plan (the run directory's, when the run keeps one), the stage
+//! computes its columns on it, and the rows are written in input order;
+//! what the run has to say on the way reaches the caller as [`Said`].
+
+use super::{open_input, RunDirError, Session};
+use crate::io::{place, IoError};
+use crate::pipeline::{KernelCost, Prepared, Progress, RunOptions, RunSettings};
+use crate::store::{PointStore, Rows};
+use std::path::{Path, PathBuf};
+
+/// Where a per-point run works and who hears it.
+pub struct PointRun<'a> {
+    /// The memory promise, threads, how the input is read, the scratch.
+    pub settings: &'a RunSettings,
+    /// This process's part of the run in its directory, if it keeps one.
+    pub session: Option<&'a Session>,
+    /// Write the points the selection leaves out too (flagged).
+    pub keep_unselected: bool,
+    /// Progress bars, or none.
+    pub progress: &'a dyn Progress,
+    /// Hears what the run says on the way.
+    pub hear: &'a dyn Hear,
+}
+
+/// Who hears what a run says on the way (the CLI prints it and keeps it
+/// for `--report`).
+pub trait Hear {
+    /// `said`, as the run says it.
+    fn hear(&self, said: Said<'_>);
+}
+
+/// What a run says on the way.
+pub enum Said<'a> {
+    /// Files killed runs left, removed before this one began.
+    Reclaimed(&'a [PathBuf]),
+    /// The store the run works on, opened (its manifest says what of the
+    /// input it lacks).
+    Opened(&'a PointStore),
+    /// A note for the user (what the output format cannot hold).
+    Note(String),
+}
+
+/// What a per-point stage's computation is given beside the store.
+pub struct Computing<'a> {
+    /// Run options whose tiles in flight fit the memory plan.
+    pub opts: RunOptions,
+    /// Progress bars, or none.
+    pub progress: &'a dyn Progress,
+    /// The run directory's job, if the run keeps one.
+    pub session: Option<&'a Session>,
+}
+
+impl PointRun<'_> {
+    /// The store to work on (`input` itself when it is one, else a scratch
+    /// store beside `output` built from the input file, or the run
+    /// directory's), its memory plan, and run options that keep the tiles
+    /// in flight within it, for a kernel that costs `cost`.
+    pub fn open(
+        &self,
+        input: &Path,
+        output: &Path,
+        cost: KernelCost,
+    ) -> Result<Prepared, RunDirError> {
+        let (opened, reclaimed) = open_input(
+            self.settings,
+            self.session,
+            input,
+            output,
+            cost,
+            self.progress,
+        )?;
+        self.hear.hear(Said::Reclaimed(&reclaimed));
+        self.hear.hear(Said::Opened(&opened.ws.store));
+        Ok(opened)
+    }
+
+    /// Runs a stage whose kernel costs `cost` from `input` to `output`:
+    /// `compute` on the opened store, then `write` of its rows (it may say
+    /// a note to the run's hearer). Returns
+    /// the computation's report and what the writer returned.
+    pub fn run<R, W, E>(
+        &self,
+        (input, output): (&Path, &Path),
+        cost: KernelCost,
+        compute: impl FnOnce(&mut PointStore, Computing<'_>) -> Result<R, E>,
+        write: impl FnOnce(&PointStore, &Rows<'_>, &dyn Hear) -> Result<W, E>,
+    ) -> Result<(R, W), E>
+    where
+        E: From<RunDirError> + From<IoError>,
+    {
+        place::check_distinct(input, output)?;
+        let mut opened = self.open(input, output, cost)?;
+        let store = &mut opened.ws.store;
+        let (progress, session) = (self.progress, self.session);
+        let report = compute(
+            store,
+            Computing {
+                opts: opened.opts,
+                progress,
+                session,
+            },
+        )?;
+        let keep = self.keep_unselected.then_some((input, &self.settings.read));
+        let window = opened.plan.window_points;
+        let rows = Rows {
+            output,
+            window,
+            keep,
+            progress,
+        };
+        Ok((report, write(store, &rows, self.hear)?))
+    }
+}
