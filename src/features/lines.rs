@@ -1,13 +1,11 @@
 //! The feature-line graph (vertices, edges with a kind, corner marks), its
-//! relaxation (paper 5 section 5, Fig. 10), its measures, and its files:
-//! PLY with `element vertex` (x, y, z double) and `element edge` (vertex1,
-//! vertex2 int, kind uchar: 1 ridge, 2 valley), or OBJ with `l` records.
+//! relaxation (paper 5 section 5, Fig. 10), its measures, and reading its
+//! PLY file back (writing it, in every format, is `super::line_files`').
 
 use crate::geom::LineKind;
-use crate::io::{AtomicFile, IoError, MeshFormat};
+use crate::io::IoError;
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Rounds of [`LineGraph::prune`] at most (a spur rarely hides more than
@@ -227,82 +225,6 @@ impl LineGraph {
 
     pub(crate) fn corner_count(&self) -> usize {
         self.corners.iter().filter(|c| **c).count()
-    }
-
-    /// Writes `format` (the output table's [`crate::io::mesh_format`] for
-    /// the path), vertices offset by `origin`.
-    pub fn write(&self, path: &Path, origin: DVec3, format: MeshFormat) -> Result<(), IoError> {
-        let mut file = AtomicFile::create(path)?;
-        {
-            let mut out = BufWriter::with_capacity(1 << 20, file.file());
-            let os = |e| IoError::os(path, e);
-            match format {
-                MeshFormat::Obj => self.obj(&mut out, origin).map_err(os)?,
-                MeshFormat::PlyBinary => self.ply(&mut out, origin, false).map_err(os)?,
-                MeshFormat::PlyAscii => self.ply(&mut out, origin, true).map_err(os)?,
-            }
-            out.flush().map_err(os)?;
-        }
-        file.commit()
-    }
-
-    fn ply(&self, out: &mut impl Write, origin: DVec3, ascii: bool) -> std::io::Result<()> {
-        let format = if ascii {
-            "ascii"
-        } else {
-            "binary_little_endian"
-        };
-        write!(
-            out,
-            "ply\nformat {format} 1.0\ncomment scanmesh features (paper 5): edge kind 1 ridge, 2 valley\n\
-             element vertex {}\nproperty double x\nproperty double y\nproperty double z\n\
-             element edge {}\nproperty int vertex1\nproperty int vertex2\nproperty uchar kind\nend_header\n",
-            self.vertices.len(),
-            self.edges.len()
-        )?;
-        for v in &self.vertices {
-            let p = *v + origin;
-            if ascii {
-                writeln!(out, "{} {} {}", p.x, p.y, p.z)?;
-            } else {
-                for c in p.to_array() {
-                    out.write_all(&c.to_le_bytes())?;
-                }
-            }
-        }
-        for &(a, b, k) in &self.edges {
-            if ascii {
-                writeln!(out, "{a} {b} {}", k as u8)?;
-            } else {
-                out.write_all(&(a as i32).to_le_bytes())?;
-                out.write_all(&(b as i32).to_le_bytes())?;
-                out.write_all(&[k as u8])?;
-            }
-        }
-        Ok(())
-    }
-
-    fn obj(&self, out: &mut impl Write, origin: DVec3) -> std::io::Result<()> {
-        writeln!(
-            out,
-            "# scanmesh features (paper 5): groups ridge and valley"
-        )?;
-        for v in &self.vertices {
-            let p = *v + origin;
-            writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
-        }
-        for kind in [LineKind::Ridge, LineKind::Valley] {
-            let name = if kind == LineKind::Ridge {
-                "ridge"
-            } else {
-                "valley"
-            };
-            writeln!(out, "g {name}")?;
-            for &(a, b, _) in self.edges.iter().filter(|e| e.2 == kind) {
-                writeln!(out, "l {} {}", a + 1, b + 1)?;
-            }
-        }
-        Ok(())
     }
 }
 

@@ -22,6 +22,7 @@ pub mod extract;
 pub(crate) mod hood;
 pub(crate) mod kernel;
 pub(crate) mod lift;
+pub mod line_files;
 pub mod lines;
 pub mod params;
 pub(crate) mod peak;

@@ -13,16 +13,23 @@
 //! [`Promise`] the mesh breaks renames its file to `NAME.incomplete.EXT`
 //! instead ([`incomplete_path`]) and fails, naming what broke it.
 //!
-//! Binary PLY layout: vertex `x, y, z` as `double` (or `float` with
-//! [`WriteOptions::single_precision`]), face `list uchar int vertex_indices`
-//! (so at most 2^31 vertices). Counts are written as 20 zero-padded digits,
-//! which every PLY reader parses as the plain decimal number.
+//! Each format's bytes are its [`Encoding`] (`encoding`): binary PLY
+//! writes vertex `x, y, z` as `double` (or `float` with
+//! [`WriteOptions::single_precision`]), face `list uchar int
+//! vertex_indices` (so at most 2^31 vertices). Counts are written as 20
+//! zero-padded digits, which every PLY reader parses as the plain decimal
+//! number.
+
+mod encoding;
+
+pub use encoding::Encoding;
 
 use super::audit::{incomplete_path, Auditor, MeshAudit, Promise, Sizes};
 use super::error::non_finite_coordinate;
 use super::scratch::scratch_beside;
 use super::{Mesh, MeshError};
 use crate::io::{AtomicFile, IoError};
+use encoding::CountOffsets;
 use glam::DVec3;
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
@@ -38,16 +45,9 @@ pub struct WriteOptions {
 }
 
 /// Width of the patched count fields in a PLY header.
-const COUNT_WIDTH: usize = 20;
+pub(crate) const COUNT_WIDTH: usize = 20;
 /// Buffer per stream: large writes, flat memory.
 const BUFFER: usize = 1 << 20;
-
-/// Where the two counts sit in the PLY header.
-#[derive(Clone, Copy, Debug)]
-struct CountOffsets {
-    vertices: u64,
-    faces: u64,
-}
 
 /// A streaming mesh writer: vertices go to the output as they come, triangles to a scratch file appended on finish; the file appears under its name only then.
 pub struct MeshWriter {
@@ -56,7 +56,7 @@ pub struct MeshWriter {
     vertex_sink: BufWriter<File>,
     face_sink: BufWriter<File>,
     out: AtomicFile,
-    format: MeshFormat,
+    encoding: &'static dyn Encoding,
     options: WriteOptions,
     counts_at: Option<CountOffsets>,
     vertices: u64,
@@ -101,13 +101,14 @@ impl MeshWriter {
         let os = |e| MeshError::Io(IoError::os(path, e));
         let scratch = scratch_beside(path).map_err(os)?;
         let mut vertex_sink = BufWriter::with_capacity(BUFFER, out.file().try_clone().map_err(os)?);
-        let counts_at = write_header(&mut vertex_sink, format, options).map_err(os)?;
+        let encoding = encoding::encoding(format);
+        let counts_at = encoding.header(&mut vertex_sink, options).map_err(os)?;
         let audit = Auditor::new(path, Sizes::DEFAULT).map_err(os)?;
         Ok(MeshWriter {
             vertex_sink,
             face_sink: BufWriter::with_capacity(BUFFER, scratch),
             out,
-            format,
+            encoding,
             options,
             counts_at,
             vertices: 0,
@@ -130,21 +131,13 @@ impl MeshWriter {
         self.out.final_path()
     }
 
-    /// Largest vertex count the format can index.
-    fn vertex_limit(&self) -> u64 {
-        match self.format {
-            MeshFormat::PlyBinary | MeshFormat::PlyAscii => i32::MAX as u64 + 1,
-            MeshFormat::Obj => u32::MAX as u64 + 1,
-        }
-    }
-
     /// Appends vertices; returns the global index of the first one. The
     /// batch is checked before anything is written, so a refused batch
     /// leaves the writer as it was.
     pub fn add_vertices(&mut self, vertices: &[DVec3]) -> Result<u32, MeshError> {
         let first = self.vertices;
         let count = first + vertices.len() as u64;
-        let limit = self.vertex_limit();
+        let limit = self.encoding.vertex_limit();
         let too_many = || MeshError::TooManyVertices {
             path: self.path().to_path_buf(),
             count,
@@ -166,9 +159,10 @@ impl MeshWriter {
                 value,
             });
         }
-        for &p in vertices {
-            self.write_vertex(p).map_err(|e| self.os(e))?;
-        }
+        let written = self
+            .encoding
+            .vertices(&mut self.vertex_sink, vertices, self.options);
+        written.map_err(|e| self.os(e))?;
         let audited = self.audit.add_vertices(vertices);
         audited.map_err(|e| self.os(e))?;
         self.vertices = count;
@@ -179,14 +173,15 @@ impl MeshWriter {
     /// vertices not yet added; `finish` checks them all. After an I/O error
     /// the writer is unusable: drop it (which removes the partial output).
     pub fn add_triangles(&mut self, triangles: &[[u32; 3]]) -> Result<(), MeshError> {
-        for &t in triangles {
+        for (k, t) in triangles.iter().enumerate() {
             let m = t[0].max(t[1]).max(t[2]);
             if self.max_index.is_none_or(|(best, _)| m > best) {
-                self.max_index = Some((m, self.triangles));
+                self.max_index = Some((m, self.triangles + k as u64));
             }
-            self.write_face(t).map_err(|e| self.os(e))?;
-            self.triangles += 1;
         }
+        let written = self.encoding.triangles(&mut self.face_sink, triangles);
+        written.map_err(|e| self.os(e))?;
+        self.triangles += triangles.len() as u64;
         let audited = self.audit.add_triangles(triangles);
         audited.map_err(|e| self.os(e))
     }
@@ -259,92 +254,6 @@ impl MeshWriter {
     fn os(&self, e: std::io::Error) -> MeshError {
         MeshError::Io(IoError::os(self.path(), e))
     }
-
-    fn write_vertex(&mut self, p: DVec3) -> std::io::Result<()> {
-        let w = &mut self.vertex_sink;
-        let single = self.options.single_precision;
-        match self.format {
-            MeshFormat::PlyBinary if single => {
-                for c in p.as_vec3().to_array() {
-                    w.write_all(&c.to_le_bytes())?;
-                }
-                Ok(())
-            }
-            MeshFormat::PlyBinary => {
-                for c in p.to_array() {
-                    w.write_all(&c.to_le_bytes())?;
-                }
-                Ok(())
-            }
-            // Rust's float Display is the shortest text that reads back to
-            // the same value, so ASCII output round-trips exactly.
-            MeshFormat::PlyAscii if single => {
-                let q = p.as_vec3();
-                writeln!(w, "{} {} {}", q.x, q.y, q.z)
-            }
-            MeshFormat::PlyAscii => writeln!(w, "{} {} {}", p.x, p.y, p.z),
-            MeshFormat::Obj if single => {
-                let q = p.as_vec3();
-                writeln!(w, "v {} {} {}", q.x, q.y, q.z)
-            }
-            MeshFormat::Obj => writeln!(w, "v {} {} {}", p.x, p.y, p.z),
-        }
-    }
-
-    fn write_face(&mut self, t: [u32; 3]) -> std::io::Result<()> {
-        let w = &mut self.face_sink;
-        match self.format {
-            MeshFormat::PlyBinary => {
-                w.write_all(&[3u8])?;
-                // Indices above i32::MAX are caught by `finish` (the vertex
-                // limit), so the cast never writes a wrong index to a file
-                // that gets committed.
-                for i in t {
-                    w.write_all(&(i as i32).to_le_bytes())?;
-                }
-                Ok(())
-            }
-            MeshFormat::PlyAscii => writeln!(w, "3 {} {} {}", t[0], t[1], t[2]),
-            MeshFormat::Obj => {
-                let [a, b, c] = t.map(|i| i as u64 + 1);
-                writeln!(w, "f {a} {b} {c}")
-            }
-        }
-    }
-}
-
-/// Writes the header; for PLY returns where the two counts sit.
-fn write_header(
-    w: &mut BufWriter<File>,
-    format: MeshFormat,
-    options: WriteOptions,
-) -> std::io::Result<Option<CountOffsets>> {
-    let kind = match format {
-        MeshFormat::PlyBinary => "binary_little_endian",
-        MeshFormat::PlyAscii => "ascii",
-        MeshFormat::Obj => {
-            writeln!(w, "# written by scanmesh")?;
-            return Ok(None);
-        }
-    };
-    let scalar = if options.single_precision {
-        "float"
-    } else {
-        "double"
-    };
-    let placeholder = format!("{:0COUNT_WIDTH$}", 0);
-    let mut header =
-        format!("ply\nformat {kind} 1.0\ncomment written by scanmesh\nelement vertex ");
-    let vertices = header.len() as u64;
-    header.push_str(&placeholder);
-    header.push_str(&format!(
-        "\nproperty {scalar} x\nproperty {scalar} y\nproperty {scalar} z\nelement face "
-    ));
-    let faces = header.len() as u64;
-    header.push_str(&placeholder);
-    header.push_str("\nproperty list uchar int vertex_indices\nend_header\n");
-    w.write_all(header.as_bytes())?;
-    Ok(Some(CountOffsets { vertices, faces }))
 }
 
 /// Writes `mesh` to `path` in one go (streamed in batches through
