@@ -79,8 +79,9 @@ impl PointRun<'_> {
 
     /// Runs a stage whose kernel costs `cost` from `input` to `output`:
     /// `compute` on the opened store, then `write` of its rows (it may say
-    /// a note to the run's hearer). Returns
-    /// the computation's report and what the writer returned.
+    /// a note to the run's hearer). Returns the computation's report and
+    /// what the writer returned. `E` is any error the run's own convert
+    /// into (the CLI's `anyhow::Error`, a caller's boxed error).
     pub fn run<R, W, E>(
         &self,
         (input, output): (&Path, &Path),

@@ -75,14 +75,7 @@ pub fn export_points_keeping(
     spec: &WriterSpec,
     rows: &Rows,
 ) -> Result<u64, StoreError> {
-    let computed = Computed::normals_for(spec);
-    let Rows {
-        output,
-        window,
-        keep,
-        progress,
-    } = *rows;
-    export_columns(store, output, spec, &computed, window, keep, progress)
+    export_columns(store, spec, &Computed::normals_for(spec), rows)
 }
 
 /// The store's computed columns an export writes beside the points: the
@@ -149,13 +142,7 @@ pub fn export_values(
     columns: [ColumnSpec; 2],
     rows: &Rows,
 ) -> Result<u64, StoreError> {
-    let Rows {
-        output,
-        window,
-        keep,
-        progress,
-    } = *rows;
-    let unselected = match keep {
+    let unselected = match rows.keep {
         Some(_) => store.manifest().left_out.unselected,
         None => 0,
     };
@@ -169,21 +156,24 @@ pub fn export_values(
         values: Some(values),
         flags: Some(flags),
     };
-    export_columns(store, output, &spec, &computed, window, keep, progress)
+    export_columns(store, &spec, &computed, rows)
 }
 
-/// Writes `store` to `path` in input order with the `computed` columns
-/// `spec` names, and the rows `keep` asks for as
+/// Writes `store` to `rows` in input order with the `computed` columns
+/// `spec` names, and the rows `rows.keep` asks for as
 /// [`export_points_keeping`] does; returns the rows written.
 pub fn export_columns(
     store: &PointStore,
-    path: &Path,
     spec: &WriterSpec,
     computed: &Computed,
-    window_points: u64,
-    keep: Option<(&Path, &crate::io::ReadOptions)>,
-    progress: &dyn Progress,
+    rows: &Rows,
 ) -> Result<u64, StoreError> {
+    let Rows {
+        output: path,
+        window: window_points,
+        keep,
+        progress,
+    } = *rows;
     let cols = computed.open(store, spec)?;
     let mut spec = spec.clone();
     if spec.las_transform.is_none() {
