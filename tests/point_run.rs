@@ -51,6 +51,7 @@ fn library_normals(
         read,
         scratch_dir: None,
         scratch_limit: None,
+        keep_records: true,
     };
     let heard = Heard::default();
     let run = PointRun {

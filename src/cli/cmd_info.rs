@@ -2,7 +2,7 @@
 //! over it (`--plan`).
 
 use super::stdout::outln;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::memory::{MemoryBudget, PlanTable};
 use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
@@ -54,11 +54,11 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let read = a.select.read(a.skip_invalid);
         let (points, store) = points_to_plan(&a.input, read, progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
-        let planned = super::plannable()
-            .into_iter()
-            .find(|(name, _)| *name == a.command);
-        let cost = planned.and_then(|(_, cost)| cost(a.closed));
-        let cost = cost.ok_or_else(|| anyhow::anyhow!("--command {}: not plannable", a.command))?;
+        let mut planned = super::plannable().into_iter();
+        let cost = planned.find_map(|(name, cost)| (name == a.command).then(|| cost(a.closed)));
+        let cost = cost
+            .flatten()
+            .context("--command: not a plannable command")?;
         return outln!("{}", PlanTable::new(budget, points, store, cost)?);
     }
     let report = if is_store(&a.input) {

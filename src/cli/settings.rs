@@ -250,6 +250,7 @@ impl CommonArgs {
                 read,
                 scratch_dir: self.scratch_dir.clone(),
                 scratch_limit,
+                keep_records: true,
             },
             quiet: self.quiet,
             run: run.session.clone(),
@@ -263,9 +264,7 @@ impl CommonArgs {
             .build_global();
         Ok(settings)
     }
-}
 
-impl CommonArgs {
     /// Runs a command that writes one row per input point in its
     /// settings ([`PointRun`]), then prints the summary line of
     /// `line(report, written)`.

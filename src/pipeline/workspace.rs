@@ -31,6 +31,10 @@ pub struct RunSettings {
     pub scratch_dir: Option<PathBuf>,
     /// The most scratch disk the run may use (`--scratch`).
     pub scratch_limit: Option<u64>,
+    /// Keep the input's attributes and LAS records in a store built for
+    /// the run (true unless the run writes no row per point:
+    /// [`crate::store::BuildOptions::records`]).
+    pub keep_records: bool,
 }
 
 /// An open store with the plan a run keeps to.
@@ -128,6 +132,7 @@ impl RunSettings {
             read: ReadOptions::default(),
             scratch_dir: None,
             scratch_limit: None,
+            keep_records: true,
         }
     }
 
@@ -140,7 +145,10 @@ impl RunSettings {
 
     /// Tile sizes for a kernel: forced by `tile_points`, else from the plan.
     pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
-        let within = BuildOptions::within(self.budget, cost);
+        let within = BuildOptions {
+            records: self.keep_records,
+            ..BuildOptions::within(self.budget, cost)
+        };
         match self.tile_points {
             Some(n) => BuildOptions {
                 tiles: TileTarget::Points(n),
@@ -246,7 +254,10 @@ impl RunSettings {
             let reader = crate::io::open_reader(input, self.read.clone())
                 .map_err(|e| reading(input, e.into()))?;
             let info = reader.info();
-            (info.declared_count, store_bytes_per_point(info)?)
+            (
+                info.declared_count,
+                store_bytes_per_point(info, self.keep_records)?,
+            )
         };
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {

@@ -54,24 +54,35 @@ pub struct Computing<'a> {
 }
 
 impl PointRun<'_> {
-    /// The store to work on (`input` itself when it is one, else a scratch
-    /// store beside `output` built from the input file, or the run
-    /// directory's), its memory plan, and run options that keep the tiles
-    /// in flight within it, for a kernel that costs `cost`.
+    /// The store for a run that writes no row per point (a mesh, lines,
+    /// lists): `input` itself when it is one, else a scratch store beside
+    /// `output` built from the input file, or the run directory's, without
+    /// the input's attributes and LAS records, which only an export of
+    /// every point reads; its memory plan, and run options that keep the
+    /// tiles in flight within it, for a kernel that costs `cost`.
     pub fn open(
         &self,
         input: &Path,
         output: &Path,
         cost: KernelCost,
     ) -> Result<Prepared, RunDirError> {
-        let (opened, reclaimed) = open_input(
-            self.settings,
-            self.session,
-            input,
-            output,
-            cost,
-            self.progress,
-        )?;
+        let settings = RunSettings {
+            keep_records: false,
+            ..self.settings.clone()
+        };
+        self.open_with(&settings, input, output, cost)
+    }
+
+    /// [`PointRun::open`] in `settings`.
+    fn open_with(
+        &self,
+        settings: &RunSettings,
+        input: &Path,
+        output: &Path,
+        cost: KernelCost,
+    ) -> Result<Prepared, RunDirError> {
+        let (opened, reclaimed) =
+            open_input(settings, self.session, input, output, cost, self.progress)?;
         self.hear.hear(Said::Reclaimed(&reclaimed));
         self.hear.hear(Said::Opened(&opened.ws.store));
         Ok(opened)
@@ -93,7 +104,8 @@ impl PointRun<'_> {
         E: From<RunDirError> + From<IoError>,
     {
         place::check_distinct(input, output)?;
-        let mut opened = self.open(input, output, cost)?;
+        // The export writes the input's attributes and LAS records.
+        let mut opened = self.open_with(self.settings, input, output, cost)?;
         let store = &mut opened.ws.store;
         let (progress, session) = (self.progress, self.session);
         let report = compute(

@@ -117,7 +117,7 @@ pub fn points_to_plan(
         return Ok((PointStore::open_shared(input)?.len(), 0));
     }
     let r = open_reader(input, read.clone())?;
-    let store = super::store_bytes_per_point(r.info())?;
+    let store = super::store_bytes_per_point(r.info(), true)?;
     match r.info().declared_count {
         Some(n) => Ok((n, store)),
         None => Ok((inspect(input, read, progress)?.count, store)),

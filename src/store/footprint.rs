@@ -15,12 +15,19 @@ use crate::io::{Format, SourceInfo};
 /// Bytes per point of the tile-ordered columns every store has.
 const TILE_COLUMNS: u64 = 12 + 8;
 
-/// Disk bytes per point of the store an input of this description builds.
-pub fn store_bytes_per_point(info: &SourceInfo) -> Result<u64, StoreError> {
+/// Disk bytes per point of the store an input of this description builds,
+/// keeping its attributes and LAS records when `records` says so
+/// ([`super::BuildOptions::records`]).
+pub fn store_bytes_per_point(info: &SourceInfo, records: bool) -> Result<u64, StoreError> {
     let exact = Coordinates::for_input(info.las_transform).item_bytes() as u64;
-    let attributes = info.attributes.bytes_per_point() as u64;
+    let attributes = match records {
+        true => info.attributes.bytes_per_point() as u64,
+        false => 0,
+    };
     let records = match info.format {
-        Format::Las | Format::Laz => u64::from(LasSource::read(&info.path)?.record_len()),
+        Format::Las | Format::Laz if records => {
+            u64::from(LasSource::read(&info.path)?.record_len())
+        }
         _ => 0,
     };
     Ok(TILE_COLUMNS + exact + attributes + records + 24u64.div_ceil(BLOCK))
@@ -59,16 +66,21 @@ mod tests {
             readers.push(open_reader(&fixtures.join(name), ReadOptions::default()).unwrap());
         }
         for (i, mut reader) in readers.into_iter().enumerate() {
-            let estimate = store_bytes_per_point(reader.info()).unwrap();
+            // Every other input built without its records.
+            let records = i % 2 == 0;
+            let estimate = store_bytes_per_point(reader.info(), records).unwrap();
             let name = reader.info().path.display().to_string();
             let dir = tmp.path().join(format!("{i}.store"));
-            let store =
-                build_store(reader.as_mut(), &dir, &BuildOptions::default(), &NoProgress).unwrap();
+            let opts = BuildOptions {
+                records,
+                ..BuildOptions::default()
+            };
+            let store = build_store(reader.as_mut(), &dir, &opts, &NoProgress).unwrap();
             let per_point = dir_bytes(&dir) as f64 / store.len() as f64;
             let excess = per_point - estimate as f64;
             assert!(
                 (-1.0..=1.0 + 8192.0 / store.len() as f64).contains(&excess),
-                "{name}: {per_point:.1} B a point built, {estimate} estimated"
+                "{name} (records {records}): {per_point:.1} B a point built, {estimate} estimated"
             );
         }
     }
