@@ -80,7 +80,7 @@ macro_rules! commands {
             }
         }
 
-        /// The commands a run of can be planned before it runs (`info
+        /// The commands whose run can be planned before it runs (`info
         /// --plan --command`), by name, with their default cost.
         fn plannable() -> Vec<(String, fn(bool) -> Option<KernelCost>)> {
             let costs: Vec<fn(bool) -> Option<KernelCost>> =

@@ -1,9 +1,11 @@
-//! A run that writes one row per input point, end to end: the shell the
-//! per-point stages (normals, curvature, outliers) share, so a library
-//! caller runs them as the command line does. The store is opened within
-//! the memory plan (the run directory's, when the run keeps one), the stage
-//! computes its columns on it, and the rows are written in input order;
-//! what the run has to say on the way reaches the caller as [`Said`].
+//! A run over a point cloud as the command line runs it, for a library
+//! caller too: the store opened within the memory plan (the run
+//! directory's, when the run keeps one; [`PointRun::open`], for a run that
+//! writes a mesh, lines or lists), and end to end the shell the per-point
+//! stages (normals, curvature, outliers) share ([`PointRun::run`]): the
+//! stage computes its columns on the store, and the rows are written in
+//! input order. What the run has to say on the way reaches the caller as
+//! [`Said`].
 
 use super::{open_input, RunDirError, Session};
 use crate::io::{place, IoError};
@@ -11,7 +13,7 @@ use crate::pipeline::{KernelCost, Prepared, Progress, RunOptions, RunSettings};
 use crate::store::{PointStore, Rows};
 use std::path::{Path, PathBuf};
 
-/// Where a per-point run works and who hears it.
+/// Where a run works and who hears it.
 pub struct PointRun<'a> {
     /// The memory promise, threads, how the input is read, the scratch.
     pub settings: &'a RunSettings,
