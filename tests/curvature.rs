@@ -57,7 +57,8 @@ fn run(points: &[DVec3], tile_points: u64, threads: usize, hood: HoodChoice) -> 
         let rows = Rows {
             output: &path,
             window: 1000,
-            keep: None,
+            input: None,
+            keep_unselected: false,
             progress: &NoProgress,
         };
         write_curvature(store, &spec, &rows).expect("write");

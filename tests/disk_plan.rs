@@ -95,10 +95,13 @@ fn runs_stay_within_their_disk_plan() {
         let info = reader.info();
         let points = info.declared_count.expect("a declared count");
         for (command, flag, cost) in &runs {
-            // A run that writes no row per point keeps no attributes or
-            // LAS records.
-            let records = *command == "normals";
-            let store = scanmesh::store::store_bytes_per_point(info, records).expect("store bytes");
+            // A run that writes a row per point reads its input again; one
+            // that writes none keeps the exact coordinates.
+            let kept = match *command == "normals" {
+                true => scanmesh::store::Kept::Nothing,
+                false => scanmesh::store::Kept::Coordinates,
+            };
+            let store = scanmesh::store::store_bytes_per_point(info, kept).expect("store bytes");
             let run_dir = tmp.path().join("run");
             let out = tmp.path().join("out.ply");
             let mut args: Vec<String> = vec![

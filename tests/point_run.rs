@@ -51,7 +51,7 @@ fn library_normals(
         read,
         scratch_dir: None,
         scratch_limit: None,
-        keep_records: true,
+        keep: scanmesh::store::Kept::Coordinates,
     };
     let heard = Heard::default();
     let run = PointRun {

@@ -250,7 +250,7 @@ impl CommonArgs {
                 read,
                 scratch_dir: self.scratch_dir.clone(),
                 scratch_limit,
-                keep_records: true,
+                keep: scanmesh::store::Kept::Coordinates,
             },
             quiet: self.quiet,
             run: run.session.clone(),

@@ -332,6 +332,43 @@ impl Attributes {
         }
     }
 
+    /// Appends the values of the set's attributes of `other`'s points
+    /// `range` (`other` holds them), and when `records` their LAS records.
+    pub fn extend_from(
+        &mut self,
+        other: &Attributes,
+        range: std::ops::Range<usize>,
+        records: bool,
+    ) {
+        let s = self.set;
+        let r = range.clone();
+        if s.contains(Attribute::Intensity) {
+            self.intensity
+                .extend_from_slice(&other.intensity[r.clone()]);
+        }
+        if s.contains(Attribute::Rgb) {
+            self.rgb.extend_from_slice(&other.rgb[r.clone()]);
+        }
+        if s.contains(Attribute::Classification) {
+            self.classification
+                .extend_from_slice(&other.classification[r.clone()]);
+        }
+        if s.contains(Attribute::ReturnNumber) {
+            self.return_number
+                .extend_from_slice(&other.return_number[r.clone()]);
+        }
+        if s.contains(Attribute::GpsTime) {
+            self.gps_time.extend_from_slice(&other.gps_time[r]);
+        }
+        if records {
+            let len = other.las.record_len;
+            self.las.record_len = len;
+            self.las
+                .bytes
+                .extend_from_slice(&other.las.bytes[range.start * len..range.end * len]);
+        }
+    }
+
     /// Point `i`'s values (zero for attributes outside the set).
     #[inline]
     pub fn get(&self, i: usize) -> AttributeValues {

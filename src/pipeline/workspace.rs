@@ -13,8 +13,8 @@ use crate::memory::{BudgetError, DiskPlan};
 use crate::store::build::{build_store, scratch_store_dir_in, MAX_POINTS};
 use crate::store::spacing::ensure_spacing;
 use crate::store::{
-    is_store, open_input, store_bytes_per_point, BuildOptions, Causes, PointStore, StoreError,
-    TileTarget, Workspace,
+    is_store, open_input, store_bytes_per_point, BuildOptions, Causes, Kept, PointStore,
+    StoreError, TileTarget, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -31,10 +31,11 @@ pub struct RunSettings {
     pub scratch_dir: Option<PathBuf>,
     /// The most scratch disk the run may use (`--scratch`).
     pub scratch_limit: Option<u64>,
-    /// Keep the input's attributes and LAS records in a store built for
-    /// the run (true unless the run writes no row per point:
-    /// [`crate::store::BuildOptions::records`]).
-    pub keep_records: bool,
+    /// What a store built for the run keeps of its input
+    /// ([`crate::store::BuildOptions::keep`]): the exact coordinates by
+    /// default (a mesh's vertices may be input points), nothing for a run
+    /// whose export reads the input again (`rundir::PointRun::run`).
+    pub keep: Kept,
 }
 
 /// An open store with the plan a run keeps to.
@@ -132,7 +133,7 @@ impl RunSettings {
             read: ReadOptions::default(),
             scratch_dir: None,
             scratch_limit: None,
-            keep_records: true,
+            keep: Kept::Coordinates,
         }
     }
 
@@ -146,7 +147,7 @@ impl RunSettings {
     /// Tile sizes for a kernel: forced by `tile_points`, else from the plan.
     pub fn build_options(&self, cost: KernelCost) -> BuildOptions {
         let within = BuildOptions {
-            records: self.keep_records,
+            keep: self.keep,
             ..BuildOptions::within(self.budget, cost)
         };
         match self.tile_points {
@@ -217,7 +218,11 @@ impl RunSettings {
         let building = crate::io::cleanup::register(dir);
         let mut reader = crate::io::open_reader(input, self.read.clone())?;
         self.check_floor(&cost)?;
-        let opts = self.build_options(cost);
+        // A store for repeated runs serves exports without its input.
+        let opts = BuildOptions {
+            keep: Kept::All,
+            ..self.build_options(cost)
+        };
         let mut store = match build_store(reader.as_mut(), dir, &opts, progress) {
             Ok(store) => store,
             Err(e) => {
@@ -254,10 +259,7 @@ impl RunSettings {
             let reader = crate::io::open_reader(input, self.read.clone())
                 .map_err(|e| reading(input, e.into()))?;
             let info = reader.info();
-            (
-                info.declared_count,
-                store_bytes_per_point(info, self.keep_records)?,
-            )
+            (info.declared_count, store_bytes_per_point(info, self.keep)?)
         };
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {

@@ -10,7 +10,7 @@
 use super::{open_input, RunDirError, Session};
 use crate::io::{place, IoError};
 use crate::pipeline::{KernelCost, Prepared, Progress, RunOptions, RunSettings};
-use crate::store::{PointStore, Rows};
+use crate::store::{Kept, PointStore, Rows};
 use std::path::{Path, PathBuf};
 
 /// Where a run works and who hears it.
@@ -58,9 +58,10 @@ pub struct Computing<'a> {
 impl PointRun<'_> {
     /// The store for a run that writes no row per point (a mesh, lines,
     /// lists): `input` itself when it is one, else a scratch store beside
-    /// `output` built from the input file, or the run directory's, without
-    /// the input's attributes and LAS records, which only an export of
-    /// every point reads; its memory plan, and run options that keep the
+    /// `output` built from the input file, or the run directory's, keeping
+    /// of the input only its exact coordinates (a mesh's vertices may be
+    /// input points; the attributes and LAS records only an export of
+    /// every point reads); its memory plan, and run options that keep the
     /// tiles in flight within it, for a kernel that costs `cost`.
     pub fn open(
         &self,
@@ -69,7 +70,7 @@ impl PointRun<'_> {
         cost: KernelCost,
     ) -> Result<Prepared, RunDirError> {
         let settings = RunSettings {
-            keep_records: false,
+            keep: Kept::Coordinates,
             ..self.settings.clone()
         };
         self.open_with(&settings, input, output, cost)
@@ -106,8 +107,12 @@ impl PointRun<'_> {
         E: From<RunDirError> + From<IoError>,
     {
         place::check_distinct(input, output)?;
-        // The export writes the input's attributes and LAS records.
-        let mut opened = self.open_with(self.settings, input, output, cost)?;
+        // The export reads the input's points again (`Rows::input`).
+        let settings = RunSettings {
+            keep: Kept::Nothing,
+            ..self.settings.clone()
+        };
+        let mut opened = self.open_with(&settings, input, output, cost)?;
         let store = &mut opened.ws.store;
         let (progress, session) = (self.progress, self.session);
         let report = compute(
@@ -118,12 +123,11 @@ impl PointRun<'_> {
                 session,
             },
         )?;
-        let keep = self.keep_unselected.then_some((input, &self.settings.read));
-        let window = opened.plan.window_points;
         let rows = Rows {
             output,
-            window,
-            keep,
+            window: opened.plan.window_points,
+            input: Some((input, &self.settings.read)),
+            keep_unselected: self.keep_unselected,
             progress,
         };
         Ok((report, write(store, &rows, self.hear)?))

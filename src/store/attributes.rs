@@ -111,6 +111,7 @@ impl PointStore {
     }
 
     fn attribute_column(&self, a: Attribute) -> Result<Column, StoreError> {
+        self.keeps_input(true)?;
         if !self.attributes().contains(a) {
             return Err(StoreError::MissingColumn {
                 column: super::ColumnName::Attribute(a),
@@ -121,6 +122,9 @@ impl PointStore {
 
     /// Checks that every attribute column holds a value per point.
     pub(super) fn check_attribute_columns(&self) -> Result<(), StoreError> {
+        if self.kept() != super::Kept::All {
+            return Ok(());
+        }
         for a in self.attributes().iter() {
             let col = self.attribute_column(a)?;
             if col.items()? != self.manifest.count {

@@ -15,7 +15,7 @@ use super::attributes::AttributeSink;
 use super::cells::CellCounts;
 use super::exact::{for_each_exact, Coordinates, ExactSink, EXACT_FILE};
 use super::ingest::first_pass;
-use super::manifest::{GridSpec, Manifest, STORE_VERSION};
+use super::manifest::{GridSpec, Kept, Manifest, STORE_VERSION};
 use super::tile_plan::{plan_tiles, CellCount, TilePlan};
 use super::{save_manifest, sort, Column, PointStore, StoreError, TileEntry, BLOCK};
 use super::{BLOCKS_FILE, INDEX_FILE, XYZ_FILE};
@@ -38,11 +38,11 @@ pub struct BuildOptions {
     /// Most occupied histogram cells held at once (36 bytes each at the
     /// peak); a finer grid is coarsened until its histogram fits.
     pub histogram_cells: usize,
-    /// Keep the input's attributes and LAS records (what an export of
-    /// every point writes beside the coordinates). A store for a run that
-    /// writes no row per point (a mesh, lines, lists) leaves them out:
-    /// 41 of the 114 scratch bytes a point of a LAS 1.4 input.
-    pub records: bool,
+    /// What the store keeps of its input once built ([`Kept`]): all of it
+    /// for a store that outlives its run, the exact coordinates for a mesh,
+    /// nothing when an export reads the input again (66 of the 114 scratch
+    /// bytes a point of a LAS 1.4 input's normals).
+    pub keep: Kept,
 }
 
 /// How large tiles may be.
@@ -80,7 +80,7 @@ impl BuildOptions {
             tiles: TileTarget::Budget { budget, cost },
             scatter_buffer: plan::scatter_buffer(budget),
             histogram_cells: plan::histogram_cells(budget),
-            records: true,
+            keep: Kept::All,
         }
     }
 }
@@ -91,7 +91,7 @@ impl Default for BuildOptions {
             tiles: TileTarget::Points(1 << 20),
             scatter_buffer: 32 << 20,
             histogram_cells: 1 << 23,
-            records: true,
+            keep: Kept::All,
         }
     }
 }
@@ -113,6 +113,9 @@ pub fn build_store(
     progress.begin("checksums", 0);
     seal(dir, &mut manifest)?;
     progress.end();
+    if manifest.kept == Kept::Nothing {
+        drop_exact(dir, &mut manifest)?;
+    }
     save_manifest(dir, &manifest)?;
     PointStore::open_fresh(dir, lock)
 }
@@ -125,10 +128,11 @@ fn seal(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
         (BLOCKS_FILE.to_string(), 24),
         (EXACT_FILE.to_string(), manifest.coordinates.item_bytes()),
     ];
-    for a in &manifest.attributes {
+    let kept = manifest.kept == Kept::All;
+    for a in manifest.attributes.iter().filter(|_| kept) {
         columns.push((super::attributes::column_file(*a), a.item_bytes()));
     }
-    if let Some(las) = manifest.las {
+    if let Some(las) = manifest.las.filter(|_| kept) {
         let name = super::las_kept::LAS_RECORDS_FILE.to_string();
         columns.push((name, usize::from(las.record_len)));
     }
@@ -139,24 +143,37 @@ fn seal(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// Removes the exact coordinates once the build's passes have read them,
+/// keeping their checksums as the input's fingerprint (`input_sums`).
+fn drop_exact(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
+    manifest.input_sums = manifest.checksums.remove(EXACT_FILE).unwrap_or_default();
+    let path = dir.join(EXACT_FILE);
+    std::fs::remove_file(&path).map_err(|e| StoreError::os(&path, e))
+}
+
 fn build_columns(
     reader: &mut dyn PointReader,
     dir: &Path,
     opts: &BuildOptions,
     progress: &dyn Progress,
 ) -> Result<Manifest, StoreError> {
-    let attributes = match opts.records {
+    let listed = opts.keep != Kept::Coordinates;
+    let attributes = match listed {
         true => reader.info().attributes,
         false => crate::io::AttributeSet::EMPTY,
     };
     let coordinates = Coordinates::for_input(reader.info().las_transform);
     let las = match reader.info().format {
-        crate::io::Format::Las | crate::io::Format::Laz if opts.records => {
+        crate::io::Format::Las | crate::io::Format::Laz if listed => {
             Some(super::las_kept::keep_frame(dir, &reader.info().path)?)
         }
         _ => None,
     };
-    let mut sink = AttributeSink::create(dir, attributes, las.map(|l| l.record_len))?;
+    // Columns only for a store that keeps them; the maxima are found anyway.
+    let mut sink = match opts.keep {
+        Kept::All => AttributeSink::create(dir, attributes, las.map(|l| l.record_len))?,
+        _ => AttributeSink::create(dir, crate::io::AttributeSet::EMPTY, None)?,
+    };
     let mut exact = ExactSink::create(dir, coordinates)?;
     let ingested = first_pass(reader, &mut exact, &mut sink, progress)?;
     let (count, bounds) = (ingested.count, ingested.bounds);
@@ -200,6 +217,8 @@ fn build_columns(
         attributes: attributes.to_vec(),
         maxima: Some(maxima),
         las,
+        kept: opts.keep,
+        input_sums: Vec::new(),
         source: String::new(),
         source_has_normals: reader.info().has_normals,
         sampling: None,

@@ -77,7 +77,7 @@ impl Coordinates {
 
     /// Appends `p`'s encoding to `out`; `None` when `p` is not on the grid
     /// (a LAS reader gave a coordinate its integers do not make).
-    fn encode(self, p: DVec3, out: &mut Vec<u8>) -> Option<()> {
+    pub(super) fn encode(self, p: DVec3, out: &mut Vec<u8>) -> Option<()> {
         match self {
             Coordinates::F64 => p
                 .to_array()
@@ -219,6 +219,7 @@ impl PointStore {
         out: &mut Vec<DVec3>,
     ) -> Result<(), StoreError> {
         out.clear();
+        self.keeps_input(false)?;
         let c = self.coordinates();
         let column = Column::open(&self.dir.join(EXACT_FILE), c.item_bytes(), false)?;
         column.with_bytes(first, count, |b| c.decode(b, out))
@@ -238,6 +239,7 @@ impl PointStore {
         count: u64,
         out: &mut Vec<DVec3>,
     ) -> Result<(), StoreError> {
+        self.keeps_input(false)?;
         let mut ranks = Vec::new();
         self.read_indices(first, count, &mut ranks)?;
         let mut order: Vec<usize> = (0..ranks.len()).collect();

@@ -25,8 +25,9 @@
 //! of a scratch file (`super::reorder`) and each window read back from it.
 
 use super::reorder::Reorder;
+use super::reread::Reread;
 use super::slots::{Columns, Slots, TileValues};
-use super::{ColumnSpec, Item, PointStore, StoreError, FLAGS, NORMALS};
+use super::{ColumnSpec, Item, Kept, PointStore, StoreError, FLAGS, NORMALS};
 use crate::io::{
     create_writer_with, Attribute, Format, LasOutput, PointChunk, PointWriter, WriterSpec,
 };
@@ -43,10 +44,15 @@ pub struct Rows<'a> {
     pub output: &'a Path,
     /// Points per window (the memory plan's `window_points`).
     pub window: u64,
-    /// The input file `keep.0` and its read `keep.1`, whose points the read
-    /// left out of the store are written between the others, flagged
-    /// ([`crate::io::keep`]); `None`: the store's points only.
-    pub keep: Option<(&'a Path, &'a crate::io::ReadOptions)>,
+    /// The input file the store was built from and how it was read: a
+    /// store that keeps nothing of its input ([`super::Kept::Nothing`])
+    /// has its points' coordinates, attributes and records read from it
+    /// again (`super::reread`); `None`: the store's own.
+    pub input: Option<(&'a Path, &'a crate::io::ReadOptions)>,
+    /// Write the input's points the read's selection left out of the
+    /// store between the others, flagged ([`crate::io::keep`]); needs
+    /// `input`.
+    pub keep_unselected: bool,
     /// Progress bars, or none.
     pub progress: &'a dyn Progress,
 }
@@ -62,13 +68,15 @@ pub fn export_points(
     let rows = Rows {
         output: path,
         window,
-        keep: None,
+        input: None,
+        keep_unselected: false,
         progress,
     };
     export_points_keeping(store, spec, &rows)
 }
 
-/// [`export_points`] to `rows`, with the points `rows.keep` asks for;
+/// [`export_points`] to `rows`, with the points `rows.keep_unselected`
+/// asks for;
 /// returns the rows written.
 pub fn export_points_keeping(
     store: &PointStore,
@@ -133,7 +141,7 @@ impl Computed {
 
 /// Writes `store` to `path` in input order with a column of values (as
 /// many per point as `spec.values` names) and one of flags, the rows
-/// declared before the first (`keep`'s unselected ones too), so a short
+/// declared before the first (the unselected ones too, when kept), so a short
 /// output fails before it is renamed into place: the curvature's and the
 /// outliers' output. Returns the rows written.
 pub fn export_values(
@@ -142,7 +150,7 @@ pub fn export_values(
     columns: [ColumnSpec; 2],
     rows: &Rows,
 ) -> Result<u64, StoreError> {
-    let unselected = match rows.keep {
+    let unselected = match rows.input.filter(|_| rows.keep_unselected) {
         Some(_) => store.manifest().left_out.unselected,
         None => 0,
     };
@@ -160,7 +168,7 @@ pub fn export_values(
 }
 
 /// Writes `store` to `rows` in input order with the `computed` columns
-/// `spec` names, and the rows `rows.keep` asks for as
+/// `spec` names, and the rows `rows.keep_unselected` asks for as
 /// [`export_points_keeping`] does; returns the rows written.
 pub fn export_columns(
     store: &PointStore,
@@ -171,9 +179,11 @@ pub fn export_columns(
     let Rows {
         output: path,
         window: window_points,
-        keep,
+        input,
+        keep_unselected,
         progress,
     } = *rows;
+    let keep = input.filter(|_| keep_unselected);
     let cols = computed.open(store, spec)?;
     let mut spec = spec.clone();
     if spec.las_transform.is_none() {
@@ -220,6 +230,7 @@ pub fn export_columns(
     } else {
         None
     };
+    let mut source = InputRows::open(store, input)?;
     let (full_tx, full_rx) = bounded::<Window>(1);
     let (empty_tx, empty_rx) = bounded::<Window>(2);
     for _ in 0..2 {
@@ -237,7 +248,7 @@ pub fn export_columns(
             widen,
             window,
         };
-        let filled = fill_windows(store, &fill, empty_rx, full_tx);
+        let filled = fill_windows(store, &fill, &mut source, empty_rx, full_tx);
         (filled, writing.join())
     });
     progress.end();
@@ -247,6 +258,8 @@ pub fn export_columns(
         Err(panic) => std::panic::resume_unwind(panic),
     };
     filled?;
+    // The input read again ends where the store does, or nothing is written.
+    source.finish()?;
     Ok(writer.finish()?)
 }
 
@@ -290,6 +303,7 @@ struct Fill<'a> {
 fn fill_windows(
     store: &PointStore,
     fill: &Fill,
+    source: &mut InputRows,
     empty: Receiver<Window>,
     full: Sender<Window>,
 ) -> Result<(), StoreError> {
@@ -303,7 +317,7 @@ fn fill_windows(
         let len = ((w0 + window).min(n) - w0) as usize;
         let chunk = &mut win.chunk;
         chunk.first_index = w0;
-        store.read_exact(w0, len as u64, &mut chunk.xyz)?;
+        source.fill(store, w0, len, chunk, fill)?;
         match (&cols.normals, &mut chunk.normals) {
             (Some(_), Some(ns)) => {
                 ns.clear();
@@ -336,13 +350,8 @@ fn fill_windows(
             (Some(b), true) => b.fill(slots)?,
             (None, true) => fill_window(store, cols, slots)?,
         }
-        // Input-order columns are in input order already: read, not placed.
-        store.read_attributes(w0, len as u64, fill.attributes, &mut chunk.attrs)?;
         if fill.widen {
             chunk.attrs.widen_8bit_colour();
-        }
-        if fill.records {
-            store.read_las_records(w0, len as u64, &mut chunk.attrs.las)?;
         }
         if full.send(win).is_err() {
             return Err(writer_gone());
@@ -350,6 +359,63 @@ fn fill_windows(
         w0 += len as u64;
     }
     Ok(())
+}
+
+/// Where a window's coordinates, attributes and LAS records come from:
+/// in input order already, so read, not placed.
+enum InputRows {
+    /// The store's input-order columns.
+    Store,
+    /// The input itself, read again (a store that keeps nothing of it).
+    Reread(Box<Reread>),
+}
+
+impl InputRows {
+    fn open(
+        store: &PointStore,
+        input: Option<(&Path, &crate::io::ReadOptions)>,
+    ) -> Result<Self, StoreError> {
+        match (store.kept(), input) {
+            (Kept::Nothing, Some((path, read))) => Ok(InputRows::Reread(Box::new(Reread::open(
+                store, path, read,
+            )?))),
+            // A store that keeps nothing, not given its input, says so.
+            _ => Ok(InputRows::Store),
+        }
+    }
+
+    /// Fills `chunk` with the points of input ranks `[w0, w0 + len)`.
+    fn fill(
+        &mut self,
+        store: &PointStore,
+        w0: u64,
+        len: usize,
+        chunk: &mut PointChunk,
+        fill: &Fill,
+    ) -> Result<(), StoreError> {
+        match self {
+            InputRows::Store => {
+                store.read_exact(w0, len as u64, &mut chunk.xyz)?;
+                store.read_attributes(w0, len as u64, fill.attributes, &mut chunk.attrs)?;
+                if fill.records {
+                    store.read_las_records(w0, len as u64, &mut chunk.attrs.las)?;
+                }
+                Ok(())
+            }
+            InputRows::Reread(r) => {
+                chunk.xyz.clear();
+                chunk.attrs.reset(fill.attributes);
+                r.next(len, chunk, fill.records)
+            }
+        }
+    }
+
+    fn finish(self) -> Result<(), StoreError> {
+        match self {
+            InputRows::Store => Ok(()),
+            InputRows::Reread(r) => r.finish(),
+        }
+    }
 }
 
 /// Writes the windows arriving on `full` in order, handing each buffer

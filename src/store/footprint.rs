@@ -4,11 +4,12 @@
 //!
 //! The columns: `xyz.f32` (12 B) and `index.u64` (8 B) in tile order, the
 //! exact coordinates in input order (`xyz.input`: 24 B as f64, 12 B on a LAS
-//! grid), the input's attributes (intensity, colour, ...), a LAS input's
-//! whole records (`las.input`), and the tile bounds (`blocks.f32`, 24 B per
-//! 512 points).
+//! grid) unless the store keeps nothing of its input, the input's
+//! attributes (intensity, colour, ...) and a LAS input's whole records
+//! (`las.input`) when it keeps all, and the tile bounds (`blocks.f32`, 24 B
+//! per 512 points).
 
-use super::{Coordinates, StoreError, BLOCK};
+use super::{Coordinates, Kept, StoreError, BLOCK};
 use crate::io::las_file::LasSource;
 use crate::io::{Format, SourceInfo};
 
@@ -16,18 +17,22 @@ use crate::io::{Format, SourceInfo};
 const TILE_COLUMNS: u64 = 12 + 8;
 
 /// Disk bytes per point of the store an input of this description builds,
-/// keeping its attributes and LAS records when `records` says so
-/// ([`super::BuildOptions::records`]).
-pub fn store_bytes_per_point(info: &SourceInfo, records: bool) -> Result<u64, StoreError> {
-    let exact = Coordinates::for_input(info.las_transform).item_bytes() as u64;
-    let attributes = match records {
+/// keeping what `kept` says of it ([`super::BuildOptions::keep`]). A store
+/// that keeps nothing holds the exact coordinates while it is built, fewer
+/// bytes than any stage's scratch after it, so its figure is the built
+/// store's.
+pub fn store_bytes_per_point(info: &SourceInfo, kept: Kept) -> Result<u64, StoreError> {
+    let exact = match kept {
+        Kept::Nothing => 0,
+        _ => Coordinates::for_input(info.las_transform).item_bytes() as u64,
+    };
+    let whole = kept == Kept::All;
+    let attributes = match whole {
         true => info.attributes.bytes_per_point() as u64,
         false => 0,
     };
     let records = match info.format {
-        Format::Las | Format::Laz if records => {
-            u64::from(LasSource::read(&info.path)?.record_len())
-        }
+        Format::Las | Format::Laz if whole => u64::from(LasSource::read(&info.path)?.record_len()),
         _ => 0,
     };
     Ok(TILE_COLUMNS + exact + attributes + records + 24u64.div_ceil(BLOCK))
@@ -66,13 +71,13 @@ mod tests {
             readers.push(open_reader(&fixtures.join(name), ReadOptions::default()).unwrap());
         }
         for (i, mut reader) in readers.into_iter().enumerate() {
-            // Every other input built without its records.
-            let records = i % 2 == 0;
-            let estimate = store_bytes_per_point(reader.info(), records).unwrap();
+            // Each input built keeping one of the three.
+            let keep = [Kept::All, Kept::Coordinates, Kept::Nothing][i % 3];
+            let estimate = store_bytes_per_point(reader.info(), keep).unwrap();
             let name = reader.info().path.display().to_string();
             let dir = tmp.path().join(format!("{i}.store"));
             let opts = BuildOptions {
-                records,
+                keep,
                 ..BuildOptions::default()
             };
             let store = build_store(reader.as_mut(), &dir, &opts, &NoProgress).unwrap();
@@ -80,7 +85,7 @@ mod tests {
             let excess = per_point - estimate as f64;
             assert!(
                 (-1.0..=1.0 + 8192.0 / store.len() as f64).contains(&excess),
-                "{name} (records {records}): {per_point:.1} B a point built, {estimate} estimated"
+                "{name} ({keep:?}): {per_point:.1} B a point built, {estimate} estimated"
             );
         }
     }

@@ -184,6 +184,7 @@ impl PointStore {
             return Ok(());
         };
         out.record_len = usize::from(kept.record_len);
+        self.keeps_input(true)?;
         let col = Column::open(&self.dir.join(LAS_RECORDS_FILE), out.record_len, false)?;
         col.with_bytes(first, count, |b| out.bytes.extend_from_slice(b))
     }

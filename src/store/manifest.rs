@@ -53,6 +53,15 @@ pub struct Manifest {
     /// as the input came (`super::las_kept`).
     #[serde(default)]
     pub las: Option<super::las_kept::LasKept>,
+    /// What the store keeps of its input in input order (absent in older
+    /// stores: all of it).
+    #[serde(default)]
+    pub kept: Kept,
+    /// With [`Kept::Nothing`]: the checksums `xyz.input` had before the
+    /// build removed it (per `integrity::INPUT_SEGMENT` points), against
+    /// which an export checks the input it reads again.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub input_sums: Vec<u32>,
     /// The input file the store was built from.
     pub source: String,
     /// Whether the input carried normals (kept in the normals column).
@@ -79,6 +88,27 @@ pub struct Manifest {
     /// CRC-32 of this manifest's JSON without this field (set when saved).
     #[serde(default)]
     pub crc32: Option<u32>,
+}
+
+/// What a store keeps of its input, in input order, once it is built: what
+/// an export of every point writes beside the computed columns (the exact
+/// coordinates, the attributes, a LAS input's records), or what of it a
+/// mesh may need.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kept {
+    /// The exact coordinates, the attributes and a LAS input's records: a
+    /// store that serves exports without its input (`scanmesh tile`).
+    #[default]
+    All,
+    /// The exact coordinates only: a run that writes no row per point (a
+    /// mesh's vertices may be input points); the attributes are not listed.
+    Coordinates,
+    /// Nothing once built (the exact coordinates serve the build's passes
+    /// and are removed, their checksums kept): an export reads the input
+    /// again, each point checked against them (`super::reread`). The
+    /// attributes and a LAS input's frame are listed as for [`Kept::All`].
+    Nothing,
 }
 
 /// A run of points (by input index, as `index.u64` numbers them) that one

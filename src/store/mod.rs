@@ -29,6 +29,7 @@ mod las_kept;
 pub(crate) mod lock;
 pub mod manifest;
 mod reorder;
+mod reread;
 pub(crate) mod sampling;
 mod slots;
 mod sort;
@@ -52,7 +53,7 @@ pub use export::{
 };
 pub use footprint::store_bytes_per_point;
 pub use las_kept::LasKept;
-pub use manifest::{GridSpec, Manifest, Station, TileEntry};
+pub use manifest::{GridSpec, Kept, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
 pub use stage::StageId;
 pub use tile_plan::{plan_tiles, CellCount, PlannedTile, TilePlan};
@@ -142,6 +143,25 @@ pub enum StoreError {
     SelectionOfAStore {
         /// The store.
         path: PathBuf,
+    },
+    /// The store keeps nothing of its input in input order
+    /// ([`Kept::Nothing`]) and the export was not given the input to read
+    /// again.
+    #[error("{path}: the store keeps nothing of its input ({source_file}); an export of its points reads the input again and was not given it")]
+    InputNotKept {
+        /// The store.
+        path: PathBuf,
+        /// The input it was built from.
+        source_file: String,
+    },
+    /// The input read again for an export is not what the store was
+    /// built from (changed, replaced or cut since): the points differ.
+    #[error("{path}: changed since the run read it: {what} differ from what was read at the start; nothing was written (run again on the file as it is now)")]
+    InputChanged {
+        /// The input.
+        path: PathBuf,
+        /// What differs (a range of points, or the count).
+        what: String,
     },
     /// Another process holds the store's lock.
     #[error("{path}: the store is in use by another scanmesh process (try again when it ends)")]
@@ -257,7 +277,6 @@ impl PointStore {
                 ),
             });
         }
-        let exact = Column::open(&dir.join(exact::EXACT_FILE), 1, false)?;
         let store = PointStore {
             xyz: Column::open(&dir.join(XYZ_FILE), 12, false)?,
             index: Column::open(&dir.join(INDEX_FILE), 8, false)?,
@@ -271,16 +290,7 @@ impl PointStore {
         store.validate()?;
         store.check_attribute_columns()?;
         store.check_las_frame()?;
-        let exact_bytes = store.manifest.coordinates.item_bytes() as u64;
-        if exact.items()? != store.manifest.count * exact_bytes {
-            return Err(store.corrupt(format!(
-                "{} holds {} bytes, {} points need {}",
-                exact.path().display(),
-                exact.items()?,
-                store.manifest.count,
-                store.manifest.count * exact_bytes
-            )));
-        }
+        store.check_exact_column()?;
         // Later passes size their state by the count: it must be the data's.
         for column in [&store.xyz, &store.index] {
             if column.items()? != store.manifest.count {
@@ -293,6 +303,55 @@ impl PointStore {
             }
         }
         Ok(store)
+    }
+
+    /// Checks that the exact coordinates hold every point, or (a store that
+    /// keeps nothing of its input) that their checksums cover every point.
+    fn check_exact_column(&self) -> Result<(), StoreError> {
+        let count = self.manifest.count;
+        if self.manifest.kept == manifest::Kept::Nothing {
+            let segments = count.div_ceil(integrity::INPUT_SEGMENT);
+            if self.manifest.input_sums.len() as u64 != segments {
+                return Err(self.corrupt(format!(
+                    "{} input checksums for {count} points ({segments} segments)",
+                    self.manifest.input_sums.len()
+                )));
+            }
+            return Ok(());
+        }
+        let exact = Column::open(&self.dir.join(exact::EXACT_FILE), 1, false)?;
+        let exact_bytes = self.manifest.coordinates.item_bytes() as u64;
+        if exact.items()? != count * exact_bytes {
+            return Err(self.corrupt(format!(
+                "{} holds {} bytes, {count} points need {}",
+                exact.path().display(),
+                exact.items()?,
+                count * exact_bytes
+            )));
+        }
+        Ok(())
+    }
+
+    /// What the store keeps of its input ([`manifest::Kept`]).
+    pub fn kept(&self) -> manifest::Kept {
+        self.manifest.kept
+    }
+
+    /// Fails unless the store keeps its input's exact coordinates (and,
+    /// when `whole`, its attributes and records) in input order.
+    pub(crate) fn keeps_input(&self, whole: bool) -> Result<(), StoreError> {
+        let keeps = match self.manifest.kept {
+            manifest::Kept::All => true,
+            manifest::Kept::Coordinates => !whole,
+            manifest::Kept::Nothing => false,
+        };
+        match keeps {
+            true => Ok(()),
+            false => Err(StoreError::InputNotKept {
+                path: self.dir.clone(),
+                source_file: self.manifest.source.clone(),
+            }),
+        }
     }
 
     /// Checks the tile table against the counts: contiguous, complete.
