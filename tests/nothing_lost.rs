@@ -299,7 +299,7 @@ fn a_flipped_byte_in_any_store_column_is_refused() {
         .collect();
     for want in [
         "xyz.f32",
-        "index.u64",
+        "index.u32",
         "blocks.f32",
         "xyz.input",
         "normal.f32",

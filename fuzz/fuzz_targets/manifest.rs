@@ -11,10 +11,10 @@ use scanmesh::store::{integrity, PointStore};
 
 fuzz_target!(|data: &[u8]| {
     let dir = tempfile::tempdir().expect("tempdir");
-    // Columns of 60 points (xyz f32 x3, index u64, one block of bounds), as
+    // Columns of 60 points (xyz f32 x3, index u32, one block of bounds), as
     // in the seed manifest.
     std::fs::write(dir.path().join("xyz.f32"), vec![0u8; 720]).expect("xyz");
-    std::fs::write(dir.path().join("index.u64"), vec![0u8; 480]).expect("index");
+    std::fs::write(dir.path().join("index.u32"), vec![0u8; 240]).expect("index");
     std::fs::write(dir.path().join("blocks.f32"), vec![0u8; 24]).expect("blocks");
     std::fs::write(dir.path().join("xyz.input"), vec![0u8; 1440]).expect("exact");
     std::fs::write(dir.path().join("manifest.json"), data).expect("manifest");

@@ -17,7 +17,7 @@ use scanmesh::store::{export_points, integrity, PointStore};
 /// bytes fill them.
 const COLUMNS: [&str; 10] = [
     "xyz.f32",
-    "index.u64",
+    "index.u32",
     "blocks.f32",
     "xyz.input",
     "normal.f32",

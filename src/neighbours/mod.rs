@@ -17,7 +17,7 @@
 //!
 //! Memory is the tiles in flight plus one window of lists (sized by the
 //! caller), never a structure per point of the whole cloud. Ids are 0-based
-//! positions in the input among the points kept (the store's `index.u64`).
+//! positions in the input among the points kept (the store's `index.u32`).
 //!
 //! Measured (release, 2 shared cores under load ~7, 1M points sampled from
 //! the dragon, k = 15): topological 24 s, peak 284 MiB at `--mem 1GiB` and

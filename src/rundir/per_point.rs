@@ -123,6 +123,8 @@ impl PointRun<'_> {
                 session,
             },
         )?;
+        // The export reads no position: a scratch store frees them.
+        store.release_positions().map_err(RunDirError::from)?;
         let rows = Rows {
             output,
             window: opened.plan.window_points,

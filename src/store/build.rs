@@ -124,7 +124,7 @@ pub fn build_store(
 fn seal(dir: &Path, manifest: &mut Manifest) -> Result<(), StoreError> {
     let mut columns = vec![
         (XYZ_FILE.to_string(), 12),
-        (INDEX_FILE.to_string(), 8),
+        (INDEX_FILE.to_string(), 4),
         (BLOCKS_FILE.to_string(), 24),
         (EXACT_FILE.to_string(), manifest.coordinates.item_bytes()),
     ];
@@ -339,8 +339,8 @@ struct TileBuffer {
 /// Fewest points a tile buffers before a positioned write: fewer would make
 /// the writes too short to be efficient.
 const MIN_BUFFERED: usize = 256;
-/// Bytes a buffered point takes (12 of coordinates, 8 of index).
-const BUFFERED_BYTES: usize = 20;
+/// Bytes a buffered point takes (12 of coordinates, 4 of index).
+const BUFFERED_BYTES: usize = 16;
 
 #[allow(clippy::too_many_arguments)]
 fn scatter(
@@ -355,7 +355,7 @@ fn scatter(
 ) -> Result<(), StoreError> {
     let count = points.count;
     let xyz = Column::create(&dir.join(XYZ_FILE), 12, count)?;
-    let index = Column::create(&dir.join(INDEX_FILE), 8, count)?;
+    let index = Column::create(&dir.join(INDEX_FILE), 4, count)?;
     let nblocks: u64 = tiles.iter().map(|t| t.count.div_ceil(BLOCK)).sum();
     Column::create(&dir.join(BLOCKS_FILE), 24, nblocks)?;
     // The buffers share `scatter_buffer` bytes whatever the tile count:
@@ -385,14 +385,16 @@ fn scatter(
                 };
                 if b.index.capacity() == 0 {
                     b.xyz.reserve_exact(per_tile * 12);
-                    b.index.reserve_exact(per_tile * 8);
+                    b.index.reserve_exact(per_tile * 4);
                 }
                 let rel = *p - origin;
                 for v in [rel.x as f32, rel.y as f32, rel.z as f32] {
                     b.xyz.extend_from_slice(&v.to_le_bytes());
                 }
-                b.index.extend_from_slice(&(first + i as u64).to_le_bytes());
-                if b.index.len() >= per_tile * 8 {
+                // Below MAX_POINTS (u32), checked as the input was read.
+                let id = (first + i as u64) as u32;
+                b.index.extend_from_slice(&id.to_le_bytes());
+                if b.index.len() >= per_tile * 4 {
                     flush(b, &xyz, &index)?;
                 }
             }
@@ -408,7 +410,7 @@ fn scatter(
 }
 
 fn flush(b: &mut TileBuffer, xyz: &Column, index: &Column) -> Result<(), StoreError> {
-    let n = (b.index.len() / 8) as u64;
+    let n = (b.index.len() / 4) as u64;
     if n == 0 {
         return Ok(());
     }

@@ -102,9 +102,10 @@ impl Column {
                 ),
             });
         }
-        // SAFETY: the store's column files are private to scanmesh and are not
-        // truncated while a store is open; the range was checked against the
-        // file length above. The map lives only inside this call.
+        // SAFETY: the store's column files are private to scanmesh and are
+        // truncated only through `&mut PointStore` (`release_positions`), so
+        // never while a map of them is alive; the range was checked against
+        // the file length above. The map lives only inside this call.
         let map = unsafe {
             MmapOptions::new()
                 .offset(offset)
@@ -156,6 +157,23 @@ impl Column {
         })
     }
 
+    /// Reads `count` u32 items from item `first` into `out` as u64
+    /// (replacing its contents).
+    pub fn read_u32_wide(
+        &self,
+        first: u64,
+        count: u64,
+        out: &mut Vec<u64>,
+    ) -> Result<(), StoreError> {
+        out.clear();
+        self.with_bytes(first, count, |b| {
+            out.extend(
+                b.chunks_exact(4)
+                    .map(|c| u64::from(u32::from_le_bytes([c[0], c[1], c[2], c[3]]))),
+            )
+        })
+    }
+
     /// Reads `count` u8 items from item `first` into `out` (replacing its contents).
     pub fn read_u8(&self, first: u64, count: u64, out: &mut Vec<u8>) -> Result<(), StoreError> {
         out.clear();
@@ -179,6 +197,20 @@ impl Column {
         values
             .iter()
             .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
+        self.write_bytes(first, &bytes)
+    }
+
+    /// Writes `values` (each at most `u32::MAX`) as one u32 per item from
+    /// item `first` on.
+    pub fn write_u32_narrow(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
+        let mut bytes = Vec::with_capacity(values.len() * 4);
+        for &v in values {
+            let v = u32::try_from(v).map_err(|_| StoreError::Corrupt {
+                path: self.path().to_path_buf(),
+                reason: format!("{v} does not fit a u32 item"),
+            })?;
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
         self.write_bytes(first, &bytes)
     }
 

@@ -2,7 +2,7 @@
 //! before it is built: the first term of a run's disk plan (the stages'
 //! own scratch comes on top, [`crate::memory::plan::KernelCost`]).
 //!
-//! The columns: `xyz.f32` (12 B) and `index.u64` (8 B) in tile order, the
+//! The columns: `xyz.f32` (12 B) and `index.u32` (4 B) in tile order, the
 //! exact coordinates in input order (`xyz.input`: 24 B as f64, 12 B on a LAS
 //! grid) unless the store keeps nothing of its input, the input's
 //! attributes (intensity, colour, ...) and a LAS input's whole records
@@ -14,7 +14,7 @@ use crate::io::las_file::LasSource;
 use crate::io::{Format, SourceInfo};
 
 /// Bytes per point of the tile-ordered columns every store has.
-const TILE_COLUMNS: u64 = 12 + 8;
+const TILE_COLUMNS: u64 = 12 + 4;
 
 /// Disk bytes per point of the store an input of this description builds,
 /// keeping what `kept` says of it ([`super::BuildOptions::keep`]). A store

@@ -4,8 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped whenever the on-disk layout changes incompatibly.
-/// (2: the input's exact coordinates, `xyz.input`, and checksums.)
-pub(crate) const STORE_VERSION: u32 = 2;
+/// (2: the input's exact coordinates, `xyz.input`, and checksums; 3: the
+/// input order as u32, `index.u32`.)
+pub(crate) const STORE_VERSION: u32 = 3;
 
 /// File name of the manifest in a store directory.
 pub const MANIFEST_FILE: &str = "manifest.json";
@@ -111,7 +112,7 @@ pub enum Kept {
     Nothing,
 }
 
-/// A run of points (by input index, as `index.u64` numbers them) that one
+/// A run of points (by input index, as `index.u32` numbers them) that one
 /// scanner position took.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Station {

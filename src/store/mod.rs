@@ -1,7 +1,7 @@
 //! The point store: a directory holding a JSON manifest beside flat
 //! little-endian columns, tile-sorted (see `ARCHITECTURE.md`).
 //!
-//! Columns: `xyz.f32` (f32 x,y,z relative to the f64 origin), `index.u64`
+//! Columns: `xyz.f32` (f32 x,y,z relative to the f64 origin), `index.u32`
 //! (each point's position in input order), `blocks.f32` (bounds of every
 //! `BLOCK` consecutive points of a tile, to find margin points without
 //! reading whole neighbour tiles), and attribute columns later passes add
@@ -9,7 +9,8 @@
 //! The input's own attributes (intensity, colour, ...) and its exact
 //! coordinates are kept in input order beside them (`intensity.input`,
 //! ..., `xyz.input`; see `attributes` and `exact`), and a LAS input's
-//! records and frame (`las.input`, `las.head`, `las.tail`; `las_kept`). Every column carries
+//! records and frame (`las.input`, `las.head`, `las.tail`; `las_kept`),
+//! as much of it as the store keeps (`manifest::Kept`; `reread`). Every column carries
 //! checksums, checked on open (`integrity`).
 
 mod attributes;
@@ -66,7 +67,7 @@ use std::path::{Path, PathBuf};
 pub(crate) const BLOCK: u64 = 512;
 
 pub(crate) const XYZ_FILE: &str = "xyz.f32";
-pub(crate) const INDEX_FILE: &str = "index.u64";
+pub(crate) const INDEX_FILE: &str = "index.u32";
 pub(crate) const BLOCKS_FILE: &str = "blocks.f32";
 
 /// Errors of the point store; each names the store (or input) path concerned.
@@ -279,7 +280,7 @@ impl PointStore {
         }
         let store = PointStore {
             xyz: Column::open(&dir.join(XYZ_FILE), 12, false)?,
-            index: Column::open(&dir.join(INDEX_FILE), 8, false)?,
+            index: Column::open(&dir.join(INDEX_FILE), 4, false)?,
             blocks: Column::open(&dir.join(BLOCKS_FILE), 24, false)?,
             dir: dir.to_path_buf(),
             manifest,
@@ -391,6 +392,31 @@ impl PointStore {
         self.scratch
     }
 
+    /// Frees the disk of the tile-ordered positions (`xyz.f32`,
+    /// `blocks.f32`) once a scratch store's stages are done: an export
+    /// reads the input order, the computed columns and the input, never
+    /// them, and they are 12 of the 46 bytes a point a per-point run's
+    /// scratch holds while its output grows. Only a scratch store, which
+    /// nothing opens again, gives them up; a later read of them fails.
+    pub fn release_positions(&mut self) -> Result<(), StoreError> {
+        if !self.scratch {
+            return Ok(());
+        }
+        for name in [XYZ_FILE, BLOCKS_FILE] {
+            let path = self.dir.join(name);
+            // A handle of its own: the store's stays open, and truncating
+            // frees the blocks now rather than when it closes. `&mut self`:
+            // no map of the column is alive.
+            std::fs::File::options()
+                .write(true)
+                .open(&path)
+                .and_then(|f| f.set_len(0))
+                .map_err(|e| StoreError::os(&path, e))?;
+            self.manifest.checksums.remove(name);
+        }
+        Ok(())
+    }
+
     /// Keeps tile results in `checkpoints` (a resumable run).
     pub fn keep_tiles(&mut self, checkpoints: Checkpoints) {
         self.checkpoints = Some(checkpoints);
@@ -483,7 +509,7 @@ impl PointStore {
         count: u64,
         out: &mut Vec<u64>,
     ) -> Result<(), StoreError> {
-        self.index.read_u64(first, count, out)
+        self.index.read_u32_wide(first, count, out)
     }
 
     /// Bounds of blocks `[first, first+count)` (relative to the origin).

@@ -14,7 +14,7 @@ pub fn sort_tiles(
     progress: &dyn Progress,
 ) -> Result<u64, StoreError> {
     let xyz = Column::open(&dir.join(XYZ_FILE), 12, true)?;
-    let index = Column::open(&dir.join(INDEX_FILE), 8, true)?;
+    let index = Column::open(&dir.join(INDEX_FILE), 4, true)?;
     let blocks = Column::open(&dir.join(BLOCKS_FILE), 24, true)?;
     progress.begin("sort tiles", tiles.len() as u64);
     let dups: Result<Vec<u64>, StoreError> = tiles
@@ -41,7 +41,7 @@ fn sort_tile(
     let mut raw = Vec::new();
     let mut ids = Vec::new();
     xyz.read_f32(t.start, t.count, &mut raw)?;
-    index.read_u64(t.start, t.count, &mut ids)?;
+    index.read_u32_wide(t.start, t.count, &mut ids)?;
     let (lo, hi) = bounds(&raw);
     t.points_min = lo;
     t.points_max = hi;
@@ -55,7 +55,7 @@ fn sort_tile(
         .count() as u64;
     let sorted_ids: Vec<u64> = order.iter().map(|&i| ids[i]).collect();
     xyz.write_f32(t.start, &sorted)?;
-    index.write_u64(t.start, &sorted_ids)?;
+    index.write_u32_narrow(t.start, &sorted_ids)?;
     let block_bounds: Vec<f32> = sorted
         .chunks(3 * BLOCK as usize)
         .flat_map(|b| {
