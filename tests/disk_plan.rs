@@ -95,12 +95,9 @@ fn runs_stay_within_their_disk_plan() {
         let info = reader.info();
         let points = info.declared_count.expect("a declared count");
         for (command, flag, cost) in &runs {
-            // A run that writes a row per point reads its input again; one
-            // that writes none keeps the exact coordinates.
-            let kept = match *command == "normals" {
-                true => scanmesh::store::Kept::Nothing,
-                false => scanmesh::store::Kept::Coordinates,
-            };
+            // Neither run keeps anything of its input once its store is
+            // built: normals reads it again, the implicit mesh needs none.
+            let kept = scanmesh::store::Kept::Nothing;
             let store = scanmesh::store::store_bytes_per_point(info, kept).expect("store bytes");
             let run_dir = tmp.path().join("run");
             let out = tmp.path().join("out.ply");

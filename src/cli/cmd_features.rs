@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::features::extract::extract_lines;
 use scanmesh::io::place;
+use scanmesh::store::Kept;
 use std::path::PathBuf;
 
 super::command::command_args!(FeaturesArgs => run, run_dir, plans |_c| scanmesh::features::params::FeatureParams::default().cost());
@@ -40,7 +41,9 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     place::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
     let progress = s.progress();
-    let mut run = s.job().open(&a.input, &a.output, params.cost())?;
+    let mut run = s
+        .job()
+        .open((&a.input, &a.output), params.cost(), Kept::Nothing)?;
     let store = &mut run.ws.store;
     let (graph, report) = extract_lines(store, &params, run.opts, progress)?;
     graph

@@ -53,10 +53,8 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let (mem, threads) = super::mem_and_threads(&a.mem, a.threads)?;
         let progress = super::shown(a.quiet);
         let read = a.select.read(a.skip_invalid);
-        // What PointRun's store keeps: nothing for a row per point, else the coordinates.
-        let rows = ["normals", "curvature", "outliers"].contains(&a.command.as_str());
-        let kept = [Kept::Coordinates, Kept::Nothing][usize::from(rows)];
-        let (points, store) = points_to_plan(&a.input, read, kept, progress.as_ref())?;
+        // Every plannable run's store keeps nothing of its input once built.
+        let (points, store) = points_to_plan(&a.input, read, Kept::Nothing, progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
         let mut planned = super::plannable().into_iter();
         let cost = planned.find_map(|(name, cost)| (name == a.command).then(|| cost(a.closed)));

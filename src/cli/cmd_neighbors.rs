@@ -6,6 +6,7 @@ use clap::Args;
 use scanmesh::io::place;
 use scanmesh::neighbours::{compute_neighbours, NeighbourParams, OutputFormat, OutputOptions};
 use scanmesh::spatial::HoodKind;
+use scanmesh::store::Kept;
 use std::path::PathBuf;
 
 super::command::command_args!(NeighborsArgs => run, run_dir |_a| Ok(vec![scanmesh::rundir::StageId::NEIGHBOURS]), plans |_c| NeighbourParams::default().cost());
@@ -60,7 +61,9 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
         }
     }
     let progress = s.progress();
-    let mut run = s.job().open(&a.input, &a.output, params.cost())?;
+    let mut run = s
+        .job()
+        .open((&a.input, &a.output), params.cost(), Kept::Nothing)?;
     let out = OutputOptions {
         format: a.format,
         window_points: run.plan.window_points,

@@ -10,7 +10,7 @@ use scanmesh::io::place;
 use scanmesh::recon::delaunay::reconstruct::{cost as delaunay_cost, reconstruct_delaunay};
 use scanmesh::recon::implicit::reconstruct::{reconstruct_implicit, ImplicitParams};
 use scanmesh::recon::projection::reconstruct_projection;
-use scanmesh::store::{spacing::ensure_spacing, StageId};
+use scanmesh::store::{spacing::ensure_spacing, Kept, StageId};
 use std::path::PathBuf;
 
 super::command::command_args!(ReconstructArgs => run, run_dir |a| a.tile_stages(), plans |closed| ImplicitParams { closed, ..ImplicitParams::default() }.cost());
@@ -69,7 +69,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     match a.method {
         Method::Delaunay => {
             let params = a.recon.delaunay()?;
-            let mut run = s.job().open(input, output, delaunay_cost())?;
+            let mut run = s
+                .job()
+                .open((input, output), delaunay_cost(), Kept::Coordinates)?;
             let store = &mut run.ws.store;
             let r = reconstruct_delaunay(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
@@ -78,7 +80,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Projection => {
             let params = a.recon.projection(&a.hood)?;
-            let mut run = s.job().open(input, output, params.cost())?;
+            let mut run = s
+                .job()
+                .open((input, output), params.cost(), Kept::Coordinates)?;
             let store = &mut run.ws.store;
             let r = reconstruct_projection(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
@@ -86,7 +90,9 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Implicit => {
             let params = a.recon.implicit(&a.hood)?;
-            let mut run = s.job().open(input, output, params.cost())?;
+            let mut run = s
+                .job()
+                .open((input, output), params.cost(), Kept::Nothing)?;
             let store = &mut run.ws.store;
             if params.cell.is_some() {
                 // The run needs the spacing anyway; kept in the store's manifest.

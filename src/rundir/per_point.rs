@@ -59,18 +59,19 @@ impl PointRun<'_> {
     /// The store for a run that writes no row per point (a mesh, lines,
     /// lists): `input` itself when it is one, else a scratch store beside
     /// `output` built from the input file, or the run directory's, keeping
-    /// of the input only its exact coordinates (a mesh's vertices may be
-    /// input points; the attributes and LAS records only an export of
-    /// every point reads); its memory plan, and run options that keep the
-    /// tiles in flight within it, for a kernel that costs `cost`.
+    /// `kept` of the input (the exact coordinates for a mesh whose
+    /// vertices are input points, else nothing: the attributes and LAS
+    /// records only an export of every point reads); its memory plan, and
+    /// run options that keep the tiles in flight within it, for a kernel
+    /// that costs `cost`.
     pub fn open(
         &self,
-        input: &Path,
-        output: &Path,
+        (input, output): (&Path, &Path),
         cost: KernelCost,
+        kept: Kept,
     ) -> Result<Prepared, RunDirError> {
         let settings = RunSettings {
-            keep: Kept::Coordinates,
+            keep: kept,
             ..self.settings.clone()
         };
         self.open_with(&settings, input, output, cost)

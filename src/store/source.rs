@@ -102,3 +102,52 @@ impl Drop for ScratchGuard {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{Format, WriterSpec};
+    use crate::store::{export_points_keeping, Kept, Rows};
+
+    /// A scratch store gives up its positions once its stages are done:
+    /// their disk is freed, a read of them is an error (not a fault), and
+    /// the export, which never reads them, writes every point; a store
+    /// that outlives the run keeps them.
+    #[test]
+    fn a_scratch_store_frees_its_positions_and_still_exports() {
+        let tmp = tempfile::tempdir().unwrap();
+        let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las/autzen.las");
+        let opts = BuildOptions {
+            keep: Kept::Nothing,
+            ..BuildOptions::default()
+        };
+        let nop = &crate::progress::NoProgress;
+        let read = ReadOptions::default();
+        let mut ws = open_input(&input, &tmp.path().join("s"), &opts, read.clone(), nop).unwrap();
+        let store = &mut ws.store;
+        let (start, count) = (store.tiles()[0].start, store.tiles()[0].count);
+        store.release_positions().unwrap();
+        let xyz = std::fs::metadata(store.dir().join(crate::store::XYZ_FILE)).unwrap();
+        assert_eq!(xyz.len(), 0);
+        assert!(store.read_coords(start, count, &mut Vec::new()).is_err());
+        let out = tmp.path().join("out.xyz");
+        let rows = Rows {
+            output: &out,
+            window: 100,
+            input: Some((&input, &read)),
+            keep_unselected: false,
+            progress: nop,
+        };
+        let spec = WriterSpec::new(Format::Xyz);
+        assert_eq!(
+            export_points_keeping(store, &spec, &rows).unwrap(),
+            store.len()
+        );
+        // Built for keeps: nothing is given up.
+        let dir = tmp.path().join("kept");
+        let mut reader = crate::io::open_reader(&input, read).unwrap();
+        let mut kept = crate::store::build_store(reader.as_mut(), &dir, &opts, nop).unwrap();
+        kept.release_positions().unwrap();
+        assert!(kept.read_coords(start, count, &mut Vec::new()).is_ok());
+    }
+}
