@@ -1,7 +1,9 @@
 //! Writing a store's points (and normals, flags) in input order to any point
 //! format. Coordinates and attributes are the input's own, exactly as read
-//! (`super::exact`), read from their input-order columns a window at a
-//! time; only the computed columns (normals, flags) are in tile order.
+//! (`super::exact`), read a window at a time from their input-order
+//! columns, or from the input itself when the store keeps nothing of it
+//! (`super::reread`, checked against the build's checksums); only the
+//! computed columns (normals, flags) are in tile order.
 //! Tiles are in spatial order, the output is in input order: the export
 //! fills windows of consecutive input indices, each by one pass over the
 //! tiles, so memory is one window plus one tile per thread whatever the
@@ -76,8 +78,7 @@ pub fn export_points(
 }
 
 /// [`export_points`] to `rows`, with the points `rows.keep_unselected`
-/// asks for;
-/// returns the rows written.
+/// asks for; returns the rows written.
 pub fn export_points_keeping(
     store: &PointStore,
     spec: &WriterSpec,
