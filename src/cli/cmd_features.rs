@@ -41,9 +41,8 @@ pub fn run(a: FeaturesArgs) -> Result<()> {
     place::check_distinct(&a.input, &a.output)?;
     let format = scanmesh::io::mesh_format(&a.output, a.ascii)?;
     let progress = s.progress();
-    let mut run = s
-        .job()
-        .open((&a.input, &a.output), params.cost(), Kept::Nothing)?;
+    let places = (a.input.as_path(), a.output.as_path());
+    let mut run = s.job().open(places, params.cost(), Kept::Nothing)?;
     let store = &mut run.ws.store;
     let (graph, report) = extract_lines(store, &params, run.opts, progress)?;
     graph

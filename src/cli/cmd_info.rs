@@ -7,7 +7,6 @@ use clap::Args;
 use scanmesh::memory::{MemoryBudget, PlanTable};
 use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
 use scanmesh::store::is_store;
-use scanmesh::store::Kept;
 use std::path::PathBuf;
 
 super::command::command_args!(InfoArgs => run);
@@ -53,8 +52,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let (mem, threads) = super::mem_and_threads(&a.mem, a.threads)?;
         let progress = super::shown(a.quiet);
         let read = a.select.read(a.skip_invalid);
-        // Every plannable run's store keeps nothing of its input once built.
-        let (points, store) = points_to_plan(&a.input, read, Kept::Nothing, progress.as_ref())?;
+        let (points, store) = points_to_plan(&a.input, read, progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
         let mut planned = super::plannable().into_iter();
         let cost = planned.find_map(|(name, cost)| (name == a.command).then(|| cost(a.closed)));

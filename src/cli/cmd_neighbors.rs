@@ -61,9 +61,8 @@ pub fn run(a: NeighborsArgs) -> Result<()> {
         }
     }
     let progress = s.progress();
-    let mut run = s
-        .job()
-        .open((&a.input, &a.output), params.cost(), Kept::Nothing)?;
+    let places = (a.input.as_path(), a.output.as_path());
+    let mut run = s.job().open(places, params.cost(), Kept::Nothing)?;
     let out = OutputOptions {
         format: a.format,
         window_points: run.plan.window_points,

@@ -66,12 +66,11 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     place::check_distinct(&a.input, &a.output)?;
     let format = mesh_format(&a.output, a.ascii)?;
     let (input, output, progress) = (&a.input, &a.output, s.progress());
+    let places = (input.as_path(), output.as_path());
     match a.method {
         Method::Delaunay => {
             let params = a.recon.delaunay()?;
-            let mut run = s
-                .job()
-                .open((input, output), delaunay_cost(), Kept::Coordinates)?;
+            let mut run = s.job().open(places, delaunay_cost(), Kept::Coordinates)?;
             let store = &mut run.ws.store;
             let r = reconstruct_delaunay(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))
@@ -80,9 +79,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Projection => {
             let params = a.recon.projection(&a.hood)?;
-            let mut run = s
-                .job()
-                .open((input, output), params.cost(), Kept::Coordinates)?;
+            let mut run = s.job().open(places, params.cost(), Kept::Coordinates)?;
             let store = &mut run.ws.store;
             let r = reconstruct_projection(store, &params, output, format, run.opts, progress)
                 .inspect_err(|e| s.log.with(|l| l.broken_promise(e.mesh())))?;
@@ -90,9 +87,7 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         }
         Method::Implicit => {
             let params = a.recon.implicit(&a.hood)?;
-            let mut run = s
-                .job()
-                .open((input, output), params.cost(), Kept::Nothing)?;
+            let mut run = s.job().open(places, params.cost(), Kept::Nothing)?;
             let store = &mut run.ws.store;
             if params.cell.is_some() {
                 // The run needs the spacing anyway; kept in the store's manifest.

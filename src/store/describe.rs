@@ -107,19 +107,20 @@ fn file_json(path: &Path, r: &Inspection) -> Value {
 
 /// The points a run over `input` plans for (from the store, the header,
 /// or a pass over the file when it declares no count) and the bytes a
-/// point of the store it would build, keeping `kept` of it, takes (0 for
-/// a store).
+/// point of the store it would build takes (0 for a store): a store that
+/// keeps nothing of its input once built, as every plannable run's does
+/// (`rundir::PointRun`; only a mesh of input points keeps their
+/// coordinates).
 pub fn points_to_plan(
     input: &Path,
     read: ReadOptions,
-    kept: super::Kept,
     progress: &dyn Progress,
 ) -> Result<(u64, u64), StoreError> {
     if is_store(input) {
         return Ok((PointStore::open_shared(input)?.len(), 0));
     }
     let r = open_reader(input, read.clone())?;
-    let store = super::store_bytes_per_point(r.info(), kept)?;
+    let store = super::store_bytes_per_point(r.info(), super::Kept::Nothing)?;
     match r.info().declared_count {
         Some(n) => Ok((n, store)),
         None => Ok((inspect(input, read, progress)?.count, store)),
