@@ -191,15 +191,6 @@ impl Column {
         self.write_bytes(first, &bytes)
     }
 
-    /// Writes `values` (one u64 per item) from item `first` on.
-    pub fn write_u64(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
-        let mut bytes = Vec::with_capacity(values.len() * 8);
-        values
-            .iter()
-            .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
-        self.write_bytes(first, &bytes)
-    }
-
     /// Writes `values` (each at most `u32::MAX`) as one u32 per item from
     /// item `first` on.
     pub fn write_u32_narrow(&self, first: u64, values: &[u64]) -> Result<(), StoreError> {
