@@ -66,6 +66,10 @@ pub struct NormalsKernel {
     pub(crate) histogram_scale: f64,
     /// The store's stations (relative), for [`Orientation::Stations`].
     pub(crate) stations: super::evidence::StationTable,
+    /// Whether the spanning tree's union-find over every point is beyond
+    /// the budget, so the orientation goes external ([`super::labels`])
+    /// and the forests are packed for it.
+    pub(crate) external_orientation: bool,
 }
 
 /// A fitted (and, toward a viewpoint, oriented) unit normal.

@@ -16,7 +16,9 @@
 //!    nodes, marking the super-edges it takes;
 //! 4. resolve every tile's points: its forest without the heaviest edges
 //!    of its rejected super-edges, each tree taking the label and parity
-//!    of a boundary vertex it holds (`resolve`).
+//!    of a boundary vertex it holds (`resolve`); each tile's forest is given
+//!    back to the file system once its labels are written
+//!    ([`EdgeRuns::release_run`]).
 //!
 //! A label at or above the point count is `count + ` a node component's
 //! dense number (it may span tiles); below, a store index of the one tile
@@ -25,7 +27,7 @@
 use super::components::Components;
 use super::contract::{contract, resolve, Contraction, LocalForest};
 use super::forest::Edge;
-use super::runs::EdgeRuns;
+use super::runs::{EdgeRuns, Layout};
 use super::unionfind::ParityUnionFind;
 use super::NormalsError;
 use crate::pipeline::Progress;
@@ -33,18 +35,24 @@ use crate::store::{Column, PointStore, StoreError, TileEntry};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Scratch column of the labels: `label | parity << 63` per point.
+/// Scratch column of the labels: `label | parity << 63` per point, or
+/// `label | parity << 31` in 4 bytes when every label is below 2^31
+/// (a billion points with room to spare).
 pub const LABELS_FILE: &str = ".orient.labels";
 /// Scratch file of the super-edge runs.
 const SUPERS_FILE: &str = ".orient.supers";
 /// Read buffers of the super-edge merge.
 const MERGE_BUFFER: usize = 16 << 20;
+/// The parity bit of a 4-byte label word.
+const NARROW_PARITY: u64 = 1 << 31;
 /// Tiles contracted at once (in parallel) before their results are written.
 const TILES_AT_ONCE: usize = 8;
 
 /// Per-point component labels and parities of the forest, on disk.
 pub struct ForestLabels {
     column: Column,
+    /// The column holds 4-byte words (see [`LABELS_FILE`]).
+    narrow: bool,
     _cleanup: crate::io::cleanup::Registered,
     points: u64,
     /// Node components: how many, for per-component tables.
@@ -72,9 +80,9 @@ impl ForestLabels {
         let sources: Vec<u32> = extra.iter().map(|e| e.0).collect();
         let boundary = runs.outside_slots(&sources)?;
         let dir = store.dir();
-        let mut supers = EdgeRuns::create(&dir.join(SUPERS_FILE))?;
+        let mut supers = EdgeRuns::create(&dir.join(SUPERS_FILE), Layout::Records)?;
         progress.begin("orient: contract", tiles.len() as u64);
-        let branches = write_supers(tiles, runs, &boundary, &mut supers, progress)?;
+        let branches = write_supers(store, runs, &boundary, &mut supers, progress)?;
         progress.end();
         let nodes = boundary.len() as u64 + branches.last().copied().unwrap_or(0) + 1;
         let root = nodes as u32 - 1;
@@ -98,9 +106,16 @@ impl ForestLabels {
             let (l, p) = comps.get(r);
             (store.len() + u64::from(l), p)
         });
+        // Labels run below the points plus the node components.
+        let narrow = store.len() + comps.count() as u64 <= NARROW_PARITY;
         let labels = ForestLabels {
             _cleanup: crate::io::cleanup::register(&dir.join(LABELS_FILE)),
-            column: Column::create(&dir.join(LABELS_FILE), 8, store.len())?,
+            column: Column::create(
+                &dir.join(LABELS_FILE),
+                if narrow { 4 } else { 8 },
+                store.len(),
+            )?,
+            narrow,
             points: store.len(),
             node_components: comps.count(),
             root,
@@ -114,14 +129,32 @@ impl ForestLabels {
             comps: &comps,
             points: store.len(),
         };
-        labels.resolve_all(tiles, runs, &solved, progress)?;
+        labels.resolve_all(store, runs, &solved, progress)?;
         progress.end();
         Ok(labels)
     }
 
     /// The points' labels and parities of tile `t` (see the module doc).
     pub fn read_tile(&self, t: &TileEntry, out: &mut Vec<u64>) -> Result<(), StoreError> {
-        self.column.read_u64(t.start, t.count, out)
+        if !self.narrow {
+            return self.column.read_u64(t.start, t.count, out);
+        }
+        self.column.read_u32_wide(t.start, t.count, out)?;
+        for w in out.iter_mut() {
+            *w = (*w & (NARROW_PARITY - 1)) | (*w & NARROW_PARITY) << 32;
+        }
+        Ok(())
+    }
+
+    /// The column's bytes of `labels` (`label | parity << 63` each).
+    fn column_bytes(&self, labels: &[u64]) -> Vec<u8> {
+        if !self.narrow {
+            return labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+        }
+        labels
+            .iter()
+            .flat_map(|l| ((l & (NARROW_PARITY - 1)) as u32 | (l >> 63 << 31) as u32).to_le_bytes())
+            .collect()
     }
 
     /// Whether `label` may span tiles (a node component), and its number.
@@ -143,13 +176,14 @@ impl ForestLabels {
 
     fn resolve_all(
         &self,
-        tiles: &[TileEntry],
+        store: &PointStore,
         runs: &EdgeRuns,
         solved: &Solved,
         progress: &dyn Progress,
     ) -> Result<(), NormalsError> {
+        let tiles = store.tiles();
         for_tile_batches(
-            tiles,
+            store,
             runs,
             progress,
             |t, forest, local| {
@@ -159,11 +193,13 @@ impl ForestLabels {
                     let (l, p) = solved.comps.get(rank(solved.boundary, s));
                     (solved.points + u64::from(l), p)
                 });
-                let bytes: Vec<u8> = labels.iter().flat_map(|l| l.to_le_bytes()).collect();
-                Ok(bytes)
+                Ok(self.column_bytes(&labels))
             },
             |t, bytes| {
                 self.column.write_bytes(tiles[t].start, &bytes)?;
+                // Pass 4 is the forests' last read: as the labels grow, the
+                // forests shrink, and the scratch peak is not their sum.
+                runs.release_run(t)?;
                 Ok(())
             },
         )
@@ -192,7 +228,7 @@ impl Solved<'_> {
     /// super-edges, sorted.
     fn rejected(&self, t: usize) -> Result<Vec<(u32, u32)>, NormalsError> {
         let base = self.supers.run_start(t);
-        let run = self.supers.read_run(t)?;
+        let run = self.supers.read_run(t, &[])?;
         let mut ids: Vec<(u32, u32)> = (0..run.len())
             .filter(|&k| !bit(self.accepted, base + k as u64))
             .map(|k| (run[k].a, run[k].b))
@@ -242,18 +278,21 @@ fn boundary_core<'a>(boundary: &'a [u32], t: &TileEntry) -> &'a [u32] {
 /// Runs `work` on the tiles' forests in batches (in parallel within one)
 /// and hands each result to `done` in tile order.
 fn for_tile_batches<R: Send>(
-    tiles: &[TileEntry],
+    store: &PointStore,
     runs: &EdgeRuns,
     progress: &dyn Progress,
     work: impl Fn(usize, &[Edge], &LocalForest) -> Result<R, NormalsError> + Sync,
     mut done: impl FnMut(usize, R) -> Result<(), NormalsError>,
 ) -> Result<(), NormalsError> {
-    let ids: Vec<usize> = (0..tiles.len()).collect();
-    for batch in ids.chunks(TILES_AT_ONCE) {
+    let tiles = store.tiles();
+    let numbers: Vec<usize> = (0..tiles.len()).collect();
+    for batch in numbers.chunks(TILES_AT_ONCE) {
         let results: Vec<R> = batch
             .par_iter()
             .map(|&t| {
-                let forest = runs.read_run(t)?;
+                let mut ids = Vec::new();
+                store.read_indices(tiles[t].start, tiles[t].count, &mut ids)?;
+                let forest = runs.read_run(t, &ids)?;
                 let range = core_range(&tiles[t]);
                 let local = LocalForest::new(&forest, range.start, range.end - range.start);
                 work(t, &forest, &local)
@@ -270,17 +309,18 @@ fn for_tile_batches<R: Send>(
 /// Pass 2: every tile's super-edges, ends numbered densely, one run per
 /// tile. Returns each tile's first branch number and, last, their total.
 fn write_supers(
-    tiles: &[TileEntry],
+    store: &PointStore,
     runs: &EdgeRuns,
     boundary: &[u32],
     supers: &mut EdgeRuns,
     progress: &dyn Progress,
 ) -> Result<Vec<u64>, NormalsError> {
+    let tiles = store.tiles();
     let mut branches = vec![0u64];
     let contract_tile = |t: usize, forest: &[Edge], local: &LocalForest| {
         Ok(contract(forest, local, boundary_core(boundary, &tiles[t])))
     };
-    for_tile_batches(tiles, runs, progress, contract_tile, |_, c| {
+    for_tile_batches(store, runs, progress, contract_tile, |_, c| {
         let first = *branches.last().unwrap_or(&0);
         let dense = dense_nodes(&c, boundary, first);
         let run: Vec<Edge> = c

@@ -20,6 +20,7 @@ pub(crate) mod kernel;
 pub(crate) mod labels;
 pub(crate) mod orient;
 mod output;
+mod packed;
 pub mod pca;
 pub(crate) mod runs;
 pub mod sources;

@@ -1,9 +1,12 @@
 //! Tile forests on disk: each tile's sorted forest edges are appended as one
 //! run to a scratch file, and a k-way merge streams all runs back in global
 //! edge order, so the union of forests (about one edge per point) never has
-//! to fit in memory.
+//! to fit in memory. Runs only ever read back whole, one tile at a time (the
+//! external orientation's), are packed to about half the bytes
+//! ([`Layout::Packed`]).
 
 use super::forest::Edge;
+use super::packed::{pack, unpack, CoreIds};
 use super::unionfind::ParityUnionFind;
 use crate::io::{cleanup, IoError};
 use crate::pipeline::Progress;
@@ -27,6 +30,40 @@ const MERGE_BUFFER: usize = 16 << 20;
 /// An edge's slots and flip parity, as the union-find takes them.
 type Pair = (u32, u32, bool);
 
+/// How a scratch file lays out its runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Fixed records of [`Edge::BYTES`]: the runs merge in global key order.
+    Records,
+    /// Packed ([`super::packed`], about 11 bytes an edge where a record
+    /// takes 24): each run is read back whole, with its tile's core ids
+    /// ([`EdgeRuns::read_run`]); never merged.
+    Packed,
+}
+
+impl Layout {
+    /// The layout of tile forests for an orientation that goes external
+    /// (read per tile: packed) or not (merged: records).
+    pub fn for_orientation(external: bool) -> Self {
+        if external {
+            Layout::Packed
+        } else {
+            Layout::Records
+        }
+    }
+}
+
+/// Where one run lies: its edges' numbers and its bytes in the file, and
+/// the tile core its ids are packed against (empty for a plain run).
+#[derive(Clone, Debug)]
+struct Run {
+    first: u64,
+    len: u64,
+    offset: u64,
+    bytes: u64,
+    core: Range<u32>,
+}
+
 /// Sorted runs of edges in one scratch file, removed on drop. Runs pushed
 /// with [`EdgeRuns::push_tile_run`] also log the slots their edges reach
 /// outside their tile's core (a second scratch file): the boundary the
@@ -34,15 +71,20 @@ type Pair = (u32, u32, bool);
 pub struct EdgeRuns {
     path: PathBuf,
     out: BufWriter<File>,
-    runs: Vec<(u64, u64)>,
+    layout: Layout,
+    runs: Vec<Run>,
+    /// Edges written.
     written: u64,
+    /// Bytes written.
+    offset: u64,
+    packing: Vec<u8>,
     outside: Option<(PathBuf, BufWriter<File>)>,
     /// Both scratch files, for an interrupt handler.
     _cleanup: [cleanup::Registered; 2],
 }
 
 impl EdgeRuns {
-    pub fn create(path: &Path) -> Result<Self, IoError> {
+    pub fn create(path: &Path, layout: Layout) -> Result<Self, IoError> {
         let file = File::options()
             .read(true)
             .write(true)
@@ -53,8 +95,11 @@ impl EdgeRuns {
         Ok(EdgeRuns {
             path: path.to_path_buf(),
             out: BufWriter::with_capacity(1 << 20, file),
+            layout,
             runs: Vec::new(),
             written: 0,
+            offset: 0,
+            packing: Vec::new(),
             outside: None,
             _cleanup: [
                 cleanup::register(path),
@@ -64,9 +109,21 @@ impl EdgeRuns {
     }
 
     /// Appends one tile's run (as [`Self::push_run`]) and logs every slot
-    /// of it outside `core`, the tile's store range.
-    pub fn push_tile_run(&mut self, edges: &[Edge], core: Range<u64>) -> Result<(), IoError> {
-        self.push_run(edges)?;
+    /// of it outside `core`, the tile's store range. `core_ids` are the
+    /// core's input ids (`PointStore::read_indices`), which a packed run
+    /// leaves out where they are the store's (a packed run given none
+    /// keeps every id).
+    pub fn push_tile_run(
+        &mut self,
+        edges: &[Edge],
+        core: Range<u64>,
+        core_ids: &[u64],
+    ) -> Result<(), IoError> {
+        let range = match (u32::try_from(core.start), u32::try_from(core.end)) {
+            (Ok(a), Ok(b)) => a..b,
+            _ => 0..0,
+        };
+        self.push(edges, range, core_ids)?;
         if self.outside.is_none() {
             let path = self.path.with_extension("outside");
             let file = File::create(&path).map_err(|e| IoError::os(&path, e))?;
@@ -126,13 +183,41 @@ impl EdgeRuns {
 
     /// Appends one run; `edges` must be sorted by [`Edge::key`].
     pub fn push_run(&mut self, edges: &[Edge]) -> Result<(), IoError> {
-        for e in edges {
-            self.out
-                .write_all(&e.to_bytes())
-                .map_err(|err| IoError::os(&self.path, err))?;
-        }
-        self.runs.push((self.written, edges.len() as u64));
+        self.push(edges, 0..0, &[])
+    }
+
+    fn push(&mut self, edges: &[Edge], core: Range<u32>, core_ids: &[u64]) -> Result<(), IoError> {
+        let bytes = match self.layout {
+            Layout::Records => {
+                for e in edges {
+                    self.out
+                        .write_all(&e.to_bytes())
+                        .map_err(|err| IoError::os(&self.path, err))?;
+                }
+                (edges.len() * Edge::BYTES) as u64
+            }
+            Layout::Packed => {
+                self.packing.clear();
+                let ids = CoreIds {
+                    range: &core,
+                    ids: core_ids,
+                };
+                pack(edges, ids, &mut self.packing);
+                self.out
+                    .write_all(&self.packing)
+                    .map_err(|err| IoError::os(&self.path, err))?;
+                self.packing.len() as u64
+            }
+        };
+        self.runs.push(Run {
+            first: self.written,
+            len: edges.len() as u64,
+            offset: self.offset,
+            bytes,
+            core,
+        });
         self.written += edges.len() as u64;
+        self.offset += bytes;
         Ok(())
     }
 
@@ -143,7 +228,7 @@ impl EdgeRuns {
     /// Position in the file (in edges) of run `r`'s first edge: runs lie
     /// one after another, so `run_start(r) + i` numbers every edge.
     pub fn run_start(&self, r: usize) -> u64 {
-        self.runs[r].0
+        self.runs[r].first
     }
 
     /// Makes every pushed run readable by [`Self::read_run`].
@@ -151,10 +236,46 @@ impl EdgeRuns {
         self.out.flush().map_err(|e| IoError::os(&self.path, e))
     }
 
-    /// The edges of run `r` (after [`Self::flush`]).
-    pub fn read_run(&self, r: usize) -> Result<Vec<Edge>, IoError> {
-        let (start, len) = self.runs[r];
-        read_edges(self.out.get_ref(), start, len as usize, &self.path)
+    /// The edges of run `r` (after [`Self::flush`]); `core_ids` as given
+    /// to [`Self::push_tile_run`] (a run of records needs none).
+    pub fn read_run(&self, r: usize, core_ids: &[u64]) -> Result<Vec<Edge>, IoError> {
+        let run = &self.runs[r];
+        let file = self.out.get_ref();
+        if self.layout == Layout::Records {
+            return read_edges(file, run.first, run.len as usize, &self.path);
+        }
+        let mut bytes = vec![0u8; run.bytes as usize];
+        file.read_exact_at(&mut bytes, run.offset)
+            .map_err(|e| IoError::os(&self.path, e))?;
+        let ids = CoreIds {
+            range: &run.core,
+            ids: core_ids,
+        };
+        unpack(&bytes, run.len as usize, ids).map_err(|i| IoError::BadRecord {
+            path: self.path.clone(),
+            record: run.first + i as u64,
+            reason: "a packed forest edge does not read back (scratch file changed?)".into(),
+        })
+    }
+
+    /// Gives run `r`'s disk blocks back to the file system: the caller has
+    /// read it for the last time. The file keeps its size (reading the run
+    /// again gives zeros, which a packed run refuses). Where the file system
+    /// cannot punch holes the blocks stay until the file is removed, as
+    /// before; only the scratch peak is higher.
+    pub fn release_run(&self, r: usize) -> Result<(), IoError> {
+        let run = &self.runs[r];
+        #[cfg(target_os = "linux")]
+        {
+            use rustix::fs::{fallocate, FallocateFlags};
+            let flags = FallocateFlags::PUNCH_HOLE | FallocateFlags::KEEP_SIZE;
+            match fallocate(self.out.get_ref(), flags, run.offset, run.bytes) {
+                Ok(()) | Err(rustix::io::Errno::OPNOTSUPP) => {}
+                Err(e) => return Err(IoError::os(&self.path, e.into())),
+            }
+        }
+        let _ = run;
+        Ok(())
     }
 
     /// Kruskal over all runs: joins every edge's slots in `uf` with its flip
@@ -234,14 +355,18 @@ impl EdgeRuns {
         mut f: impl FnMut(u64, Edge),
     ) -> Result<(), IoError> {
         self.out.flush().map_err(|e| IoError::os(&self.path, e))?;
+        if self.layout == Layout::Packed {
+            let why = "packed runs are read one tile at a time, never merged";
+            return Err(IoError::os(&self.path, std::io::Error::other(why)));
+        }
         let file = self.out.get_ref();
         let per_run = (buffer_bytes / Edge::BYTES / self.runs.len().max(1)).max(64);
         let mut cursors: Vec<RunCursor> = self
             .runs
             .iter()
-            .map(|&(start, len)| RunCursor {
-                next: start,
-                end: start + len,
+            .map(|run| RunCursor {
+                next: run.first,
+                end: run.first + run.len,
                 buf: Vec::new(),
                 pos: 0,
             })
@@ -334,7 +459,7 @@ mod tests {
     #[test]
     fn merge_yields_global_order() {
         let dir = tempfile::tempdir().unwrap();
-        let mut runs = EdgeRuns::create(&dir.path().join("e")).unwrap();
+        let mut runs = EdgeRuns::create(&dir.path().join("e"), Layout::Records).unwrap();
         let mut all = Vec::new();
         for r in 0..5u32 {
             let mut edges: Vec<Edge> = (0..100u32)
@@ -354,5 +479,85 @@ mod tests {
         let mut merged = Vec::new();
         runs.merge(1024, |e| merged.push(e)).unwrap();
         assert_eq!(merged, all);
+    }
+
+    /// Three tiles of 100 points whose ids are a permutation; each edge
+    /// from a core point, a tenth of them to the next tile's points.
+    fn tile_forests() -> (Vec<u64>, Vec<Vec<Edge>>) {
+        let ids: Vec<u64> = (0..300u64).map(|s| (s * 181 + 7) % 300).collect();
+        let forests = (0..3u32)
+            .map(|t| {
+                let mut edges: Vec<Edge> = (0..100u32)
+                    .map(|i| {
+                        let x = t * 100 + i;
+                        let y = if i % 10 == 0 {
+                            (x + 100) % 300
+                        } else {
+                            t * 100 + (i * 37) % 100
+                        };
+                        let end = |s: u32| [ids[s as usize] as u32, s];
+                        let cost = f64::from((i * 7919) % 97) / 97.0;
+                        Edge::between(end(x), end(y), cost, if i % 3 == 0 { -1.0 } else { 1.0 })
+                    })
+                    .collect();
+                edges.sort_unstable_by_key(Edge::key);
+                edges
+            })
+            .collect();
+        (ids, forests)
+    }
+
+    #[test]
+    fn packed_tile_runs_read_back_whole_and_refuse_a_merge() {
+        let (ids, forests) = tile_forests();
+        let dir = tempfile::tempdir().unwrap();
+        let mut packed = EdgeRuns::create(&dir.path().join("p"), Layout::Packed).unwrap();
+        let mut records = EdgeRuns::create(&dir.path().join("r"), Layout::Records).unwrap();
+        for (t, f) in forests.iter().enumerate() {
+            let core = t as u64 * 100..(t as u64 + 1) * 100;
+            let core_ids = &ids[core.start as usize..core.end as usize];
+            packed.push_tile_run(f, core.clone(), core_ids).unwrap();
+            records.push_tile_run(f, core, &[]).unwrap();
+        }
+        packed.flush().unwrap();
+        records.flush().unwrap();
+        let size = |p: &str| std::fs::metadata(dir.path().join(p)).unwrap().len();
+        assert!(size("p") * 2 < size("r"), "{} vs {}", size("p"), size("r"));
+        for (t, f) in forests.iter().enumerate() {
+            let core_ids = &ids[t * 100..(t + 1) * 100];
+            assert_eq!(&packed.read_run(t, core_ids).unwrap(), f);
+            assert_eq!(&records.read_run(t, &[]).unwrap(), f);
+            assert_eq!(packed.run_start(t), records.run_start(t));
+        }
+        // Read with the wrong core ids, a run does not come back as it was.
+        let wrong: Vec<u64> = ids[..100].iter().map(|i| i + 1).collect();
+        assert_ne!(packed.read_run(0, &wrong).ok().as_ref(), Some(&forests[0]));
+        assert_eq!(packed.outside_slots(&[]).unwrap().len(), 30);
+        assert!(packed.merge(1024, |_| {}).is_err());
+    }
+
+    #[test]
+    fn a_released_run_gives_its_blocks_back_and_spares_the_others() {
+        use std::os::unix::fs::MetadataExt;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("e");
+        let mut runs = EdgeRuns::create(&path, Layout::Records).unwrap();
+        let run = |r: u32| -> Vec<Edge> {
+            (0..20_000u32)
+                .map(|i| Edge::new(r * 100_000 + i, r * 100_000 + i + 1, f64::from(i) / 2e4))
+                .collect()
+        };
+        for r in 0..3 {
+            runs.push_run(&run(r)).unwrap();
+        }
+        runs.flush().unwrap();
+        let blocks = || std::fs::metadata(&path).unwrap().blocks();
+        let before = blocks();
+        runs.release_run(1).unwrap();
+        // 480 kB given back, in 512-byte blocks (less the partial ones at
+        // the run's two ends).
+        assert!(before - blocks() > 900, "{before} -> {}", blocks());
+        assert_eq!(runs.read_run(0, &[]).unwrap(), run(0));
+        assert_eq!(runs.read_run(2, &[]).unwrap(), run(2));
     }
 }

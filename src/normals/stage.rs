@@ -9,7 +9,7 @@
 //! statistics recorded in the manifest before the columns are sealed.
 
 use super::kernel::{NormalsKernel, NormalsTile};
-use super::runs::EdgeRuns;
+use super::runs::{EdgeRuns, Layout};
 use super::{evidence, orient, sources, Evidence, NormalParams, NormalsError, NormalsReport};
 use super::{Orientation, OrientedBy, Sensor, FLAG_DEGENERATE};
 use crate::memory::KernelCost;
@@ -65,7 +65,7 @@ impl Stage for NormalsStage {
     fn kernel(
         &self,
         store: &mut PointStore,
-        _: RunOptions,
+        opts: RunOptions,
         _: &dyn Progress,
     ) -> Result<NormalsKernel, NormalsError> {
         let params = NormalParams {
@@ -82,6 +82,7 @@ impl Stage for NormalsStage {
             spacing,
             histogram_scale: scale,
             stations: evidence::StationTable::new(&store.manifest().stations, store.origin()),
+            external_orientation: !opts.holds(store.len(), orient::BYTES_PER_POINT),
         })
     }
 
@@ -92,7 +93,11 @@ impl Stage for NormalsStage {
         columns: &'s StageColumns,
     ) -> Result<NormalsSeam<'s>, NormalsError> {
         let params = kernel.params;
-        let runs = EdgeRuns::create(&store.dir().join(".forest.edges"))?;
+        let external = kernel.external_orientation;
+        let runs = EdgeRuns::create(
+            &store.dir().join(".forest.edges"),
+            Layout::for_orientation(external),
+        )?;
         let anchoring = match params.orientation {
             Orientation::Aerial => orient::anchors::Anchoring::new(DVec3::Z, store.len()),
             _ => None,
@@ -114,6 +119,7 @@ impl Stage for NormalsStage {
             spacing: kernel.spacing,
             sampling: SamplingHistograms::new(kernel.histogram_scale),
             runs,
+            external,
             anchoring,
             isolated,
             ids: Vec::new(),
@@ -143,9 +149,11 @@ pub struct NormalsSeam<'s> {
     spacing: f64,
     sampling: SamplingHistograms,
     runs: EdgeRuns,
+    /// The orientation goes external: its runs are packed.
+    external: bool,
     anchoring: Option<orient::anchors::Anchoring>,
     isolated: Option<orient::Isolated>,
-    /// A tile's input-order ids (aerial anchoring).
+    /// A tile's input-order ids (aerial anchoring, packed runs).
     ids: Vec<u64>,
     report: NormalsReport,
 }
@@ -171,13 +179,16 @@ impl Seam for NormalsSeam<'_> {
         }
         let tile = &store.tiles()[t];
         let core = tile.start..tile.start + tile.count;
+        self.ids.clear();
+        if self.anchoring.is_some() || self.external {
+            store.read_indices(tile.start, tile.count, &mut self.ids)?;
+        }
         match &self.anchoring {
             Some(a) => {
-                store.read_indices(tile.start, tile.count, &mut self.ids)?;
                 let forest = a.forest(out.forest, core.clone(), &self.ids, &flat, &out.flags);
-                self.runs.push_tile_run(&forest, core)?;
+                self.runs.push_tile_run(&forest, core, &self.ids)?;
             }
-            None => self.runs.push_tile_run(&out.forest, core)?,
+            None => self.runs.push_tile_run(&out.forest, core, &self.ids)?,
         }
         self.sampling.merge(&out.sampling);
         Ok(())
@@ -206,10 +217,10 @@ impl Seam for NormalsSeam<'_> {
                 grid: orient::ColumnGrid::new([b.min.x, b.min.y], [b.max.x, b.max.y]),
                 sky: self.anchoring.is_some(),
             };
-            let stats = if opts.holds(store.len(), orient::BYTES_PER_POINT) {
-                orient::orient_by_forest(store, self.runs, columns, progress)?
-            } else {
+            let stats = if self.external {
                 orient::orient_external(store, self.runs, columns, progress)?
+            } else {
+                orient::orient_by_forest(store, self.runs, columns, progress)?
             };
             report.unoriented = stats.unoriented;
             report.components = stats.components;

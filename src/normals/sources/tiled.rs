@@ -27,7 +27,7 @@ use super::state::faces_away;
 use super::{Extreme, Extremes, Neighbourhood, Order, SourceParams, Sources, SourcesError};
 use crate::normals::orient::anchors::Anchoring;
 use crate::normals::orient::{rewrite_signs, BYTES_PER_POINT};
-use crate::normals::runs::EdgeRuns;
+use crate::normals::runs::{EdgeRuns, Layout};
 use crate::normals::unionfind::ParityUnionFind;
 use crate::normals::{initial_margin, NormalsError, FLAG_DEGENERATE};
 use crate::pipeline::{run_tiles, Progress, RunOptions};
@@ -96,7 +96,11 @@ pub fn orient_store(
         params: *params,
         margin: tile_margin(params, spacing),
     };
-    let mut runs = EdgeRuns::create(&store.dir().join(FOREST_FILE))?;
+    let external = !opts.holds(store.len() + 1, BYTES_PER_POINT);
+    let mut runs = EdgeRuns::create(
+        &store.dir().join(FOREST_FILE),
+        Layout::for_orientation(external),
+    )?;
     // A single source stands for its direction, not for one point: every
     // normal within 45 degrees of it is an anchor facing it, tied to the
     // root before any pair (`orient::anchors`, cost 0). Deviation from
@@ -117,23 +121,26 @@ pub fn orient_store(
     run_tiles(store, &kernel, opts, progress, |t, forest| {
         let tile = &store.tiles()[t];
         let core = tile.start..tile.start + tile.count;
+        ids.clear();
+        if anchoring.is_some() || external {
+            store.read_indices(tile.start, tile.count, &mut ids)?;
+        }
         let forest = match &anchoring {
             Some(a) => {
-                store.read_indices(tile.start, tile.count, &mut ids)?;
                 normals.read_f32(tile.start, tile.count, &mut nrm)?;
                 flags.read_u8(tile.start, tile.count, &mut flg)?;
                 a.forest(forest, core.clone(), &ids, &nrm, &flg)
             }
             None => forest,
         };
-        runs.push_tile_run(&forest, core).map_err(Into::into)
+        runs.push_tile_run(&forest, core, &ids).map_err(Into::into)
     })?;
     let mut stats = SourceStats {
         sources: sources.len(),
         forest_edges: runs.edges(),
         ..SourceStats::default()
     };
-    if !opts.holds(store.len() + 1, BYTES_PER_POINT) {
+    if external {
         let dir = params.first_direction();
         (stats.components, stats.unoriented) =
             orient_external(store, runs, &sources, dir, normals, flags, progress)?;
