@@ -94,12 +94,18 @@ fn runs_stay_within_their_disk_plan() {
             scanmesh::io::open_reader(input, scanmesh::io::ReadOptions::default()).expect("open");
         let info = reader.info();
         let points = info.declared_count.expect("a declared count");
-        for (command, flag, cost) in &runs {
+        // A run directory keeps its checkpoints; a plain run's scratch
+        // directory holds its store and spills only.
+        let each = runs.iter().flat_map(|r| [(r, true), (r, false)]);
+        for ((command, flag, cost), in_run_dir) in each {
             // Neither run keeps anything of its input once its store is
             // built: normals reads it again, the implicit mesh needs none.
             let kept = scanmesh::store::Kept::Nothing;
             let store = scanmesh::store::store_bytes_per_point(info, kept).expect("store bytes");
             let run_dir = tmp.path().join("run");
+            if !in_run_dir {
+                std::fs::create_dir_all(&run_dir).expect("scratch directory");
+            }
             let out = tmp.path().join("out.ply");
             let mut args: Vec<String> = vec![
                 command.to_string(),
@@ -107,13 +113,25 @@ fn runs_stay_within_their_disk_plan() {
                 "-q".into(),
                 "-o".into(),
                 out.display().to_string(),
-                "--run-dir".into(),
+                if in_run_dir {
+                    "--run-dir"
+                } else {
+                    "--scratch-dir"
+                }
+                .into(),
                 run_dir.display().to_string(),
             ];
             args.extend(flag.map(str::to_string));
             let peak = peak_while_running(&args, &run_dir);
-            let plan = DiskPlan::new(points, store, cost).scratch_dir();
-            let what = format!("{} {command} {flag:?}", input.display());
+            let cost = match in_run_dir {
+                true => cost.in_run_dir(),
+                false => *cost,
+            };
+            let plan = DiskPlan::new(points, store, &cost).scratch_dir();
+            let what = format!(
+                "{} {command} {flag:?} run dir {in_run_dir}",
+                input.display()
+            );
             eprintln!("{what}: peak {peak} B, plan {plan} B");
             assert!(
                 peak <= plan + FIXED,
@@ -124,7 +142,7 @@ fn runs_stay_within_their_disk_plan() {
                 "{what}: peak {peak} B, plan {plan} B: too loose"
             );
             let written = std::fs::metadata(&out).expect("output").len();
-            let planned = DiskPlan::new(points, store, cost).output;
+            let planned = DiskPlan::new(points, store, &cost).output;
             assert!(
                 written <= planned + FIXED && 4 * written >= planned,
                 "{what}: output {written} B, planned {planned} B"
@@ -132,6 +150,52 @@ fn runs_stay_within_their_disk_plan() {
             std::fs::remove_dir_all(&run_dir).ok();
             std::fs::remove_file(&out).ok();
         }
+    }
+}
+
+/// A LAS or LAZ output of an input of its own format is planned from the
+/// input file's bytes per point, not from a PLY row: on the real LAZ and
+/// LAS fixtures the output is within the plan, and the plan within 2x.
+#[test]
+fn a_las_output_is_planned_from_its_input() {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/las");
+    let declared = NormalParams::default().cost().output_per_point;
+    for name in [
+        "autzen_trim_cut.laz",
+        "32-1-472-150-76.laz",
+        "autzen_town_cut.las",
+    ] {
+        let input = fixtures.join(name);
+        let reader =
+            scanmesh::io::open_reader(&input, scanmesh::io::ReadOptions::default()).expect("open");
+        let info = reader.info();
+        let points = info.declared_count.expect("a declared count");
+        let out = tmp.path().join(name);
+        let per_point = scanmesh::store::output_bytes_per_point(info, &out, declared);
+        let ply =
+            scanmesh::store::output_bytes_per_point(info, &out.with_extension("ply"), declared);
+        assert_eq!(ply, declared, "{name}");
+        let status = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+            .arg("normals")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .arg("-q")
+            .status()
+            .expect("run scanmesh");
+        assert!(status.success(), "{name}");
+        let written = std::fs::metadata(&out).expect("output").len();
+        let planned = points * per_point;
+        eprintln!("{name}: written {written} B, planned {planned} B ({per_point} B a point)");
+        assert!(
+            written <= planned + FIXED,
+            "{name}: {written} B over {planned}"
+        );
+        assert!(
+            2 * written >= planned,
+            "{name}: {written} B, planned {planned}"
+        );
     }
 }
 
@@ -166,12 +230,20 @@ fn a_scratch_limit_refuses_runs_that_need_more() {
     let (ok, err) = run(&["normals", "--scratch", "64MiB"]);
     assert!(ok, "{err}");
     std::fs::remove_file(&out).ok();
-    // A cell of about 2 spacings: the mesh's share (some 36 MB) passes
-    // the first check, which cannot count it, and not the second.
-    let (ok, err) = run(&["reconstruct", "--cell", "0.3", "--scratch", "25MiB"]);
+    // A cell of about 2 spacings: in a run directory, which keeps the
+    // mesh's tiles, the mesh's share (some 36 MB) passes the first check,
+    // which cannot count it, and not the second. A plain run streams the
+    // tiles to the writer, beside the output: the limit does not see them.
+    let run_dir = |name: &str| tmp.path().join(name).display().to_string();
+    let (a, b) = (run_dir("a"), run_dir("b"));
+    let cell = ["reconstruct", "--cell", "0.3", "--scratch"];
+    let (ok, err) = run(&[&cell[..], &["25MiB", "--run-dir", &a]].concat());
     assert!(!ok && err.contains("--scratch 25.0MiB"), "{err}");
     assert!(!out.exists());
-    let (ok, err) = run(&["reconstruct", "--cell", "0.3", "--scratch", "80MiB"]);
+    let (ok, err) = run(&[&cell[..], &["80MiB", "--run-dir", &b]].concat());
+    assert!(ok, "{err}");
+    std::fs::remove_file(&out).ok();
+    let (ok, err) = run(&[&cell[..], &["25MiB"]].concat());
     assert!(ok, "{err}");
     // A command with nothing to plan says so rather than ignore the limit.
     std::fs::remove_file(&out).ok();

@@ -29,11 +29,13 @@ cargo build --release --quiet --bins
 bin="${CARGO_TARGET_DIR:-target}/release"
 dragon=../shared/data/dragon_vrip.ply.gz
 
-# Prints the largest size in bytes `dir` reached while process `pid` ran.
+# Prints the most disk `dir` took while process `pid` ran: the blocks its
+# files hold, not their apparent sizes (a column is created sparse and
+# fills as it is written; a forest run is punched out once read).
 scratch_peak() { # dir pid
   local peak=0 now
   while kill -0 "$2" 2>/dev/null; do
-    now=$(du -sb "$1" 2>/dev/null | cut -f1 || echo 0)
+    now=$(du -s -B1 "$1" 2>/dev/null | cut -f1 || echo 0)
     [ "${now:-0}" -gt "$peak" ] && peak=$now
     sleep 1
   done

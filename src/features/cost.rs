@@ -71,6 +71,7 @@ impl CurvatureParams {
             bytes_per_point: normals.bytes_per_point.max(CURVATURE_BYTES_PER_POINT),
             window_bytes_per_point: crate::normals::EXPORT_BYTES_PER_POINT,
             scratch_per_point: self.scratch_before_export() + 4 + values,
+            export_scratch_per_point: self.scratch_before_export() + 4 + values,
             // A PLY record: x y z double, then the values and flags (a
             // LAS input's records, kept, are longer by their own length).
             output_per_point: 24 + values,
@@ -94,6 +95,7 @@ impl FeatureParams {
             resident_per_point: line_bytes,
             window_bytes_per_point: 0,
             scratch_per_point: self.curvature.scratch_before_export(),
+            export_scratch_per_point: self.curvature.scratch_before_export(),
             // Vertices (24 B) and edges (9 B) of the PLY.
             output_per_point: (LINE_VERTICES_PER_POINT * 33.0).ceil() as u64,
             parallel_in_tile: false,

@@ -82,17 +82,19 @@ pub fn kept_free(free: u64) -> u64 {
 }
 
 /// Checks the free space for `scratch` bytes in `scratch_dir` and `output`
-/// bytes in `output_dir` (summed when both share a file system), less what
+/// bytes in `output_dir`, or `both` when they share a file system (at most
+/// their sum: a run's scratch shrinks before its output grows), less what
 /// is kept free ([`kept_free`]).
 pub fn check_space(
     scratch_dir: &Path,
     scratch: u64,
     output_dir: &Path,
     output: u64,
+    both: u64,
 ) -> Result<(), IoError> {
     let same = device(scratch_dir).is_some() && device(scratch_dir) == device(output_dir);
     let needs: Vec<(&Path, u64, &'static str)> = if same {
-        vec![(scratch_dir, scratch + output, "scratch files and output")]
+        vec![(scratch_dir, both, "scratch files and output")]
     } else {
         vec![
             (scratch_dir, scratch, "scratch files"),
@@ -149,8 +151,8 @@ mod tests {
     #[test]
     fn space_is_checked_against_the_volume() {
         let dir = tempfile::tempdir().unwrap();
-        assert!(check_space(dir.path(), 1, dir.path(), 1).is_ok());
-        let e = check_space(dir.path(), u64::MAX / 4, dir.path(), 0).unwrap_err();
+        assert!(check_space(dir.path(), 1, dir.path(), 1, 2).is_ok());
+        let e = check_space(dir.path(), u64::MAX / 4, dir.path(), 0, u64::MAX / 4).unwrap_err();
         assert!(e.to_string().contains("free"), "{e}");
     }
 }

@@ -5,13 +5,18 @@
 
 use super::plan::KernelCost;
 
-/// Bytes on disk at a run's peak.
+/// Bytes on disk at a run's peak. A run has two: its stages (the store and
+/// their scratch) and its export (the store, what the export still reads
+/// beside it, and the output growing); on one volume the larger counts,
+/// not their sum.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DiskPlan {
     /// The point store (0 when the input already is one).
     pub store: u64,
-    /// The stages' scratch beside the store.
+    /// The stages' scratch beside the store, at their peak.
     pub scratch: u64,
+    /// The scratch still beside the store while the output is written.
+    pub export_scratch: u64,
     /// The output file.
     pub output: u64,
     /// Unnamed scratch beside the output while it is written.
@@ -25,6 +30,7 @@ impl DiskPlan {
         DiskPlan {
             store: points.saturating_mul(store_per_point),
             scratch: points.saturating_mul(cost.scratch_per_point),
+            export_scratch: points.saturating_mul(cost.export_scratch_per_point),
             output: points.saturating_mul(cost.output_per_point),
             beside_output: points.saturating_mul(cost.beside_output_per_point),
         }
@@ -33,7 +39,15 @@ impl DiskPlan {
     /// What the scratch directory holds at the peak: the store and the
     /// stages' scratch.
     pub fn scratch_dir(&self) -> u64 {
-        self.store.saturating_add(self.scratch)
+        self.store
+            .saturating_add(self.scratch.max(self.export_scratch))
+    }
+
+    /// What one volume holding the scratch directory and the output holds
+    /// at the peak: the stages' or the export's, whichever is larger.
+    pub fn one_volume(&self) -> u64 {
+        let export = self.export_scratch.saturating_add(self.output_dir());
+        self.store.saturating_add(self.scratch.max(export))
     }
 
     /// What the output's directory holds at the peak: the output and the
@@ -56,6 +70,8 @@ mod tests {
             resident_per_point: 0.0,
             window_bytes_per_point: 0,
             scratch_per_point: 84,
+            export_scratch_per_point: 84,
+            checkpoint_per_point: 0,
             output_per_point: 37,
             beside_output_per_point: 3,
             parallel_in_tile: false,
@@ -65,6 +81,35 @@ mod tests {
         let plan = DiskPlan::new(1_000_000, 44, &cost);
         assert_eq!(plan.scratch_dir(), 128_000_000);
         assert_eq!(plan.output_dir(), 40_000_000);
+        assert_eq!(plan.one_volume(), 168_000_000);
         assert_eq!(DiskPlan::new(u64::MAX, 44, &cost).scratch_dir(), u64::MAX);
+        assert_eq!(DiskPlan::new(u64::MAX, 44, &cost).one_volume(), u64::MAX);
+    }
+
+    #[test]
+    fn the_output_comes_on_top_of_the_export_not_of_the_stages() {
+        let cost = KernelCost {
+            bytes_per_point: 360,
+            global_per_point: 0,
+            contracts_boundaries: false,
+            resident_per_point: 0.0,
+            window_bytes_per_point: 0,
+            scratch_per_point: 44,
+            export_scratch_per_point: 30,
+            checkpoint_per_point: 40,
+            output_per_point: 20,
+            beside_output_per_point: 0,
+            parallel_in_tile: false,
+            margin_spacings: 0.0,
+            resident_bytes: 0,
+        };
+        let plain = DiskPlan::new(1000, 16, &cost);
+        assert_eq!(plain.scratch_dir(), 60_000);
+        assert_eq!(plain.one_volume(), 66_000);
+        // A run directory keeps its checkpoints through the export.
+        let kept = DiskPlan::new(1000, 16, &cost.in_run_dir());
+        assert_eq!(kept.scratch_dir(), 100_000);
+        assert_eq!(kept.one_volume(), 106_000);
+        assert_eq!(cost.in_run_dir().in_run_dir(), cost.in_run_dir());
     }
 }

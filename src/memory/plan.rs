@@ -57,9 +57,18 @@ pub struct KernelCost {
     /// Bytes per point of an output window (0: no input-order output).
     pub window_bytes_per_point: u64,
     /// Scratch disk per point at the run's peak beside the store (columns,
-    /// checkpointed tiles, spills); the store's own bytes depend on the
+    /// spills, and checkpointed tiles where [`Self::checkpoint_per_point`]
+    /// does not count them apart); the store's own bytes depend on the
     /// input (`store::store_bytes_per_point`).
     pub scratch_per_point: u64,
+    /// Of that, what is still beside the store while the output is written
+    /// (the columns the export reads, its reorder file): the output comes
+    /// on top of this, not of the stages' peak, when both share a volume.
+    pub export_scratch_per_point: u64,
+    /// Scratch per point a run directory adds to a plain run's (the
+    /// checkpointed tile outputs it keeps so a killed run resumes), until
+    /// the run is done; see [`Self::in_run_dir`].
+    pub checkpoint_per_point: u64,
     /// Output file bytes per input point, roughly.
     pub output_per_point: u64,
     /// Unnamed scratch bytes per input point beside the output while it is
@@ -82,6 +91,17 @@ pub struct KernelCost {
 }
 
 impl KernelCost {
+    /// The cost of the same run in a run directory, whose checkpointed
+    /// tiles stay beside the store through the export.
+    pub fn in_run_dir(self) -> Self {
+        KernelCost {
+            scratch_per_point: self.scratch_per_point + self.checkpoint_per_point,
+            export_scratch_per_point: self.export_scratch_per_point + self.checkpoint_per_point,
+            checkpoint_per_point: 0,
+            ..self
+        }
+    }
+
     /// Tiles running at once for `threads` threads.
     pub fn workers(&self, threads: usize) -> usize {
         if self.parallel_in_tile {
@@ -334,6 +354,8 @@ mod tests {
             resident_per_point: 0.0,
             window_bytes_per_point: 48,
             scratch_per_point: 94,
+            export_scratch_per_point: 94,
+            checkpoint_per_point: 0,
             output_per_point: 37,
             beside_output_per_point: 0,
             parallel_in_tile: false,

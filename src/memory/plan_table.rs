@@ -89,11 +89,14 @@ impl fmt::Display for PlanTable {
         let disk = &self.disk;
         write!(
             f,
-            "disk at the peak: the store {}, scratch beside it {}, the output {} and scratch beside that {} (about; --scratch-dir puts the first two elsewhere)",
+            "disk at the peak: the store {}, scratch beside it {} ({} while the output is written), the output {} and scratch beside that {}; {} on one volume (about; --scratch-dir puts the first two elsewhere; a run directory adds {} of checkpoints)",
             human_bytes(disk.store),
             human_bytes(disk.scratch),
+            human_bytes(disk.export_scratch),
             human_bytes(disk.output),
-            human_bytes(disk.beside_output)
+            human_bytes(disk.beside_output),
+            human_bytes(disk.one_volume()),
+            human_bytes(points.saturating_mul(cost.checkpoint_per_point)),
         )
     }
 }

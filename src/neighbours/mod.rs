@@ -149,6 +149,8 @@ impl NeighbourParams {
             // (measured at the default, 30 expected: 135 B on the 1M
             // dragon, 130 B on a 110k LAS).
             scratch_per_point: 16 + 4 * self.expected_size(),
+            export_scratch_per_point: 16 + 4 * self.expected_size(),
+            checkpoint_per_point: 0,
             output_per_point: 8 + 4 * self.expected_size(),
             beside_output_per_point: 0,
             parallel_in_tile: false,

@@ -248,13 +248,22 @@ impl NormalParams {
             contracts_boundaries: global,
             resident_per_point: 0.0,
             window_bytes_per_point: EXPORT_BYTES_PER_POINT,
-            // Beside the store: normals and flags (13), the checkpointed
-            // tiles, forest runs (24), the orientation's slots and labels
-            // and the export's reorder file. Measured (the run directory
-            // sampled every 50 ms): 74 B on the 1M dragon and terrain (2
-            // tiles), 78 B on the 10M dragon at `--mem 512MiB` (64 tiles),
-            // 50 B on a 110k LAS.
-            scratch_per_point: 84,
+            // Beside the store at the orientation, its peak: normals and
+            // flags (13), the forest runs (24 B an edge merged, ~11
+            // packed for the external pass, about one edge a point), the
+            // neighbour slots (2) and the external pass's labels (4) and
+            // super-edges (1.4-2.2). Measured on the 10M dragon (scratch
+            // sampled every second, allocated blocks): 40.1 B in memory
+            // (`--mem 256MiB`), 28.2 external (`--mem 128MiB`).
+            scratch_per_point: 44,
+            // While the output is written: normals and flags, and the
+            // export's reorder file (slot, normal, flags: 17).
+            export_scratch_per_point: 30,
+            // A run directory keeps each tile's output until the run is
+            // done: its normals, flags, neighbour slots and forest (24 B
+            // an edge). Measured: 35.4 B on the 1M dragon, 38.9 on the
+            // 10M (`--mem 256MiB`).
+            checkpoint_per_point: 44,
             // x y z as double, normals as float, flags.
             output_per_point: 37,
             beside_output_per_point: 0,

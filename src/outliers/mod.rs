@@ -113,6 +113,8 @@ impl OutlierParams {
             // The two columns (5), the export's reorder file (slot, score,
             // flags: 9).
             scratch_per_point: 14,
+            export_scratch_per_point: 14,
+            checkpoint_per_point: 0,
             // A PLY record: x y z double, the score, the flags.
             output_per_point: 29,
             beside_output_per_point: 0,

@@ -229,6 +229,8 @@ mod tests {
                 resident_per_point: 0.0,
                 window_bytes_per_point: 0,
                 scratch_per_point: 1,
+                export_scratch_per_point: 1,
+                checkpoint_per_point: 0,
                 output_per_point: 0,
                 beside_output_per_point: 0,
                 parallel_in_tile: false,

@@ -13,8 +13,8 @@ use crate::memory::{BudgetError, DiskPlan};
 use crate::store::build::{build_store, scratch_store_dir_in, MAX_POINTS};
 use crate::store::spacing::ensure_spacing;
 use crate::store::{
-    is_store, open_input, store_bytes_per_point, BuildOptions, Causes, Kept, PointStore,
-    StoreError, TileTarget, Workspace,
+    is_store, open_input, output_bytes_per_point, store_bytes_per_point, BuildOptions, Causes,
+    Kept, PointStore, StoreError, TileTarget, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -252,18 +252,29 @@ impl RunSettings {
         };
         place::check_writable_dir(&scratch_dir, "scratch")?;
         let reclaimed = reclaim(&[&scratch_dir, &place::directory_of(output)]);
-        // The points, and the bytes a point of the store to build takes.
-        let (count, store) = if is_store(input) {
-            (Some(PointStore::open(input)?.len()), 0)
+        // The points, the bytes a point of the store to build takes, and
+        // of the output.
+        let declared = cost.output_per_point;
+        let (count, store, output_per_point) = if is_store(input) {
+            (Some(PointStore::open(input)?.len()), 0, declared)
         } else {
             let reader = crate::io::open_reader(input, self.read.clone())
                 .map_err(|e| reading(input, e.into()))?;
             let info = reader.info();
-            (info.declared_count, store_bytes_per_point(info, self.keep)?)
+            let out = output_bytes_per_point(info, output, declared);
+            (
+                info.declared_count,
+                store_bytes_per_point(info, self.keep)?,
+                out,
+            )
+        };
+        let cost = KernelCost {
+            output_per_point,
+            ..*cost
         };
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {
-            let disk = DiskPlan::new(n, store, cost);
+            let disk = DiskPlan::new(n, store, &cost);
             self.within_scratch_limit(disk.scratch_dir())?;
             let output_dir = place::directory_of(output);
             place::check_space(
@@ -271,6 +282,7 @@ impl RunSettings {
                 disk.scratch_dir(),
                 &output_dir,
                 disk.output_dir(),
+                disk.one_volume(),
             )
             .map_err(WorkspaceError::NoSpace)?;
         }
@@ -286,10 +298,15 @@ impl RunSettings {
         output: &Path,
         cost: &KernelCost,
     ) -> Result<(), WorkspaceError> {
-        let disk = DiskPlan::new(store.len(), 0, cost);
-        self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch))?;
+        let cost = match store.checkpoints() {
+            Some(_) => cost.in_run_dir(),
+            None => *cost,
+        };
+        let disk = DiskPlan::new(store.len(), 0, &cost);
+        self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch_dir()))?;
         let output_dir = place::directory_of(output);
-        place::check_space(store.dir(), disk.scratch, &output_dir, disk.output_dir())
+        let (scratch, out) = (disk.scratch_dir(), disk.output_dir());
+        place::check_space(store.dir(), scratch, &output_dir, out, disk.one_volume())
             .map_err(WorkspaceError::NoSpace)
     }
 

@@ -141,7 +141,7 @@ impl Session {
             scratch_dir: Some(self.run.dir().to_path_buf()),
             ..settings.clone()
         };
-        let (_, reclaimed) = in_run.check_places(input, output, &cost)?;
+        let (_, reclaimed) = in_run.check_places(input, output, &cost.in_run_dir())?;
         let build = settings.build_options(cost);
         ingest_kept(input, store_dir, &build, settings.read.clone(), progress).map_err(
             |source| WorkspaceError::Reading {

@@ -52,7 +52,7 @@ pub use exact::Coordinates;
 pub use export::{
     export_columns, export_points, export_points_keeping, export_values, Computed, Rows,
 };
-pub use footprint::store_bytes_per_point;
+pub use footprint::{output_bytes_per_point, store_bytes_per_point};
 pub use las_kept::LasKept;
 pub use manifest::{GridSpec, Kept, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};

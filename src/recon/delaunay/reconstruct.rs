@@ -66,6 +66,8 @@ pub fn cost() -> KernelCost {
         // and neighbours at their peak; the mesh is about two triangles
         // per input point (vertices are the input points).
         scratch_per_point: 2 * untwist::SCRATCH_PER_TRIANGLE,
+        export_scratch_per_point: 2 * untwist::SCRATCH_PER_TRIANGLE,
+        checkpoint_per_point: 0,
         output_per_point: 24 + 2 * 13,
         // The face spool and the audit beside the output, two triangles
         // per point.

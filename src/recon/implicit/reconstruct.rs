@@ -168,9 +168,14 @@ impl ImplicitParams {
             } else {
                 0.0
             },
-            scratch_per_point: normals
-                .scratch_per_point
-                .max(SCRATCH_BEFORE_TRIANGLES + (on_disk * SCRATCH_PER_TRIANGLE) as u64),
+            // A plain run streams each tile's triangles to the writer
+            // (its spool is beside the output): the normals' scratch is
+            // the peak. A run directory keeps the tiles' triangles too.
+            scratch_per_point: normals.scratch_per_point,
+            export_scratch_per_point: normals.scratch_per_point,
+            checkpoint_per_point: (normals.scratch_per_point + normals.checkpoint_per_point)
+                .max(SCRATCH_BEFORE_TRIANGLES + (on_disk * SCRATCH_PER_TRIANGLE) as u64)
+                - normals.scratch_per_point,
             output_per_point: (on_disk * OUTPUT_PER_TRIANGLE).ceil() as u64,
             beside_output_per_point: (on_disk * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE)
                 as u64,

@@ -132,6 +132,8 @@ impl ProjectionParams {
             window_bytes_per_point: 0,
             // Beside the store: the triangle spool (16 B, two per point).
             scratch_per_point: 2 * 16,
+            export_scratch_per_point: 2 * 16,
+            checkpoint_per_point: 0,
             // Vertices (3 f64) and faces (13 B, two per point).
             output_per_point: 24 + 2 * 13,
             // The face spool and the audit beside the output, two triangles
