@@ -61,23 +61,29 @@ impl DiskPlan {
 mod tests {
     use super::*;
 
-    #[test]
-    fn sums_per_point_figures_without_overflow() {
-        let cost = KernelCost {
+    /// A kernel's disk figures: scratch at the stages' peak and at the
+    /// export, checkpoints, output and beside it.
+    fn cost(scratch: [u64; 3], output: [u64; 2]) -> KernelCost {
+        KernelCost {
             bytes_per_point: 360,
             global_per_point: 0,
             contracts_boundaries: false,
             resident_per_point: 0.0,
             window_bytes_per_point: 0,
-            scratch_per_point: 84,
-            export_scratch_per_point: 84,
-            checkpoint_per_point: 0,
-            output_per_point: 37,
-            beside_output_per_point: 3,
+            scratch_per_point: scratch[0],
+            export_scratch_per_point: scratch[1],
+            checkpoint_per_point: scratch[2],
+            output_per_point: output[0],
+            beside_output_per_point: output[1],
             parallel_in_tile: false,
             margin_spacings: 0.0,
             resident_bytes: 0,
-        };
+        }
+    }
+
+    #[test]
+    fn sums_per_point_figures_without_overflow() {
+        let cost = cost([84, 84, 0], [37, 3]);
         let plan = DiskPlan::new(1_000_000, 44, &cost);
         assert_eq!(plan.scratch_dir(), 128_000_000);
         assert_eq!(plan.output_dir(), 40_000_000);
@@ -88,21 +94,7 @@ mod tests {
 
     #[test]
     fn the_output_comes_on_top_of_the_export_not_of_the_stages() {
-        let cost = KernelCost {
-            bytes_per_point: 360,
-            global_per_point: 0,
-            contracts_boundaries: false,
-            resident_per_point: 0.0,
-            window_bytes_per_point: 0,
-            scratch_per_point: 44,
-            export_scratch_per_point: 30,
-            checkpoint_per_point: 40,
-            output_per_point: 20,
-            beside_output_per_point: 0,
-            parallel_in_tile: false,
-            margin_spacings: 0.0,
-            resident_bytes: 0,
-        };
+        let cost = cost([44, 30, 40], [20, 0]);
         let plain = DiskPlan::new(1000, 16, &cost);
         assert_eq!(plain.scratch_dir(), 60_000);
         assert_eq!(plain.one_volume(), 66_000);

@@ -164,6 +164,17 @@ mod tests {
         (edges, ids)
     }
 
+    const CORE: Range<u32> = 100..300;
+
+    /// The test runs' core, with `ids` as its ids, and `edges` packed
+    /// against it.
+    fn packed<'a>(edges: &[Edge], ids: &'a [u64]) -> (CoreIds<'a>, Vec<u8>) {
+        let core = CoreIds { range: &CORE, ids };
+        let mut bytes = Vec::new();
+        pack(edges, core, &mut bytes);
+        (core, bytes)
+    }
+
     fn same(a: &[Edge], b: &[Edge]) -> bool {
         a.len() == b.len()
             && a.iter().zip(b).all(|(x, y)| {
@@ -175,13 +186,7 @@ mod tests {
     fn runs_come_back_bit_for_bit_and_smaller() {
         for seed in 0..20 {
             let (edges, ids) = run(seed);
-            let range = 100..300;
-            let core = CoreIds {
-                range: &range,
-                ids: &ids,
-            };
-            let mut bytes = Vec::new();
-            pack(&edges, core, &mut bytes);
+            let (core, bytes) = packed(&edges, &ids);
             assert!(
                 bytes.len() < edges.len() * 16,
                 "seed {seed}: {}",
@@ -189,12 +194,7 @@ mod tests {
             );
             assert!(same(&unpack(&bytes, edges.len(), core).unwrap(), &edges));
             // Without the core's ids every end carries its own.
-            let none = CoreIds {
-                range: &range,
-                ids: &[],
-            };
-            let mut full = Vec::new();
-            pack(&edges, none, &mut full);
+            let (none, full) = packed(&edges, &[]);
             assert!(full.len() > bytes.len());
             assert!(same(&unpack(&full, edges.len(), none).unwrap(), &edges));
         }
@@ -205,26 +205,14 @@ mod tests {
         let (mut edges, ids) = run(7);
         edges.reverse();
         edges[3].a ^= 1;
-        let range = 100..300;
-        let core = CoreIds {
-            range: &range,
-            ids: &ids,
-        };
-        let mut bytes = Vec::new();
-        pack(&edges, core, &mut bytes);
+        let (core, bytes) = packed(&edges, &ids);
         assert!(same(&unpack(&bytes, edges.len(), core).unwrap(), &edges));
     }
 
     #[test]
     fn a_cut_or_padded_run_is_refused() {
         let (edges, ids) = run(3);
-        let range = 100..300;
-        let core = CoreIds {
-            range: &range,
-            ids: &ids,
-        };
-        let mut bytes = Vec::new();
-        pack(&edges, core, &mut bytes);
+        let (core, bytes) = packed(&edges, &ids);
         let n = edges.len();
         assert!(unpack(&bytes[..bytes.len() - 1], n, core).is_err());
         assert!(unpack(&bytes, n - 1, core).is_err());
