@@ -141,7 +141,7 @@ impl ForestLabels {
         }
         self.column.read_u32_wide(t.start, t.count, out)?;
         for w in out.iter_mut() {
-            *w = (*w & (NARROW_PARITY - 1)) | (*w & NARROW_PARITY) << 32;
+            *w = widen(*w as u32);
         }
         Ok(())
     }
@@ -153,7 +153,7 @@ impl ForestLabels {
         }
         labels
             .iter()
-            .flat_map(|l| ((l & (NARROW_PARITY - 1)) as u32 | (l >> 63 << 31) as u32).to_le_bytes())
+            .flat_map(|&l| narrow(l).to_le_bytes())
             .collect()
     }
 
@@ -253,6 +253,17 @@ fn dense_nodes(c: &Contraction, boundary: &[u32], first_branch: u64) -> Vec<u32>
             }
         })
         .collect()
+}
+
+/// A label word (`label | parity << 63`, the label below 2^31) in 4 bytes.
+fn narrow(word: u64) -> u32 {
+    (word & (NARROW_PARITY - 1)) as u32 | (word >> 63 << 31) as u32
+}
+
+/// The label word of [`narrow`]'s 4 bytes.
+fn widen(word: u32) -> u64 {
+    let w = u64::from(word);
+    (w & (NARROW_PARITY - 1)) | (w & NARROW_PARITY) << 32
 }
 
 fn bit(bits: &[u64], i: u64) -> bool {
@@ -373,4 +384,19 @@ fn kruskal(
     })?;
     progress.end();
     Ok((uf.into_components(), accepted))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_label_word_survives_four_bytes_up_to_its_limit() {
+        for label in [0, 1, 12_345, (1 << 30) + 7, NARROW_PARITY - 1] {
+            for parity in [0u64, 1] {
+                let word = label | parity << 63;
+                assert_eq!(widen(narrow(word)), word, "{label} {parity}");
+            }
+        }
+    }
 }
