@@ -259,22 +259,25 @@ impl EdgeRuns {
     }
 
     /// Gives run `r`'s disk blocks back to the file system: the caller has
-    /// read it for the last time. The file keeps its size (reading the run
-    /// again gives zeros, which a packed run refuses). Where the file system
-    /// cannot punch holes the blocks stay until the file is removed, as
-    /// before; only the scratch peak is higher.
+    /// read it for the last time, and must not read it again (the file
+    /// keeps its size and reads zeros there, which need not fail to
+    /// decode). Where the file system cannot punch holes the blocks stay
+    /// until the file is removed, as before; only the scratch peak is
+    /// higher.
+    #[cfg(target_os = "linux")]
     pub fn release_run(&self, r: usize) -> Result<(), IoError> {
+        use rustix::fs::{fallocate, FallocateFlags};
         let run = &self.runs[r];
-        #[cfg(target_os = "linux")]
-        {
-            use rustix::fs::{fallocate, FallocateFlags};
-            let flags = FallocateFlags::PUNCH_HOLE | FallocateFlags::KEEP_SIZE;
-            match fallocate(self.out.get_ref(), flags, run.offset, run.bytes) {
-                Ok(()) | Err(rustix::io::Errno::OPNOTSUPP) => {}
-                Err(e) => return Err(IoError::os(&self.path, e.into())),
-            }
+        let flags = FallocateFlags::PUNCH_HOLE | FallocateFlags::KEEP_SIZE;
+        match fallocate(self.out.get_ref(), flags, run.offset, run.bytes) {
+            Ok(()) | Err(rustix::io::Errno::OPNOTSUPP) => Ok(()),
+            Err(e) => Err(IoError::os(&self.path, e.into())),
         }
-        let _ = run;
+    }
+
+    /// As on Linux, without the holes: the blocks stay until the file goes.
+    #[cfg(not(target_os = "linux"))]
+    pub fn release_run(&self, _: usize) -> Result<(), IoError> {
         Ok(())
     }
 
