@@ -9,7 +9,7 @@ use scanmesh::rundir::{Computing, Hear};
 use scanmesh::store::{PointStore, Rows};
 use std::path::PathBuf;
 
-super::command::command_args!(CurvatureArgs => run, run_dir, plans |_c| scanmesh::features::CurvatureParams::default().cost());
+super::command::command_args!(CurvatureArgs => run, run_dir, plans |_c| scanmesh::rundir::PointRun::cost(scanmesh::features::CurvatureParams::default().cost()));
 #[derive(Args)]
 pub struct CurvatureArgs {
     /// Input point file or store directory.

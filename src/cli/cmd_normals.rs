@@ -10,7 +10,7 @@ use scanmesh::spatial::KnnBackend;
 use scanmesh::store::{export_points_keeping, PointStore, Rows, StageId, NORMALS};
 use std::path::PathBuf;
 
-super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::NORMALS]), plans |_c| NormalParams::default().cost());
+super::command::command_args!(NormalsArgs => run, run_dir |_a| Ok(vec![StageId::NORMALS]), plans |_c| scanmesh::rundir::PointRun::cost(NormalParams::default().cost()));
 #[derive(Args)]
 pub struct NormalsArgs {
     /// Input point file or store directory.

@@ -10,7 +10,7 @@ use scanmesh::rundir::{Computing, Hear};
 use scanmesh::store::{PointStore, Rows};
 use std::path::PathBuf;
 
-super::command::command_args!(OutliersArgs => run, run_dir, plans |_c| OutlierParams::default().cost());
+super::command::command_args!(OutliersArgs => run, run_dir, plans |_c| scanmesh::rundir::PointRun::cost(OutlierParams::default().cost()));
 #[derive(Args)]
 pub struct OutliersArgs {
     /// Input point file or store directory.

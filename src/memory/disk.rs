@@ -21,7 +21,13 @@ pub struct DiskPlan {
     pub output: u64,
     /// Unnamed scratch beside the output while it is written.
     pub beside_output: u64,
+    /// Of the store, what the export frees before the output grows (its
+    /// tile-ordered positions, [`KernelCost::export_frees_positions`]).
+    pub freed_at_export: u64,
 }
+
+/// Bytes per point of the store's tile-ordered positions (`xyz.f32`).
+const POSITION_BYTES: u64 = 12;
 
 impl DiskPlan {
     /// The plan for `points` points whose store takes `store_per_point`
@@ -33,20 +39,25 @@ impl DiskPlan {
             export_scratch: points.saturating_mul(cost.export_scratch_per_point),
             output: points.saturating_mul(cost.output_per_point),
             beside_output: points.saturating_mul(cost.beside_output_per_point),
+            freed_at_export: match cost.export_frees_positions {
+                true => points.saturating_mul(POSITION_BYTES),
+                false => 0,
+            },
         }
     }
 
     /// What the scratch directory holds at the peak: the store and the
     /// stages' scratch.
     pub fn scratch_dir(&self) -> u64 {
-        self.store
-            .saturating_add(self.scratch.max(self.export_scratch))
+        let export = self.export_scratch.saturating_sub(self.freed_at_export);
+        self.store.saturating_add(self.scratch.max(export))
     }
 
     /// What one volume holding the scratch directory and the output holds
     /// at the peak: the stages' or the export's, whichever is larger.
     pub fn one_volume(&self) -> u64 {
-        let export = self.export_scratch.saturating_add(self.output_dir());
+        let export = (self.export_scratch.saturating_add(self.output_dir()))
+            .saturating_sub(self.freed_at_export);
         self.store.saturating_add(self.scratch.max(export))
     }
 
@@ -73,6 +84,8 @@ mod tests {
             scratch_per_point: scratch[0],
             export_scratch_per_point: scratch[1],
             checkpoint_per_point: scratch[2],
+            external_scratch_saving: 0,
+            export_frees_positions: false,
             output_per_point: output[0],
             beside_output_per_point: output[1],
             parallel_in_tile: false,
@@ -103,5 +116,61 @@ mod tests {
         assert_eq!(kept.scratch_dir(), 100_000);
         assert_eq!(kept.one_volume(), 106_000);
         assert_eq!(cost.in_run_dir().in_run_dir(), cost.in_run_dir());
+    }
+
+    #[test]
+    fn freed_positions_come_off_the_export_only_and_not_in_a_run_dir() {
+        let cost = KernelCost {
+            export_frees_positions: true,
+            ..cost([44, 30, 40], [20, 0])
+        };
+        let plain = DiskPlan::new(1000, 16, &cost);
+        assert_eq!(plain.freed_at_export, 12_000);
+        // The stages' peak (16 + 44) now passes the export's (16 + 30 + 20 - 12).
+        assert_eq!(plain.one_volume(), 60_000);
+        assert_eq!(plain.scratch_dir(), 60_000);
+        let shrunk = DiskPlan::new(
+            1000,
+            16,
+            &KernelCost {
+                scratch_per_point: 20,
+                ..cost
+            },
+        );
+        assert_eq!(shrunk.one_volume(), 16_000 + 38_000);
+        assert_eq!(shrunk.scratch_dir(), 16_000 + 20_000);
+        let kept = DiskPlan::new(
+            1000,
+            16,
+            &KernelCost {
+                scratch_per_point: 20,
+                ..cost
+            }
+            .in_run_dir(),
+        );
+        assert_eq!(kept.freed_at_export, 0);
+        assert_eq!(kept.one_volume(), 16_000 + 30_000 + 40_000 + 20_000);
+    }
+
+    #[test]
+    fn an_external_global_pass_plans_its_own_scratch() {
+        let cost = KernelCost {
+            global_per_point: 6,
+            external_scratch_saving: 12,
+            ..cost([44, 30, 0], [20, 0])
+        };
+        let budget = crate::memory::MemoryBudget::new(256 << 20, 2);
+        let fits = (256u64 << 20).saturating_sub(crate::memory::BASE_BYTES) / 2 / 6;
+        assert_eq!(cost.under_budget(&budget, fits).scratch_per_point, 44);
+        assert_eq!(cost.under_budget(&budget, fits + 1).scratch_per_point, 32);
+        // Applied once: the saving is spent.
+        let once = cost.under_budget(&budget, fits + 1);
+        assert_eq!(once.under_budget(&budget, fits + 1), once);
+        // A kernel without a global pass has nothing to save.
+        let none = KernelCost {
+            global_per_point: 0,
+            ..cost
+        };
+        assert_eq!(none.under_budget(&budget, u64::MAX).scratch_per_point, 44);
     }
 }

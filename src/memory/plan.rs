@@ -69,6 +69,16 @@ pub struct KernelCost {
     /// checkpointed tile outputs it keeps so a killed run resumes), until
     /// the run is done; see [`Self::in_run_dir`].
     pub checkpoint_per_point: u64,
+    /// Of [`Self::scratch_per_point`], what the global pass does not write
+    /// when it goes external (the normals' forest packed per tile, about
+    /// 11 B an edge, where the in-memory union-find's merged records take
+    /// 24): the disk plan takes it off then ([`Self::under_budget`]).
+    pub external_scratch_saving: u64,
+    /// The export frees the store's tile-ordered positions before the
+    /// output grows (a per-point run's scratch store,
+    /// `PointStore::release_positions`): the disk plan counts the store
+    /// without them while the output is written.
+    pub export_frees_positions: bool,
     /// Output file bytes per input point, roughly.
     pub output_per_point: u64,
     /// Unnamed scratch bytes per input point beside the output while it is
@@ -98,6 +108,26 @@ impl KernelCost {
             scratch_per_point: self.scratch_per_point + self.checkpoint_per_point,
             export_scratch_per_point: self.export_scratch_per_point + self.checkpoint_per_point,
             checkpoint_per_point: 0,
+            // The store of a run directory is kept: its positions too.
+            export_frees_positions: false,
+            ..self
+        }
+    }
+
+    /// The cost of the same run under `budget` for `points` points: a
+    /// global pass that does not fit in memory goes external, and its
+    /// scratch is then the external path's (the same decision
+    /// [`MemoryPlan::new`] and the kernels make, `MemoryBudget::holds`).
+    pub fn under_budget(self, budget: &MemoryBudget, points: u64) -> Self {
+        let external = self.global_per_point > 0 && !budget.holds(points, self.global_per_point);
+        KernelCost {
+            scratch_per_point: match external {
+                true => self
+                    .scratch_per_point
+                    .saturating_sub(self.external_scratch_saving),
+                false => self.scratch_per_point,
+            },
+            external_scratch_saving: 0,
             ..self
         }
     }
@@ -356,6 +386,8 @@ mod tests {
             scratch_per_point: 94,
             export_scratch_per_point: 94,
             checkpoint_per_point: 0,
+            external_scratch_saving: 0,
+            export_frees_positions: false,
             output_per_point: 37,
             beside_output_per_point: 0,
             parallel_in_tile: false,

@@ -151,6 +151,8 @@ impl NeighbourParams {
             scratch_per_point: 16 + 4 * self.expected_size(),
             export_scratch_per_point: 16 + 4 * self.expected_size(),
             checkpoint_per_point: 0,
+            external_scratch_saving: 0,
+            export_frees_positions: false,
             output_per_point: 8 + 4 * self.expected_size(),
             beside_output_per_point: 0,
             parallel_in_tile: false,

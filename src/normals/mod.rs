@@ -264,6 +264,12 @@ impl NormalParams {
             // an edge). Measured: 35.4 B on the 1M dragon, 38.9 on the
             // 10M (`--mem 256MiB`).
             checkpoint_per_point: 44,
+            // The external pass's forest is packed (about 11 B an edge
+            // where a merged record takes 24). Measured peaks beside the
+            // store, external: 28.2 B on the 10M dragon, 27.8 on the
+            // 100M (scratch sampled every second, allocated blocks).
+            external_scratch_saving: 12,
+            export_frees_positions: false,
             // x y z as double, normals as float, flags.
             output_per_point: 37,
             beside_output_per_point: 0,

@@ -115,6 +115,8 @@ impl OutlierParams {
             scratch_per_point: 14,
             export_scratch_per_point: 14,
             checkpoint_per_point: 0,
+            external_scratch_saving: 0,
+            export_frees_positions: false,
             // A PLY record: x y z double, the score, the flags.
             output_per_point: 29,
             beside_output_per_point: 0,

@@ -231,6 +231,8 @@ mod tests {
                 scratch_per_point: 1,
                 export_scratch_per_point: 1,
                 checkpoint_per_point: 0,
+                external_scratch_saving: 0,
+                export_frees_positions: false,
                 output_per_point: 0,
                 beside_output_per_point: 0,
                 parallel_in_tile: false,

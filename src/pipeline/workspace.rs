@@ -270,11 +270,13 @@ impl RunSettings {
         };
         let cost = KernelCost {
             output_per_point,
+            // A store given as input is kept whole.
+            export_frees_positions: cost.export_frees_positions && !is_store(input),
             ..*cost
         };
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {
-            let disk = DiskPlan::new(n, store, &cost);
+            let disk = DiskPlan::new(n, store, &cost.under_budget(&self.budget, n));
             self.within_scratch_limit(disk.scratch_dir())?;
             let output_dir = place::directory_of(output);
             place::check_space(
@@ -301,6 +303,11 @@ impl RunSettings {
         let cost = match store.checkpoints() {
             Some(_) => cost.in_run_dir(),
             None => *cost,
+        };
+        let cost = KernelCost {
+            // Only a scratch store gives its positions up.
+            export_frees_positions: cost.export_frees_positions && store.is_scratch(),
+            ..cost.under_budget(&self.budget, store.len())
         };
         let disk = DiskPlan::new(store.len(), 0, &cost);
         self.within_scratch_limit(store.bytes_on_disk().saturating_add(disk.scratch_dir()))?;

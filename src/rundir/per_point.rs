@@ -92,6 +92,16 @@ impl PointRun<'_> {
         Ok(opened)
     }
 
+    /// The cost of a per-point run of a stage whose kernel costs `cost`:
+    /// its export frees the scratch store's positions before the output
+    /// grows ([`Self::run`]), which the disk plan counts.
+    pub fn cost(cost: KernelCost) -> KernelCost {
+        KernelCost {
+            export_frees_positions: true,
+            ..cost
+        }
+    }
+
     /// Runs a stage whose kernel costs `cost` from `input` to `output`:
     /// `compute` on the opened store, then `write` of its rows (it may say
     /// a note to the run's hearer). Returns the computation's report and
@@ -113,7 +123,7 @@ impl PointRun<'_> {
             keep: Kept::Nothing,
             ..self.settings.clone()
         };
-        let mut opened = self.open_with(&settings, input, output, cost)?;
+        let mut opened = self.open_with(&settings, input, output, Self::cost(cost))?;
         let store = &mut opened.ws.store;
         let (progress, session) = (self.progress, self.session);
         let report = compute(

@@ -68,6 +68,8 @@ pub fn cost() -> KernelCost {
         scratch_per_point: 2 * untwist::SCRATCH_PER_TRIANGLE,
         export_scratch_per_point: 2 * untwist::SCRATCH_PER_TRIANGLE,
         checkpoint_per_point: 0,
+        external_scratch_saving: 0,
+        export_frees_positions: false,
         output_per_point: 24 + 2 * 13,
         // The face spool and the audit beside the output, two triangles
         // per point.

@@ -176,6 +176,8 @@ impl ImplicitParams {
             checkpoint_per_point: (normals.scratch_per_point + normals.checkpoint_per_point)
                 .max(SCRATCH_BEFORE_TRIANGLES + (on_disk * SCRATCH_PER_TRIANGLE) as u64)
                 - normals.scratch_per_point,
+            external_scratch_saving: normals.external_scratch_saving,
+            export_frees_positions: false,
             output_per_point: (on_disk * OUTPUT_PER_TRIANGLE).ceil() as u64,
             beside_output_per_point: (on_disk * crate::mesh::SCRATCH_BESIDE_OUTPUT_PER_TRIANGLE)
                 as u64,

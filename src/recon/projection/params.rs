@@ -134,6 +134,8 @@ impl ProjectionParams {
             scratch_per_point: 2 * 16,
             export_scratch_per_point: 2 * 16,
             checkpoint_per_point: 0,
+            external_scratch_saving: 0,
+            export_frees_positions: false,
             // Vertices (3 f64) and faces (13 B, two per point).
             output_per_point: 24 + 2 * 13,
             // The face spool and the audit beside the output, two triangles
