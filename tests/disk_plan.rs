@@ -8,6 +8,7 @@
 use scanmesh::memory::DiskPlan;
 use scanmesh::normals::NormalParams;
 use scanmesh::recon::implicit::reconstruct::ImplicitParams;
+use scanmesh::units::human_bytes;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -176,6 +177,22 @@ fn a_las_output_is_planned_from_its_input() {
         let ply =
             scanmesh::store::output_bytes_per_point(info, &out.with_extension("ply"), declared);
         assert_eq!(ply, declared, "{name}");
+        // `info --plan -o` plans the output as the run will.
+        for (output, bytes) in [(&out, per_point), (&out.with_extension("ply"), declared)] {
+            let o = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
+                .args(["info", "-q", "--plan", "-o"])
+                .arg(output)
+                .arg(&input)
+                .output()
+                .expect("run scanmesh info");
+            let text = String::from_utf8_lossy(&o.stdout);
+            let figure = format!("the output {} and", human_bytes(points * bytes));
+            assert!(
+                text.contains(&figure),
+                "{name} -o {}: {text}",
+                output.display()
+            );
+        }
         let status = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
             .arg("normals")
             .arg(&input)

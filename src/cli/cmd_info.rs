@@ -4,8 +4,8 @@
 use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::Args;
-use scanmesh::memory::{MemoryBudget, PlanTable};
-use scanmesh::store::describe::{describe_file, describe_store, points_to_plan};
+use scanmesh::memory::{KernelCost, MemoryBudget, PlanTable};
+use scanmesh::store::describe::{describe_file, describe_store, output_to_plan, points_to_plan};
 use scanmesh::store::is_store;
 use std::path::PathBuf;
 
@@ -35,6 +35,12 @@ pub struct InfoArgs {
     /// Worker threads to plan for (with --plan; default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// The output to plan for (with --plan): its format sets the output's
+    /// share of the disk plan (a LAS or LAZ written from its own format is
+    /// planned from the input's bytes per point, as the run plans it;
+    /// otherwise a PLY row).
+    #[arg(long, short)]
+    output: Option<PathBuf>,
     /// Plan `reconstruct --closed` (with --plan --command reconstruct).
     #[arg(long)]
     closed: bool,
@@ -52,13 +58,20 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let (mem, threads) = super::mem_and_threads(&a.mem, a.threads)?;
         let progress = super::shown(a.quiet);
         let read = a.select.read(a.skip_invalid);
-        let (points, store) = points_to_plan(&a.input, read, progress.as_ref())?;
+        let (points, store) = points_to_plan(&a.input, read.clone(), progress.as_ref())?;
         let budget = MemoryBudget::new(mem, threads);
         let mut planned = super::plannable().into_iter();
         let cost = planned.find_map(|(name, cost)| (name == a.command).then(|| cost(a.closed)));
         let cost = cost
             .flatten()
             .context("--command: not a plannable command")?;
+        let cost = match &a.output {
+            Some(output) => KernelCost {
+                output_per_point: output_to_plan(&a.input, read, output, cost.output_per_point)?,
+                ..cost
+            },
+            None => cost,
+        };
         return outln!("{}", PlanTable::new(budget, points, store, cost)?);
     }
     let report = if is_store(&a.input) {

@@ -127,6 +127,24 @@ pub fn points_to_plan(
     }
 }
 
+/// Output bytes per input point of a run over `input` writing `output`,
+/// whose command declares `declared` (a PLY row): a LAS or LAZ written
+/// from its own format is planned from the input's bytes per point
+/// ([`super::output_bytes_per_point`], as the run plans it); a store's
+/// format is not known here, so it keeps the declared figure.
+pub fn output_to_plan(
+    input: &Path,
+    read: ReadOptions,
+    output: &Path,
+    declared: u64,
+) -> Result<u64, StoreError> {
+    if is_store(input) {
+        return Ok(declared);
+    }
+    let r = open_reader(input, read)?;
+    Ok(super::output_bytes_per_point(r.info(), output, declared))
+}
+
 /// A LAS/LAZ file's frame: version, point format, its VLRs and EVLRs
 /// (user id / record id), whether it carries a CRS and whether it is a COPC
 /// (a COPC info VLR, user id "copc", record 1: read as LAZ).
