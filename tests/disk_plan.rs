@@ -192,6 +192,9 @@ fn a_las_output_is_planned_from_its_input() {
                 "{name} -o {}: {text}",
                 output.display()
             );
+            // And whether this disk has room for it now (these have).
+            assert!(text.contains("room on disk: "), "{name}: {text}");
+            assert!(text.contains("has it now"), "{name}: {text}");
         }
         let status = Command::new(env!("CARGO_BIN_EXE_scanmesh"))
             .arg("normals")

@@ -4,10 +4,11 @@
 use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::Args;
-use scanmesh::memory::{KernelCost, MemoryBudget, PlanTable};
+use scanmesh::io::place;
+use scanmesh::memory::{DiskPlan, KernelCost, MemoryBudget, PlanTable};
 use scanmesh::store::describe::{describe_file, describe_store, output_to_plan, points_to_plan};
 use scanmesh::store::is_store;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 super::command::command_args!(InfoArgs => run);
 #[derive(Args)]
@@ -72,7 +73,12 @@ pub fn run(a: InfoArgs) -> Result<()> {
             },
             None => cost,
         };
-        return outln!("{}", PlanTable::new(budget, points, store, cost)?);
+        let table = PlanTable::new(budget, points, store, cost)?;
+        outln!("{table}")?;
+        return match &a.output {
+            Some(output) => outln!("{}", room_for(table.disk(), output)),
+            None => Ok(()),
+        };
     }
     let report = if is_store(&a.input) {
         describe_store(&a.input, &a.select.selection())?
@@ -83,5 +89,19 @@ pub fn run(a: InfoArgs) -> Result<()> {
     match a.json {
         true => outln!("{}", serde_json::to_string_pretty(report.json())?),
         false => outln!("{report}"),
+    }
+}
+
+/// Whether the output's volume (the scratch directory's too, by default)
+/// has room for the disk plan now, by the check a run makes before it
+/// reads its input.
+fn room_for(disk: &DiskPlan, output: &Path) -> String {
+    let dir = place::directory_of(output);
+    let (scratch, out) = (disk.scratch_dir(), disk.output_dir());
+    match place::check_space(&dir, scratch, &dir, out, disk.one_volume()) {
+        Ok(()) => format!("room on disk: {} has it now", dir.display()),
+        Err(e) => {
+            format!("room on disk: none, a run would be refused before it reads its input: {e}")
+        }
     }
 }

@@ -39,6 +39,11 @@ impl PlanTable {
         })
     }
 
+    /// The disk plan.
+    pub fn disk(&self) -> &DiskPlan {
+        &self.disk
+    }
+
     fn global(&self) -> String {
         if self.cost.global_per_point == 0 {
             "none".to_string()
