@@ -66,6 +66,12 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let cost = cost
             .flatten()
             .context("--command: not a plannable command")?;
+        // A store given as input is kept whole: its positions stay (as
+        // the run plans it, `RunSettings::check_places`).
+        let cost = KernelCost {
+            export_frees_positions: cost.export_frees_positions && !is_store(&a.input),
+            ..cost
+        };
         let cost = match &a.output {
             Some(output) => KernelCost {
                 output_per_point: output_to_plan(&a.input, read, output, cost.output_per_point)?,
