@@ -49,8 +49,14 @@ impl DiskPlan {
     /// What the scratch directory holds at the peak: the store and the
     /// stages' scratch.
     pub fn scratch_dir(&self) -> u64 {
-        let export = self.export_scratch.saturating_sub(self.freed_at_export);
-        self.store.saturating_add(self.scratch.max(export))
+        self.store
+            .saturating_add(self.scratch.max(self.export_beside_store()))
+    }
+
+    /// What the export adds beside the store while the output is written:
+    /// its scratch, less what it frees of the store.
+    pub fn export_beside_store(&self) -> u64 {
+        self.export_scratch.saturating_sub(self.freed_at_export)
     }
 
     /// What one volume holding the scratch directory and the output holds

@@ -97,7 +97,7 @@ impl fmt::Display for PlanTable {
             "disk at the peak: the store {}, scratch beside it {} ({} while the output is written), the output {} and scratch beside that {}; {} on one volume (about; --scratch-dir puts the first two elsewhere; a run directory adds {} of checkpoints)",
             human_bytes(disk.store),
             human_bytes(disk.scratch),
-            human_bytes(disk.export_scratch.saturating_sub(disk.freed_at_export)),
+            human_bytes(disk.export_beside_store()),
             human_bytes(disk.output),
             human_bytes(disk.beside_output),
             human_bytes(disk.one_volume()),
