@@ -1,17 +1,13 @@
 //! `scanmesh info` for files: what the header says, plus the facts one
-//! streaming pass gives (count, bounds) and the first points, whose
-//! spacing a caller estimates (`spatial::mean_nearest_distance`): for
-//! scanner data they are spatially coherent. Reading, not geometry: no
-//! index is built here.
+//! streaming pass gives (count, bounds, and the spacing measured in a few
+//! exact neighbourhoods as the points stream past, whatever the file's
+//! order: `spatial::patches`).
 
 use super::{open_reader, IoError, LeftOut, PointChunk, ReadOptions, SourceInfo, DEFAULT_CHUNK};
 use crate::geom::Aabb;
 use crate::progress::Progress;
-use glam::DVec3;
+use crate::spatial::patches::SpacingPatches;
 use std::path::Path;
-
-/// The first points kept, for a spacing estimate.
-const FIRST_POINTS: usize = 1 << 16;
 
 /// What a pass over a whole input found (`scanmesh info`).
 #[derive(Clone, Debug)]
@@ -29,8 +25,10 @@ pub struct Inspection {
     pub left_out: LeftOut,
     /// Bounding box of the points read.
     pub bounds: Aabb,
-    /// The first points read (at most 65,536), for a spacing estimate.
-    pub first_points: Vec<DVec3>,
+    /// Mean nearest-neighbour distance of the points read (exact
+    /// duplicates left out), from exact neighbourhoods of a few of them;
+    /// `None` with fewer than two distinct points.
+    pub spacing: Option<f64>,
 }
 
 /// `read` is an [`InvalidPolicy`](super::InvalidPolicy) or [`ReadOptions`].
@@ -44,12 +42,11 @@ pub fn inspect(
     let mut chunk = PointChunk::default();
     let mut bounds = Aabb::EMPTY;
     let mut count = 0;
-    let mut sample: Vec<DVec3> = Vec::new();
+    let mut spacing = SpacingPatches::new();
     progress.begin("inspect", info.declared_count.unwrap_or(0));
     while reader.read_chunk(&mut chunk, DEFAULT_CHUNK)? > 0 {
         chunk.xyz.iter().for_each(|p| bounds.add(*p));
-        let room = FIRST_POINTS.saturating_sub(sample.len());
-        sample.extend(chunk.xyz.iter().take(room));
+        spacing.offer(&chunk.xyz);
         count += chunk.len() as u64;
         progress.advance(chunk.len() as u64);
     }
@@ -60,7 +57,7 @@ pub fn inspect(
         skipped: reader.skipped(),
         left_out: reader.left_out(),
         bounds,
-        first_points: sample,
+        spacing: spacing.estimate(),
     })
 }
 
@@ -81,7 +78,7 @@ pub struct ScanInspection {
 
 /// An E57 inspected scan by scan, in one pass over the file (each scan's
 /// section is read once); the whole file's figures are their sums, its
-/// first points those of the first scan with points.
+/// spacing that of the first scan with points.
 pub fn inspect_scans(
     path: &Path,
     policy: super::InvalidPolicy,
@@ -110,9 +107,7 @@ pub fn inspect_scans(
                 w.skipped += one.skipped;
                 w.left_out = w.left_out.plus(one.left_out);
                 w.bounds = w.bounds.union(&one.bounds);
-                if w.first_points.is_empty() {
-                    w.first_points = one.first_points;
-                }
+                w.spacing = w.spacing.or(one.spacing);
                 w
             }
         });

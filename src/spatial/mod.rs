@@ -1,6 +1,7 @@
 //! Spatial queries over one tile's points: exact k-nearest neighbours by a
 //! uniform grid (paper 1 section 2.1) or a kd-tree (kiddo), every point
-//! within a radius (`ball`), and a brute-force oracle for tests.
+//! within a radius (`ball`), a brute-force oracle for tests, and the
+//! spacing of a stream of points (`patches`).
 //!
 //! Every backend returns the same answer bit for bit: neighbours sorted by
 //! (squared distance, tie key), where the squared distance is always computed
@@ -12,8 +13,8 @@ use glam::DVec3;
 
 /// Mean nearest-neighbour distance among `points` (exact duplicates left
 /// out: a zero distance says nothing of the sampling); `None` with fewer
-/// than two distinct points. `scanmesh info`'s estimate over a file's
-/// first points.
+/// than two distinct points. `scanmesh info`'s estimate over a short
+/// file (`patches` measures a long one).
 pub fn mean_nearest_distance(points: &[DVec3]) -> Option<f64> {
     let origin = points.first().copied()?;
     let pts: Vec<DVec3> = points.iter().map(|p| *p - origin).collect();
@@ -37,6 +38,7 @@ pub(crate) mod blocks;
 pub(crate) mod brute;
 pub(crate) mod grid;
 mod kdtree;
+pub mod patches;
 pub mod rtree;
 pub mod topological;
 

@@ -99,7 +99,7 @@ fn file_json(path: &Path, r: &Inspection) -> Value {
         "attributes": r.info.attributes.describe(),
         "bounds_min": r.bounds.min.to_array(),
         "bounds_max": r.bounds.max.to_array(),
-        "spacing_estimate": crate::spatial::mean_nearest_distance(&r.first_points),
+        "spacing_estimate": r.spacing,
         "las_scale": r.info.las_transform.map(|t| t.scale.to_array()),
         "las_offset": r.info.las_transform.map(|t| t.offset.to_array()),
     })
