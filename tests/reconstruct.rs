@@ -539,3 +539,53 @@ fn an_object_from_six_misregistered_stations_closes_over_its_unscanned_base() {
         );
     }
 }
+
+/// A scratch store gives up its points once every tile is meshed, before
+/// the output is written from the tiles' triangles alone: the mesh is the
+/// one a store that outlives the run gives (which keeps them), byte for
+/// byte, on a real aerial scan (tests/fixtures/las) in 9 tiles.
+#[test]
+fn a_scratch_store_frees_its_points_before_the_mesh_is_written() {
+    use scanmesh::io::{open_reader, ReadOptions};
+    use scanmesh::store::{build_store, open_input, BuildOptions, Kept, TileTarget};
+    let tmp = tempfile::tempdir().unwrap();
+    let input = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/las/autzen_trim_cut.laz");
+    let opts = BuildOptions {
+        keep: Kept::Nothing,
+        tiles: TileTarget::Points(2_000),
+        ..BuildOptions::default()
+    };
+    let read = ReadOptions::default();
+    let mesh_of = |store: &mut scanmesh::store::PointStore, name: &str| {
+        let out = tmp.path().join(name);
+        let params = ImplicitParams::default();
+        let run = RunOptions::new(2);
+        reconstruct_implicit(
+            store,
+            &params,
+            &out,
+            MeshFormat::PlyBinary,
+            run,
+            &NoProgress,
+        )
+        .unwrap_or_else(|e| panic!("reconstruct: {e}"));
+        std::fs::read(out).unwrap()
+    };
+    let column = |store: &scanmesh::store::PointStore, name: &str| {
+        std::fs::metadata(store.dir().join(name)).unwrap().len()
+    };
+    let scratch_dir = tmp.path().join("scratch");
+    let mut ws = open_input(&input, &scratch_dir, &opts, read.clone(), &NoProgress).unwrap();
+    assert!(ws.store.is_scratch() && ws.store.tiles().len() > 4);
+    let freed = mesh_of(&mut ws.store, "scratch.ply");
+    let mut reader = open_reader(&input, read).unwrap();
+    let dir = tmp.path().join("kept");
+    let mut kept = build_store(reader.as_mut(), &dir, &opts, &NoProgress).unwrap();
+    let whole = mesh_of(&mut kept, "kept.ply");
+    assert!(freed.len() > 10_000 && freed == whole);
+    for name in ["xyz.f32", "normal.f32", "index.u32", "flags.u8"] {
+        assert_eq!(column(&ws.store, name), 0, "{name} of the scratch store");
+        assert!(column(&kept, name) > 0, "{name} of the kept store");
+    }
+}

@@ -5,8 +5,8 @@ use super::stdout::outln;
 use anyhow::{Context, Result};
 use clap::Args;
 use scanmesh::io::place;
-use scanmesh::memory::{DiskPlan, KernelCost, MemoryBudget, PlanTable};
-use scanmesh::store::describe::{describe_file, describe_store, output_to_plan, points_to_plan};
+use scanmesh::memory::{DiskPlan, MemoryBudget, PlanTable};
+use scanmesh::store::describe::{describe_file, describe_store, footprint_to_plan};
 use scanmesh::store::is_store;
 use std::path::{Path, PathBuf};
 
@@ -59,27 +59,15 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let (mem, threads) = super::mem_and_threads(&a.mem, a.threads)?;
         let progress = super::shown(a.quiet);
         let read = a.select.read(a.skip_invalid);
-        let (points, store) = points_to_plan(&a.input, read.clone(), progress.as_ref())?;
-        let budget = MemoryBudget::new(mem, threads);
         let mut planned = super::plannable().into_iter();
         let cost = planned.find_map(|(name, cost)| (name == a.command).then(|| cost(a.closed)));
         let cost = cost
             .flatten()
             .context("--command: not a plannable command")?;
-        // A store given as input is kept whole: its positions stay (as
-        // the run plans it, `RunSettings::check_places`).
-        let cost = KernelCost {
-            export_frees_positions: cost.export_frees_positions && !is_store(&a.input),
-            ..cost
-        };
-        let cost = match &a.output {
-            Some(output) => KernelCost {
-                output_per_point: output_to_plan(&a.input, read, output, cost.output_per_point)?,
-                ..cost
-            },
-            None => cost,
-        };
-        let table = PlanTable::new(budget, points, store, cost)?;
+        let output = a.output.as_deref();
+        let (points, run) = footprint_to_plan(&a.input, read, output, cost, progress.as_ref())?;
+        let budget = MemoryBudget::new(mem, threads);
+        let table = PlanTable::new(budget, points, run.store_per_point, run.cost)?;
         outln!("{table}")?;
         return match &a.output {
             Some(output) => outln!("{}", room_for(table.disk(), output)),

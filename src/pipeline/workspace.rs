@@ -13,8 +13,8 @@ use crate::memory::{BudgetError, DiskPlan};
 use crate::store::build::{build_store, scratch_store_dir_in, MAX_POINTS};
 use crate::store::spacing::ensure_spacing;
 use crate::store::{
-    is_store, open_input, output_bytes_per_point, store_bytes_per_point, BuildOptions, Causes,
-    Kept, PointStore, StoreError, TileTarget, Workspace,
+    is_store, open_input, run_footprint, BuildOptions, Causes, Kept, PointStore, StoreError,
+    TileTarget, Workspace,
 };
 use std::path::{Path, PathBuf};
 
@@ -252,28 +252,12 @@ impl RunSettings {
         };
         place::check_writable_dir(&scratch_dir, "scratch")?;
         let reclaimed = reclaim(&[&scratch_dir, &place::directory_of(output)]);
-        // The points, the bytes a point of the store to build takes, and
-        // of the output.
-        let declared = cost.output_per_point;
-        let (count, store, output_per_point) = if is_store(input) {
-            (Some(PointStore::open(input)?.len()), 0, declared)
-        } else {
-            let reader = crate::io::open_reader(input, self.read.clone())
-                .map_err(|e| reading(input, e.into()))?;
-            let info = reader.info();
-            let out = output_bytes_per_point(info, output, declared);
-            (
-                info.declared_count,
-                store_bytes_per_point(info, self.keep)?,
-                out,
-            )
-        };
-        let cost = KernelCost {
-            output_per_point,
-            // A store given as input is kept whole.
-            export_frees_positions: cost.export_frees_positions && !is_store(input),
-            ..*cost
-        };
+        let footprint = run_footprint(input, self.read.clone(), self.keep, Some(output), *cost)
+            .map_err(|e| match is_store(input) {
+                true => WorkspaceError::Store(e),
+                false => reading(input, e),
+            })?;
+        let (count, store, cost) = (footprint.points, footprint.store_per_point, footprint.cost);
         // A count past what a store holds is refused later, as such.
         if let Some(n) = count.filter(|&n| n <= MAX_POINTS) {
             let disk = DiskPlan::new(n, store, &cost.under_budget(&self.budget, n));

@@ -1,13 +1,14 @@
 //! What a point file or a store holds (`scanmesh info`): one record built
-//! from a pass over a file ([`crate::io::inspect`], the spacing of its
-//! first points, a LAS file's frame, an E57 file's scans) or from a
-//! store's manifest, rendered as JSON or as text; and the points a run
-//! over an input would plan for (`info --plan`).
+//! from a pass over a file ([`crate::io::inspect`], its spacing measured
+//! as it streams past, a LAS file's frame, an E57 file's scans) or from a
+//! store's manifest, rendered as JSON or as text; and the points and
+//! footprint a run over an input would plan for (`info --plan`).
 
-use super::{is_store, PointStore, StoreError};
+use super::{run_footprint, Kept, PointStore, RunFootprint, StoreError};
 use crate::io::e57::is_e57_magic;
 use crate::io::inspect::{inspect, inspect_scans, Inspection, ScanInspection};
 use crate::io::{open_reader, Format, LasSource, ReadOptions, Selection};
+use crate::memory::KernelCost;
 use crate::progress::Progress;
 use serde_json::{json, Value};
 use std::fmt;
@@ -105,44 +106,25 @@ fn file_json(path: &Path, r: &Inspection) -> Value {
     })
 }
 
-/// The points a run over `input` plans for (from the store, the header,
-/// or a pass over the file when it declares no count) and the bytes a
-/// point of the store it would build takes (0 for a store): a store that
-/// keeps nothing of its input once built, as every plannable run's does
-/// (`rundir::PointRun`; only a mesh of input points keeps their
+/// The points a run over `input` writing `output` plans for (from the
+/// store, the header, or a pass over the file when it declares no count)
+/// and its footprint ([`super::run_footprint`], as the run plans it): a
+/// store that keeps nothing of its input once built, as every plannable
+/// run's does (`rundir::PointRun`; only a mesh of input points keeps their
 /// coordinates).
-pub fn points_to_plan(
+pub fn footprint_to_plan(
     input: &Path,
     read: ReadOptions,
+    output: Option<&Path>,
+    cost: KernelCost,
     progress: &dyn Progress,
-) -> Result<(u64, u64), StoreError> {
-    if is_store(input) {
-        return Ok((PointStore::open_shared(input)?.len(), 0));
-    }
-    let r = open_reader(input, read.clone())?;
-    let store = super::store_bytes_per_point(r.info(), super::Kept::Nothing)?;
-    match r.info().declared_count {
-        Some(n) => Ok((n, store)),
-        None => Ok((inspect(input, read, progress)?.count, store)),
-    }
-}
-
-/// Output bytes per input point of a run over `input` writing `output`,
-/// whose command declares `declared` (a PLY row): a LAS or LAZ written
-/// from its own format is planned from the input's bytes per point
-/// ([`super::output_bytes_per_point`], as the run plans it); a store's
-/// format is not known here, so it keeps the declared figure.
-pub fn output_to_plan(
-    input: &Path,
-    read: ReadOptions,
-    output: &Path,
-    declared: u64,
-) -> Result<u64, StoreError> {
-    if is_store(input) {
-        return Ok(declared);
-    }
-    let r = open_reader(input, read)?;
-    Ok(super::output_bytes_per_point(r.info(), output, declared))
+) -> Result<(u64, RunFootprint), StoreError> {
+    let footprint = run_footprint(input, read.clone(), Kept::Nothing, output, cost)?;
+    let points = match footprint.points {
+        Some(n) => n,
+        None => inspect(input, read, progress)?.count,
+    };
+    Ok((points, footprint))
 }
 
 /// A LAS/LAZ file's frame: version, point format, its VLRs and EVLRs

@@ -9,9 +9,10 @@
 //! (`las.input`) when it keeps all, and the tile bounds (`blocks.f32`, 24 B
 //! per 512 points).
 
-use super::{Coordinates, Kept, StoreError, BLOCK};
+use super::{is_store, Coordinates, Kept, PointStore, StoreError, BLOCK};
 use crate::io::las_file::LasSource;
-use crate::io::{Format, SourceInfo};
+use crate::io::{open_reader, Format, ReadOptions, SourceInfo};
+use crate::memory::KernelCost;
 use std::path::Path;
 
 /// Bytes per point of the tile-ordered columns every store has.
@@ -63,6 +64,58 @@ pub fn output_bytes_per_point(info: &SourceInfo, output: &Path, declared: u64) -
         }
         _ => declared,
     }
+}
+
+/// What a run over one input plans its disk from, known before it reads
+/// a point: the run's check of its places (`pipeline::RunSettings`) and
+/// `scanmesh info --plan` take it from here, so they plan alike.
+#[derive(Clone, Copy, Debug)]
+pub struct RunFootprint {
+    /// Points the input declares (a store's count; `None` when a file's
+    /// header gives none).
+    pub points: Option<u64>,
+    /// Bytes a point of the store the run builds takes (0 when the input
+    /// is a store: it is there already).
+    pub store_per_point: u64,
+    /// The command's cost with the output's share by its format, and
+    /// whether the export frees the store's positions.
+    pub cost: KernelCost,
+}
+
+/// The footprint of a run of a command costing `cost` over `input`,
+/// keeping `kept` of it in its store, writing `output` (`None`: the
+/// command's declared PLY row). A store given as input is kept whole, so
+/// its positions stay through the export; its format is not known here,
+/// so the output keeps the declared figure. A file's header is read once.
+pub fn run_footprint(
+    input: &Path,
+    read: ReadOptions,
+    kept: Kept,
+    output: Option<&Path>,
+    cost: KernelCost,
+) -> Result<RunFootprint, StoreError> {
+    if is_store(input) {
+        return Ok(RunFootprint {
+            points: Some(PointStore::open_shared(input)?.len()),
+            store_per_point: 0,
+            cost: KernelCost {
+                export_frees_positions: false,
+                ..cost
+            },
+        });
+    }
+    let reader = open_reader(input, read)?;
+    let info = reader.info();
+    let declared = cost.output_per_point;
+    Ok(RunFootprint {
+        points: info.declared_count,
+        store_per_point: store_bytes_per_point(info, kept)?,
+        cost: KernelCost {
+            output_per_point: output
+                .map_or(declared, |o| output_bytes_per_point(info, o, declared)),
+            ..cost
+        },
+    })
 }
 
 #[cfg(test)]

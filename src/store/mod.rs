@@ -52,7 +52,7 @@ pub use exact::Coordinates;
 pub use export::{
     export_columns, export_points, export_points_keeping, export_values, Computed, Rows,
 };
-pub use footprint::{output_bytes_per_point, store_bytes_per_point};
+pub use footprint::{output_bytes_per_point, run_footprint, store_bytes_per_point, RunFootprint};
 pub use las_kept::LasKept;
 pub use manifest::{GridSpec, Kept, Manifest, Station, TileEntry};
 pub use source::{ingest_kept, is_store, open_input, Workspace};
@@ -399,19 +399,34 @@ impl PointStore {
     /// scratch holds while its output grows. Only a scratch store, which
     /// nothing opens again, gives them up; a later read of them fails.
     pub fn release_positions(&mut self) -> Result<(), StoreError> {
+        self.release(&[XYZ_FILE, BLOCKS_FILE])
+    }
+
+    /// Frees the disk of every point column of a scratch store whose run
+    /// reads no point again: a mesh whose tiles are all meshed writes its
+    /// output from their triangles alone, and the positions, normals,
+    /// input order and flags (29 bytes a point) would otherwise sit beside
+    /// the output while it grows, the peak of the run's disk.
+    pub fn release_points(&mut self) -> Result<(), StoreError> {
+        let (normals, flags) = (columns::NORMALS.name, columns::FLAGS.name);
+        self.release(&[XYZ_FILE, BLOCKS_FILE, INDEX_FILE, normals, flags])
+    }
+
+    /// Truncates the files `names` of a scratch store (those it has).
+    fn release(&mut self, names: &[&str]) -> Result<(), StoreError> {
         if !self.scratch {
             return Ok(());
         }
-        for name in [XYZ_FILE, BLOCKS_FILE] {
+        for &name in names {
             let path = self.dir.join(name);
             // A handle of its own: the store's stays open, and truncating
             // frees the blocks now rather than when it closes. `&mut self`:
             // no map of the column is alive.
-            std::fs::File::options()
-                .write(true)
-                .open(&path)
-                .and_then(|f| f.set_len(0))
-                .map_err(|e| StoreError::os(&path, e))?;
+            match std::fs::File::options().write(true).open(&path) {
+                Ok(f) => f.set_len(0).map_err(|e| StoreError::os(&path, e))?,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(StoreError::os(&path, e)),
+            }
             self.manifest.checksums.remove(name);
         }
         Ok(())

@@ -98,6 +98,12 @@ const SCRATCH_PER_TRIANGLE: f64 = 101.0;
 const SCRATCH_BEFORE_TRIANGLES: u64 = 48;
 /// Output bytes per triangle: half a vertex (24 B) and a face (13 B).
 const OUTPUT_PER_TRIANGLE: f64 = 25.0;
+/// Scratch bytes per point beside the store while a plain run meshes and
+/// writes: the normals and flags columns the marching cubes read. The
+/// orientation's scratch is gone by then; counting it (44 B, as this plan
+/// did) refused the 1B dragon at 6 spacings for 70.8 GiB where 100M had
+/// measured 42 B a point beside its store at the peak, output included.
+const COLUMNS_WHILE_MESHING: u64 = 13;
 
 /// Peak bytes of a band cube ([`super::kernel`]'s measurements).
 fn bytes_per_cube(closed: bool) -> u64 {
@@ -172,10 +178,13 @@ impl ImplicitParams {
             // (its spool is beside the output): the normals' scratch is
             // the peak. A run directory keeps the tiles' triangles too.
             scratch_per_point: normals.scratch_per_point,
-            export_scratch_per_point: normals.scratch_per_point,
+            export_scratch_per_point: COLUMNS_WHILE_MESHING,
+            // A run directory's peak beside the store, over the export's
+            // columns: `in_run_dir` adds it to both phases, so the stages'
+            // phase is planned 31 B a point above its own peak there.
             checkpoint_per_point: (normals.scratch_per_point + normals.checkpoint_per_point)
                 .max(SCRATCH_BEFORE_TRIANGLES + (on_disk * SCRATCH_PER_TRIANGLE) as u64)
-                - normals.scratch_per_point,
+                - COLUMNS_WHILE_MESHING,
             external_scratch_saving: normals.external_scratch_saving,
             export_frees_positions: false,
             output_per_point: (on_disk * OUTPUT_PER_TRIANGLE).ceil() as u64,
@@ -356,16 +365,19 @@ pub fn reconstruct_implicit(
     let writer = PieceFilter::new(out, min_piece)?;
     let cores = store.tiles().iter().map(|t| core_box(store, t)).collect();
     let mut stitcher = Stitcher::new(writer, store.origin(), cores);
-    let store = &*store;
-    report.run = run_tiles(store, &kernel, opts, progress, |t, out| {
+    let shared = &*store;
+    report.run = run_tiles(shared, &kernel, opts, progress, |t, out| {
         report.cubes += out.cubes as u64;
         report.away_triangles += out.away as u64;
         report.merged_triangles += out.merged as u64;
-        let core = core_box(store, &store.tiles()[t]);
+        let core = core_box(shared, &shared.tiles()[t]);
         stitcher
             .add_tile(&lattice, (t, &core), &out.triangles)
             .map_err(PipelineError::seam)
     })?;
+    // Every tile is meshed: the output is written from their triangles
+    // alone, and a scratch store's points would sit beside it.
+    store.release_points()?;
     let written = stitcher.finish()?;
     report.vertices = written.vertices;
     report.triangles = written.triangles;
