@@ -543,7 +543,7 @@ fn an_object_from_six_misregistered_stations_closes_over_its_unscanned_base() {
 /// A scratch store gives up its points once every tile is meshed, before
 /// the output is written from the tiles' triangles alone: the mesh is the
 /// one a store that outlives the run gives (which keeps them), byte for
-/// byte, on a real aerial scan (tests/fixtures/las) in 9 tiles.
+/// byte, on a real aerial scan (tests/fixtures/las) in several tiles.
 #[test]
 fn a_scratch_store_frees_its_points_before_the_mesh_is_written() {
     use scanmesh::io::{open_reader, ReadOptions};

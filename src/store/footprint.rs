@@ -1,6 +1,7 @@
-//! What a store holds on disk per point, known from the input's header
-//! before it is built: the first term of a run's disk plan (the stages'
-//! own scratch comes on top, [`crate::memory::plan::KernelCost`]).
+//! What a run over an input takes on disk per point, known from the
+//! input's header before a point is read (`run_footprint`): the store it
+//! builds, the first term of its disk plan (the stages' own scratch comes
+//! on top, [`crate::memory::plan::KernelCost`]), and its output's share.
 //!
 //! The columns: `xyz.f32` (12 B) and `index.u32` (4 B) in tile order, the
 //! exact coordinates in input order (`xyz.input`: 24 B as f64, 12 B on a LAS
